@@ -1,0 +1,1 @@
+"""The REST service over ``synth`` (FastAPI): ``api.main:app``."""

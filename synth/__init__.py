@@ -1,0 +1,29 @@
+"""Dimensional synthesis and analysis of quick-return mechanisms.
+
+>>> import synth
+>>> a = synth.analyze("crank_shaper", {"crank": 120, "pivot_distance": 240, "lever": 450})
+>>> round(a.time_ratio, 12), round(a.stroke, 9)
+(2.0, 450.0)
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from . import mechanisms
+from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
+from .kinematics import analyze
+from .results import Analysis
+
+try:
+    __version__ = version("quickreturn-synth")
+except PackageNotFoundError:  # run from a checkout without installing
+    __version__ = "0.1.0"
+
+__all__ = [
+    "Analysis",
+    "InvalidDesign",
+    "InvalidParameters",
+    "SynthError",
+    "UnknownMechanism",
+    "analyze",
+    "mechanisms",
+]

@@ -1,0 +1,44 @@
+"""Domain errors: misuse and designs that cannot run. Turned into HTTP in one handler (api.main).
+
+Every error carries ``loc`` (the parameter or field names it concerns) and a message that states
+the condition with its numbers, so a caller can fix the input without reading the code.
+"""
+
+from __future__ import annotations
+
+
+class SynthError(ValueError):
+    """Base of every error this library raises on purpose."""
+
+    def __init__(self, msg: str, loc: tuple[str, ...] = (), kind: str = "value_error") -> None:
+        super().__init__(msg)
+        self.msg = msg
+        self.loc = tuple(loc)
+        self.kind = kind
+
+
+class UnknownMechanism(SynthError):
+    """A mechanism type that is not in the registry."""
+
+    def __init__(self, name: str, known: tuple[str, ...]) -> None:
+        super().__init__(
+            f"unknown mechanism type {name!r}; known types: {', '.join(known)}",
+            ("type",),
+            "unknown_mechanism",
+        )
+        self.known = known
+
+
+class InvalidParameters(SynthError):
+    """Parameter names or values that are malformed (unknown, missing, non-finite, non-positive)."""
+
+    def __init__(self, msg: str, loc: tuple[str, ...]) -> None:
+        super().__init__(msg, loc, "invalid_parameters")
+
+
+class InvalidDesign(SynthError):
+    """A well-formed design that cannot run: it cannot assemble, or the crank cannot turn fully."""
+
+    def __init__(self, msg: str, loc: tuple[str, ...], condition: str) -> None:
+        super().__init__(msg, loc, "invalid_design")
+        self.condition = condition

@@ -1,0 +1,68 @@
+"""Shared four-bar pieces: the output pin, Grashof conditions and class.
+
+O2 at the origin, O4 = (ground, 0), crank pin A = crank·(cos θ, sin θ); the output pin D is the
+intersection of circle(A, coupler) and circle(O4, rocker) to the left of the directed line A→O4.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+
+from ..geometry import circle_circle_left, cos_law
+from ._registry import Condition, Params
+
+
+def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, Any]:
+    """(D_x, D_y, cos μ): the rocker/follower pin and the signed coupler–rocker transmission."""
+    ax, ay = r2 * ca.cos(th), r2 * ca.sin(th)
+    dx, dy = circle_circle_left(ax, ay, r3, r1, 0.0, r4)
+    a_o4_sq = (ax - r1) ** 2 + ay**2
+    return dx, dy, cos_law(r3, r4, ca.sqrt(a_o4_sq))
+
+
+def grashof_conditions(
+    names: tuple[str, str, str, str], shortest: str, kind: str
+) -> tuple[Condition, ...]:
+    """Grashof with ``shortest`` the shortest link, as three linear conditions.
+
+    "shortest + x ≤ the other two" for each other link x is equivalent to: ``shortest`` is the
+    shortest link and s + l ≤ p + q. ``names`` are the parameter names of the four links.
+    """
+    others = [n for n in names if n != shortest]
+    conds = []
+    for x in others:
+        a, b = (n for n in others if n != x)
+        conds.append(
+            Condition(
+                name=f"grashof_{x}",
+                text=f"{shortest} + {x} ≤ {a} + {b} (Grashof with the {shortest} the shortest "
+                f"link: a {kind})",
+                params=(shortest, x, a, b),
+                margin=lambda p, x=x, a=a, b=b: p[a] + p[b] - p[shortest] - p[x],
+                explain=lambda p, x=x, a=a, b=b: (
+                    f"{shortest} {p[shortest]:g} + {x} {p[x]:g} = {p[shortest] + p[x]:g} > "
+                    f"{a} {p[a]:g} + {b} {p[b]:g} = {p[a] + p[b]:g}: not a {kind} (Grashof with "
+                    f"the {shortest} the shortest link), the crank cannot drive it through a "
+                    f"full revolution as one"
+                ),
+            )
+        )
+    return tuple(conds)
+
+
+def grashof_class(ground: float, crank: float, coupler: float, rocker: float) -> str:
+    """The four-bar's class by Grashof's criterion (s + l ≤ p + q counts as Grashof)."""
+    links = [ground, crank, coupler, rocker]
+    s, lng = min(links), max(links)
+    if s + lng > sum(links) - s - lng:
+        return "triple-rocker"
+    if ground == s:
+        return "drag-link"
+    if crank == s:
+        return "crank-rocker"
+    if rocker == s:
+        return "rocker-crank"
+    return "double-rocker"
+

@@ -1,0 +1,167 @@
+"""The registry: one record per mechanism type, read by analysis, synthesis, the API and the tests.
+
+A type module defines its maths with ``casadi`` operations only and ends with
+``register(Mechanism(...))``. Nothing else restates its equations.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..errors import InvalidDesign, InvalidParameters, UnknownMechanism
+
+Params = Mapping[str, Any]  # parameter name -> float, DM, SX or MX
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A link length or placement; a length unless ``signed``."""
+
+    name: str
+    symbol: str
+    description: str
+    default: float | None = None  # a constant default (makes the parameter optional)
+    default_rule: str | None = None  # words for a default derived from the others (optional too)
+    signed: bool = False  # may be zero or negative (an offset)
+    zero_means: str | None = None  # 0 is allowed and selects a variant (e.g. a slot drive)
+
+    @property
+    def required(self) -> bool:
+        return self.default is None and self.default_rule is None
+
+
+@dataclass(frozen=True)
+class Condition:
+    """A validity condition: ``margin(p) >= 0`` (``> 0`` when strict) on complete parameters.
+
+    ``margin`` is polymorphic (a constraint in the formulation); ``explain`` states a violation
+    with its numbers, e.g. "coupler 2 < crank 1 + |offset| 1.5: the crank cannot turn fully".
+    ``applies`` limits the condition to a variant (e.g. only with a ram link).
+    """
+
+    name: str
+    text: str
+    params: tuple[str, ...]
+    margin: Callable[[Params], Any]
+    explain: Callable[[Params], str]
+    strict: bool = False
+    applies: Callable[[Params], bool] = lambda p: True
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """One mechanism type: parameters, validity, and its kinematics as functions of (p, θ)."""
+
+    type: str
+    title: str
+    description: str
+    seeds: tuple[str, ...]
+    quick_return: bool
+    parameters: tuple[Parameter, ...]
+    conditions: tuple[Condition, ...]
+    position: Callable[[Params, Any], Any]  # s(θ) along the slider path, complete parameters
+    transmission: Callable[[Params, Any], dict[str, Any]]  # signed cos μ per pin-jointed coupler
+    defaults: Callable[[Params], dict[str, Any]] = lambda p: {}  # derived defaults (polymorphic)
+    fourbar: Callable[[Params], tuple[Any, Any, Any, Any]] | None = None  # ground, crank, coupler, rocker
+    facts: Callable[[Params], dict[str, Any]] | None = None  # closed forms from mechanisms.md
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(q.name for q in self.parameters)
+
+    def parameter(self, name: str) -> Parameter:
+        for q in self.parameters:
+            if q.name == name:
+                return q
+        raise InvalidParameters(
+            f"{self.type} has no parameter {name!r}; its parameters: {', '.join(self.names)}",
+            (name,),
+        )
+
+    def variant(self, p: Params) -> frozenset[str]:
+        """The optional parts set to zero (e.g. ``ram_link`` 0 = slot drive): a structural choice."""
+        return frozenset(q.name for q in self.parameters if q.zero_means and p[q.name] == 0)
+
+    def complete(self, given: Mapping[str, float]) -> dict[str, float]:
+        """Check names and values, fill the defaults, and check every validity condition.
+
+        Raises ``InvalidParameters`` for unknown, missing, non-finite or non-positive values and
+        ``InvalidDesign`` for the first failed condition, with the numbers.
+        """
+        for name in given:
+            self.parameter(name)
+        p: dict[str, float] = {}
+        for q in self.parameters:
+            if q.name in given and given[q.name] is not None:
+                p[q.name] = _check_value(self.type, q, given[q.name])
+            elif q.default is not None:
+                p[q.name] = q.default
+            elif q.required:
+                raise InvalidParameters(
+                    f"{self.type} needs {q.name!r} ({q.description})", (q.name,)
+                )
+        missing = [q.name for q in self.parameters if q.name not in p]
+        if missing:
+            derived = {k: float(v) for k, v in self.defaults(p).items() if k in missing}
+            p.update(derived)
+        self.check(p)
+        return {q.name: p[q.name] for q in self.parameters}
+
+    def check(self, p: Params) -> None:
+        """Raise ``InvalidDesign`` for the first condition the complete parameters break."""
+        for c in self.conditions:
+            if not c.applies(p):
+                continue
+            m = float(c.margin(p))
+            if not (m > 0 if c.strict else m >= 0):  # also catches NaN
+                raise InvalidDesign(c.explain(p), c.params, c.name)
+
+
+def _check_value(mtype: str, q: Parameter, value: Any) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InvalidParameters(
+            f"{mtype}.{q.name} must be a number, got {value!r}", (q.name,)
+        ) from None
+    if not math.isfinite(x):
+        raise InvalidParameters(f"{mtype}.{q.name} must be finite, got {x}", (q.name,))
+    if q.signed:
+        return x
+    if x < 0 or (x == 0 and q.zero_means is None):
+        allowed = "≥ 0 (0 means " + q.zero_means + ")" if q.zero_means else "> 0"
+        raise InvalidParameters(
+            f"{mtype}.{q.name} is a length and must be {allowed}, got {x:g}", (q.name,)
+        )
+    return x
+
+
+_REGISTRY: dict[str, Mechanism] = {}
+
+
+def register(m: Mechanism) -> Mechanism:
+    _REGISTRY[m.type] = m
+    return m
+
+
+def get(name: str) -> Mechanism:
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        raise UnknownMechanism(name, tuple(_REGISTRY)) from None
+
+
+def all_types() -> tuple[str, ...]:
+    return tuple(_REGISTRY)
+
+
+def absent(x: Any) -> bool:
+    """True when an optional part is numerically zero (a structural variant, e.g. a slot drive).
+
+    Model code branches on this in Python; formulations build one graph per variant.
+    """
+    return isinstance(x, int | float) and x == 0

@@ -1,0 +1,145 @@
+"""Crank-rocker four-bar driving a slider (piston) — seed 002, Fig. 2a.
+
+O2 at the origin, O4 = (r1, 0), crank pin A = r2(cos θ, sin θ); the rocker pin D is the
+intersection of circle(A, r3) and circle(O4, r4) left of A→O4, ψ the angle of O4→D. The rocker
+swings between its toggles (crank and coupler collinear, O2D = r3 ± r2), at angles
+ψ = π − γ(r3 ± r2) with γ(ρ) the angle at O4 of the triangle (r1, r4, ρ). The slider path is
+perpendicular to the mid-swing line ψmid at distance h from O4; with δ = ψ − ψmid and C the pin
+at r5 along the rocker:
+
+    s(θ) = r5 sin δ + sqrt(r6² − (h − r5 cos δ)²)      (r6 = 0, slot drive: s = r5 sin δ)
+
+==============  ======  =========================================================
+name            symbol  meaning
+==============  ======  =========================================================
+ground          r1      crank pivot to rocker pivot, O2O4
+crank           r2      crank O2A
+coupler         r3      coupler AD
+rocker          r4      rocker O4D
+rocker_arm      r5      O4C, the pin on the rocker line (same side as D)
+connecting_rod  r6      rod CR to the slider (0: slot drive)
+slider_height   h       O4 to the slider path along the mid-swing line
+==============  ======  =========================================================
+
+Valid: Grashof with the crank the shortest link (a crank-rocker); r6 ≥ max |h − r5 cos δ| over
+the swing when r6 > 0. Default h = r5 cos(Δψ/2), the path through C's extreme positions.
+Transmission: coupler → rocker cos μ = (r3² + r4² − |AO4|²)/(2 r3 r4), extremes with the crank on
+the ground line; rod → slider cos μ = (h − r5 cos δ)/r6. Closed forms (mechanisms.md): with φe,
+φf the angles of O2D to the ground line at the toggles, TR = (π + |φf − φe|)/(π − |φf − φe|);
+stroke = 2 r5 sin(Δψ/2) when s is monotonic over the swing.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from ..geometry import cos_law, leg, triangle_angle
+from ._fourbar import grashof_conditions, output_pin
+from ._registry import Condition, Mechanism, Parameter, absent, register
+
+LINKS = ("ground", "crank", "coupler", "rocker")
+
+
+def _swing(p):
+    """(γ at the extended toggle, γ at the folded one); ψ = π − γ, Δψ = γe − γf."""
+    r1, r2, r3, r4 = (p[n] for n in LINKS)
+    return triangle_angle(r1, r4, r3 + r2), triangle_angle(r1, r4, r3 - r2)
+
+
+def _delta(p, th):
+    """cos δ, sin δ of the rocker relative to its mid-swing line, and cos μ at the coupler."""
+    r1, r2, r3, r4 = (p[n] for n in LINKS)
+    dx, dy, cos_mu = output_pin(r1, r2, r3, r4, th)
+    ux, uy = (dx - r1) / r4, dy / r4
+    ge, gf = _swing(p)
+    mx, my = -ca.cos((ge + gf) / 2), ca.sin((ge + gf) / 2)  # ψmid = π − (γe + γf)/2
+    return mx * ux + my * uy, mx * uy - my * ux, cos_mu
+
+
+def _reach(p):
+    ge, gf = _swing(p)
+    h, r5 = p["slider_height"], p["rocker_arm"]
+    return ca.fmax(ca.fabs(h - r5), ca.fabs(h - r5 * ca.cos((ge - gf) / 2)))
+
+
+def position(p, th):
+    r5, r6, h = p["rocker_arm"], p["connecting_rod"], p["slider_height"]
+    c, s, _ = _delta(p, th)
+    if absent(r6):
+        return r5 * s
+    return r5 * s + leg(r6, h - r5 * c)
+
+
+def transmission(p, th):
+    r5, r6, h = p["rocker_arm"], p["connecting_rod"], p["slider_height"]
+    c, _, cos_mu = _delta(p, th)
+    joints = {"coupler-rocker": cos_mu}
+    if not absent(r6):
+        joints["connecting_rod-slider"] = (h - r5 * c) / r6
+    return joints
+
+
+def defaults(p):
+    ge, gf = _swing(p)
+    return {"slider_height": p["rocker_arm"] * ca.cos((ge - gf) / 2)}
+
+
+def facts(p):
+    r1, r2, r3, r4 = (p[n] for n in LINKS)
+    r5, r6 = p["rocker_arm"], p["connecting_rod"]
+    dphi = ca.fabs(triangle_angle(r1, r3 - r2, r4) - triangle_angle(r1, r3 + r2, r4))
+    ge, gf = _swing(p)
+    worst = ca.fmax(ca.fabs(cos_law(r3, r4, r1 - r2)), ca.fabs(cos_law(r3, r4, r1 + r2)))
+    if not absent(r6):
+        worst = ca.fmax(worst, _reach(p) / r6)
+    return {
+        "time_ratio": (ca.pi + dphi) / (ca.pi - dphi),
+        "stroke": 2 * r5 * ca.sin((ge - gf) / 2),
+        "min_transmission": ca.acos(worst),
+    }
+
+
+register(
+    Mechanism(
+        type="crank_rocker_slider",
+        title="Crank-rocker driven slider",
+        description="A crank-rocker four-bar whose rocker drives a slider (piston) through a "
+        "connecting rod or a slot; the rocker's unequal swing times give the quick return.",
+        seeds=("002_9eb3d3dc2e472629.txt",),
+        quick_return=True,
+        parameters=(
+            Parameter("ground", "r1", "crank pivot to rocker pivot, O2O4"),
+            Parameter("crank", "r2", "crank O2A"),
+            Parameter("coupler", "r3", "coupler AD"),
+            Parameter("rocker", "r4", "rocker O4D"),
+            Parameter("rocker_arm", "r5", "O4C: the pin on the rocker line driving the slider"),
+            Parameter("connecting_rod", "r6", "rod from C to the slider", default=0.0,
+                      zero_means="C drives the slider through a slot"),
+            Parameter("slider_height", "h", "O4 to the slider path along the mid-swing line",
+                      default_rule="rocker_arm·cos(Δψ/2): the path through C's extreme "
+                      "positions"),
+        ),
+        conditions=(
+            *grashof_conditions(LINKS, "crank", "crank-rocker"),
+            Condition(
+                name="rod_reach",
+                text="connecting_rod ≥ max |slider_height − rocker_arm·cos δ| over the swing "
+                "(when connecting_rod > 0)",
+                params=("connecting_rod", "slider_height", "rocker_arm"),
+                margin=lambda p: p["connecting_rod"] - _reach(p),
+                applies=lambda p: not absent(p["connecting_rod"]),
+                explain=lambda p: (
+                    f"connecting_rod {p['connecting_rod']:g} < {float(_reach(p)):g}, the largest "
+                    f"distance from the pin C to the slider path (slider_height "
+                    f"{p['slider_height']:g}): the rod cannot reach the slider over the whole "
+                    f"swing"
+                ),
+            ),
+        ),
+        position=position,
+        transmission=transmission,
+        defaults=defaults,
+        fourbar=lambda p: tuple(p[n] for n in LINKS),
+        facts=facts,
+    )
+)

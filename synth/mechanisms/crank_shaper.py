@@ -1,0 +1,150 @@
+"""Crank and slotted lever (crank shaper) — seeds 000, 001, 004 (Ex. 1, 2) and 002 Fig. 1b.
+
+The crank pin B = r2(cos θ, sin θ) carries a block that slides in the lever pivoted at
+O4 = (−d, 0); the lever angle ψ = atan2(B_y, B_x + d) oscillates (r2 < d) and its tip is
+P = O4 + L(cos ψ, sin ψ). The ram runs on the line x = −d + h (perpendicular to the pivot line):
+
+    ram_link l = 0 (the tip drives the ram through a block in a slot):  s = P_y
+    ram_link l > 0 (a link PR):                                          s = P_y + sqrt(l² − (h − L cos ψ)²)
+
+==============  ======  =============================================================
+name            symbol  meaning
+==============  ======  =============================================================
+crank           r2      crank CB
+pivot_distance  d       lever pivot to crank pivot, AC
+lever           L       slotted lever AP
+ram_link        l       link PR from the lever tip to the ram (0: slot drive)
+ram_height      h       lever pivot to the ram path, along the pivot line
+==============  ======  =============================================================
+
+Valid: r2 < d (else it is a Whitworth); d + r2 ≤ L (the block stays on the lever);
+l ≥ max |h − L cos ψ| over the swing when l > 0. Default h = L cos ψmax, the path through the
+tip's extreme positions. Closed forms (mechanisms.md): sin ψmax = r2/d;
+TR = (π + 2 asin(r2/d)) / (π − 2 asin(r2/d)); stroke = 2 L r2/d when s is monotonic in ψ;
+transmission at the ram link cos μ = (h − L cos ψ)/l; the slot drive alone transmits at 90°.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+
+from ..geometry import leg, unit
+from ._registry import Condition, Mechanism, Parameter, absent, register
+
+
+def _lever(p, th):
+    """cos ψ, sin ψ of the lever O4→B."""
+    r2, d = p["crank"], p["pivot_distance"]
+    return unit(r2 * ca.cos(th) + d, r2 * ca.sin(th))
+
+
+def _cos_psi_max(p):
+    r2, d = p["crank"], p["pivot_distance"]
+    return leg(d, r2) / d
+
+
+def _reach(p):
+    """The largest distance from the lever tip to the ram path over the swing."""
+    h, L = p["ram_height"], p["lever"]
+    return ca.fmax(ca.fabs(h - L), ca.fabs(h - L * _cos_psi_max(p)))
+
+
+def position(p, th):
+    L, l, h = p["lever"], p["ram_link"], p["ram_height"]
+    c, s = _lever(p, th)
+    if absent(l):
+        return L * s
+    return L * s + leg(l, h - L * c)
+
+
+def transmission(p, th):
+    L, l, h = p["lever"], p["ram_link"], p["ram_height"]
+    if absent(l):
+        return {}
+    c, _ = _lever(p, th)
+    return {"ram_link-ram": (h - L * c) / l}
+
+
+def defaults(p):
+    return {"ram_height": p["lever"] * _cos_psi_max(p)}
+
+
+def facts(p):
+    r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["ram_link"]
+    half = ca.asin(r2 / d)
+    mu = math.pi / 2 if absent(l) else ca.acos(_reach(p) / l)
+    return {
+        "time_ratio": (ca.pi + 2 * half) / (ca.pi - 2 * half),
+        "stroke": 2 * L * r2 / d,
+        "min_transmission": mu,
+    }
+
+
+register(
+    Mechanism(
+        type="crank_shaper",
+        title="Crank and slotted lever (crank shaper)",
+        description="A crank drives a block in an oscillating slotted lever whose tip drives the "
+        "ram, directly through a block in a slot or through a short ram link: the classic "
+        "shaper drive.",
+        seeds=(
+            "000_0f0be32169ba29b8.txt",
+            "001_40ca53381776f4dd.txt",
+            "002_9eb3d3dc2e472629.txt",
+            "004_127788c29ec9efe4.txt",
+        ),
+        quick_return=True,
+        parameters=(
+            Parameter("crank", "r2", "crank CB"),
+            Parameter("pivot_distance", "d", "lever pivot to crank pivot, AC"),
+            Parameter("lever", "L", "slotted lever AP, pivot to tip"),
+            Parameter("ram_link", "l", "link PR from the lever tip to the ram", default=0.0,
+                      zero_means="the lever tip drives the ram through a block in a slot"),
+            Parameter("ram_height", "h", "lever pivot to the ram path, along the pivot line",
+                      default_rule="lever·cos ψmax (sin ψmax = crank/pivot_distance): the path "
+                      "through the tip's extreme positions"),
+        ),
+        conditions=(
+            Condition(
+                name="oscillating_lever",
+                text="crank < pivot_distance (the lever oscillates; otherwise a Whitworth)",
+                params=("crank", "pivot_distance"),
+                margin=lambda p: p["pivot_distance"] - p["crank"],
+                strict=True,
+                explain=lambda p: (
+                    f"crank {p['crank']:g} ≥ pivot_distance {p['pivot_distance']:g}: the lever "
+                    f"would turn a full revolution (that is a whitworth), not oscillate"
+                ),
+            ),
+            Condition(
+                name="block_on_lever",
+                text="pivot_distance + crank ≤ lever (the crank-pin block stays on the lever)",
+                params=("lever", "pivot_distance", "crank"),
+                margin=lambda p: p["lever"] - p["pivot_distance"] - p["crank"],
+                explain=lambda p: (
+                    f"lever {p['lever']:g} < pivot_distance {p['pivot_distance']:g} + crank "
+                    f"{p['crank']:g} = {p['pivot_distance'] + p['crank']:g}: the crank-pin block "
+                    f"runs off the slotted lever"
+                ),
+            ),
+            Condition(
+                name="ram_link_reach",
+                text="ram_link ≥ max |ram_height − lever·cos ψ| over the swing (when ram_link > 0)",
+                params=("ram_link", "ram_height", "lever"),
+                margin=lambda p: p["ram_link"] - _reach(p),
+                applies=lambda p: not absent(p["ram_link"]),
+                explain=lambda p: (
+                    f"ram_link {p['ram_link']:g} < {float(_reach(p)):g}, the largest distance "
+                    f"from the lever tip to the ram path (ram_height {p['ram_height']:g}): the "
+                    f"ram link cannot reach the ram over the whole swing"
+                ),
+            ),
+        ),
+        position=position,
+        transmission=transmission,
+        defaults=defaults,
+        facts=facts,
+    )
+)

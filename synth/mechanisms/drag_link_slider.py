@@ -1,0 +1,107 @@
+"""Drag-link (crank-crank) four-bar driving a piston — seed 002, Fig. 2b, Fig. 3, eqs. 2–13.
+
+O2 at the origin, O4 = (r1, 0), crank pin A = r2(cos θ, sin θ); the follower pin B is the
+intersection of circle(A, r3) and circle(O4, r4) left of A→O4, and the follower turns fully.
+The pin C = O4 + r5 (B − O4)/r4 drives the piston on the ground line through the rod CD:
+
+    s(θ) = C_x + sqrt(r6² − C_y²)
+
+==============  ======  ===============================================
+name            symbol  meaning
+==============  ======  ===============================================
+ground          r1      crank pivot to follower pivot, O2O4
+crank           r2      crank O2A
+coupler         r3      coupler AB
+follower        r4      follower O4B
+follower_arm    r5      O4C, on the follower line, same side as B
+connecting_rod  r6      rod CD to the piston
+==============  ======  ===============================================
+
+Valid: Grashof with the ground the shortest link (a drag-link); r6 > r5. Closed forms (seed 002):
+TDC/BDC with the follower on the ground line, O2B = r4 ± r1; θ2a, θ2b from eqs. (3a)/(3b);
+TR = (π − θ2a + θ2b)/(π + θ2a − θ2b); stroke = 2 r5; rod → piston μ_min = acos(r5/r6).
+Coupler → follower: cos μ = (r3² + r4² − |AO4|²)/(2 r3 r4), extremes with the *crank* on the
+ground line, |AO4| = r2 ∓ r1 (the seed evaluates it at TDC/BDC instead: not the minimum).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from ..geometry import cos_law, leg, triangle_angle
+from ._fourbar import grashof_conditions, output_pin
+from ._registry import Condition, Mechanism, Parameter, register
+
+LINKS = ("ground", "crank", "coupler", "follower")
+
+
+def _pin_c(p, th):
+    r1, r2, r3, r4 = (p[n] for n in LINKS)
+    bx, by, cos_mu = output_pin(r1, r2, r3, r4, th)
+    k = p["follower_arm"] / r4
+    return r1 + k * (bx - r1), k * by, cos_mu
+
+
+def position(p, th):
+    cx, cy, _ = _pin_c(p, th)
+    return cx + leg(p["connecting_rod"], cy)
+
+
+def transmission(p, th):
+    _, cy, cos_mu = _pin_c(p, th)
+    return {"coupler-follower": cos_mu, "connecting_rod-slider": cy / p["connecting_rod"]}
+
+
+def facts(p):
+    r1, r2, r3, r4 = (p[n] for n in LINKS)
+    r5, r6 = p["follower_arm"], p["connecting_rod"]
+    t2a = triangle_angle(r2, r4 + r1, r3)  # eq. (3a)
+    t2b = triangle_angle(r2, r4 - r1, r3)  # eq. (3b)
+    tr = (ca.pi - t2a + t2b) / (ca.pi + t2a - t2b)  # eq. (5); its inverse if the strokes swap
+    worst = ca.fmax(ca.fabs(cos_law(r3, r4, r2 - r1)), ca.fabs(cos_law(r3, r4, r2 + r1)))
+    return {
+        "time_ratio": ca.fmax(tr, 1 / tr),
+        "stroke": 2 * r5,
+        "min_transmission": ca.acos(ca.fmax(worst, r5 / r6)),
+        "theta2a": t2a,
+        "theta2b": t2b,
+    }
+
+
+register(
+    Mechanism(
+        type="drag_link_slider",
+        title="Drag-link driven slider",
+        description="A drag-link (crank-crank) four-bar whose follower drives a piston on the "
+        "ground line; the follower's non-uniform rotation gives the quick return.",
+        seeds=("002_9eb3d3dc2e472629.txt",),
+        quick_return=True,
+        parameters=(
+            Parameter("ground", "r1", "crank pivot to follower pivot, O2O4"),
+            Parameter("crank", "r2", "crank O2A"),
+            Parameter("coupler", "r3", "coupler AB"),
+            Parameter("follower", "r4", "follower O4B"),
+            Parameter("follower_arm", "r5", "O4C: the pin on the follower line driving the rod"),
+            Parameter("connecting_rod", "r6", "rod CD from C to the piston"),
+        ),
+        conditions=(
+            *grashof_conditions(LINKS, "ground", "drag-link"),
+            Condition(
+                name="rod_reach",
+                text="connecting_rod > follower_arm (the rod reaches the piston path)",
+                params=("connecting_rod", "follower_arm"),
+                margin=lambda p: p["connecting_rod"] - p["follower_arm"],
+                strict=True,
+                explain=lambda p: (
+                    f"connecting_rod {p['connecting_rod']:g} ≤ follower_arm "
+                    f"{p['follower_arm']:g}: the rod cannot reach the piston path when the "
+                    f"follower is perpendicular to it"
+                ),
+            ),
+        ),
+        position=position,
+        transmission=transmission,
+        fourbar=lambda p: tuple(p[n] for n in LINKS),
+        facts=facts,
+    )
+)

@@ -1,0 +1,80 @@
+"""Offset slider-crank — seed 002, Fig. 1a.
+
+Crank pin B = r2(cos θ, sin θ); the slider C runs on the line y = e, ahead of B along +x:
+
+    s(θ) = B_x + sqrt(r3² − (e − B_y)²)
+
+=======  ======  ==================================================
+name     symbol  meaning
+=======  ======  ==================================================
+crank    r2      crank O2B
+coupler  r3      connecting rod BC
+offset   e       signed distance of the slider path from O2 (y = e)
+=======  ======  ==================================================
+
+Valid when r3 ≥ r2 + |e| (the crank turns fully). Transmission (coupler → slider): the angle
+between BC and the path's normal, cos μ = (e − B_y)/r3. Closed forms (mechanisms.md):
+stroke = sqrt((r3+r2)² − e²) − sqrt((r3−r2)² − e²); β = asin(|e|/(r3−r2)) − asin(|e|/(r3+r2));
+TR = (π+β)/(π−β); μ_min = acos((r2+|e|)/r3).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from ..geometry import leg
+from ._registry import Condition, Mechanism, Parameter, register
+
+
+def position(p, th):
+    r2, r3, e = p["crank"], p["coupler"], p["offset"]
+    return r2 * ca.cos(th) + leg(r3, e - r2 * ca.sin(th))
+
+
+def transmission(p, th):
+    r2, r3, e = p["crank"], p["coupler"], p["offset"]
+    return {"coupler-slider": (e - r2 * ca.sin(th)) / r3}
+
+
+def facts(p):
+    r2, r3, e = p["crank"], p["coupler"], ca.fabs(p["offset"])
+    beta = ca.asin(e / (r3 - r2)) - ca.asin(e / (r3 + r2))
+    return {
+        "time_ratio": (ca.pi + beta) / (ca.pi - beta),
+        "stroke": leg(r3 + r2, e) - leg(r3 - r2, e),
+        "min_transmission": ca.acos((r2 + e) / r3),
+    }
+
+
+register(
+    Mechanism(
+        type="offset_slider_crank",
+        title="Offset slider-crank",
+        description="A slider-crank whose slider path is offset from the crank pivot; the offset "
+        "makes the two strokes take different crank angles.",
+        seeds=("002_9eb3d3dc2e472629.txt",),
+        quick_return=True,
+        parameters=(
+            Parameter("crank", "r2", "crank O2B"),
+            Parameter("coupler", "r3", "connecting rod BC (crank pin to slider)"),
+            Parameter("offset", "e", "signed offset of the slider path from the crank pivot",
+                      signed=True),
+        ),
+        conditions=(
+            Condition(
+                name="full_rotation",
+                text="coupler ≥ crank + |offset| (the crank turns a full revolution)",
+                params=("coupler", "crank", "offset"),
+                margin=lambda p: p["coupler"] - p["crank"] - ca.fabs(p["offset"]),
+                explain=lambda p: (
+                    f"coupler {p['coupler']:g} < crank {p['crank']:g} + |offset| "
+                    f"{abs(p['offset']):g} = {p['crank'] + abs(p['offset']):g}: the crank cannot "
+                    f"turn a full revolution"
+                ),
+            ),
+        ),
+        position=position,
+        transmission=transmission,
+        facts=facts,
+    )
+)

@@ -1,0 +1,52 @@
+"""Scotch yoke (slotted link) — seed 003.
+
+The crank pin B = r(cos θ, sin θ) slides in a slot of the yoke, which moves along x:
+
+    s(θ) = r cos θ        (the seed measures x = r(1 − cos θ) from one extreme: the same curve)
+
+=====  ==========  =========================
+name   symbol      meaning
+=====  ==========  =========================
+crank  r           crank radius O2B
+=====  ==========  =========================
+
+Time ratio 1 (simple harmonic motion: the baseline, not a quick return), stroke 2r; the slot
+drives along the slot's normal, so the transmission angle is 90° throughout.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+
+from ._registry import Mechanism, Parameter, register
+
+
+def position(p, th):
+    return p["crank"] * ca.cos(th)
+
+
+def transmission(p, th):
+    return {}
+
+
+def facts(p):
+    return {"time_ratio": 1.0, "stroke": 2 * p["crank"], "min_transmission": math.pi / 2}
+
+
+register(
+    Mechanism(
+        type="scotch_yoke",
+        title="Scotch yoke (slotted link)",
+        description="A crank pin sliding in a slotted yoke: simple harmonic motion, time ratio 1. "
+        "The baseline every quick-return mechanism is compared with.",
+        seeds=("003_7e0bfa42a11f01fb.txt",),
+        quick_return=False,
+        parameters=(Parameter("crank", "r", "crank radius O2B"),),
+        conditions=(),
+        position=position,
+        transmission=transmission,
+        facts=facts,
+    )
+)

@@ -1,0 +1,100 @@
+"""Whitworth quick return — seed 002 Fig. 1c, seed 004 Example 3.
+
+The crank pin B = r2(cos θ, sin θ) slides in a lever pivoted at O4 = (−d, 0) with d < r2, so
+the lever angle ψ = atan2(B_y, B_x + d) turns a full revolution. The output arm points the
+other way, P = O4 − L(cos ψ, sin ψ), and drives the ram on the line x = −d through the rod PR:
+
+    s(θ) = P_y + sqrt(l² − (P_x + d)²) = −L sin ψ + sqrt(l² − L² cos² ψ)
+
+==============  ======  ======================================
+name            symbol  meaning
+==============  ======  ======================================
+crank           r2      crank O2B
+pivot_distance  d       lever pivot to crank pivot, O2O4
+lever           L       output arm O4P
+connecting_rod  l       rod PR from the arm to the ram
+==============  ======  ======================================
+
+Valid: r2 > d (the lever turns fully); l > L (the rod reaches the ram path). Closed forms
+(mechanisms.md): extremes where B_x = −d; quick-stroke crank angle 2 acos(d/r2);
+TR = (π − acos(d/r2)) / acos(d/r2); stroke = 2L; transmission cos μ = L cos ψ / l,
+μ_min = acos(L/l).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from ..geometry import leg, unit
+from ._registry import Condition, Mechanism, Parameter, register
+
+
+def _lever(p, th):
+    r2, d = p["crank"], p["pivot_distance"]
+    return unit(r2 * ca.cos(th) + d, r2 * ca.sin(th))
+
+
+def position(p, th):
+    L, l = p["lever"], p["connecting_rod"]
+    c, s = _lever(p, th)
+    return -L * s + leg(l, L * c)
+
+
+def transmission(p, th):
+    c, _ = _lever(p, th)
+    return {"connecting_rod-ram": p["lever"] * c / p["connecting_rod"]}
+
+
+def facts(p):
+    r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["connecting_rod"]
+    q = ca.acos(d / r2)
+    return {
+        "time_ratio": (ca.pi - q) / q,
+        "stroke": 2 * L,
+        "min_transmission": ca.acos(L / l),
+    }
+
+
+register(
+    Mechanism(
+        type="whitworth",
+        title="Whitworth quick return",
+        description="The inversion of the crank shaper with the crank longer than the pivot "
+        "distance: the slotted lever turns fully and drives the ram through a connecting rod.",
+        seeds=("002_9eb3d3dc2e472629.txt", "004_127788c29ec9efe4.txt"),
+        quick_return=True,
+        parameters=(
+            Parameter("crank", "r2", "crank O2B"),
+            Parameter("pivot_distance", "d", "lever pivot to crank pivot, O2O4"),
+            Parameter("lever", "L", "output arm O4P of the slotted lever"),
+            Parameter("connecting_rod", "l", "rod PR from the arm to the ram"),
+        ),
+        conditions=(
+            Condition(
+                name="rotating_lever",
+                text="crank > pivot_distance (the lever turns fully; otherwise a crank shaper)",
+                params=("crank", "pivot_distance"),
+                margin=lambda p: p["crank"] - p["pivot_distance"],
+                strict=True,
+                explain=lambda p: (
+                    f"crank {p['crank']:g} ≤ pivot_distance {p['pivot_distance']:g}: the lever "
+                    f"cannot turn a full revolution (that is a crank_shaper)"
+                ),
+            ),
+            Condition(
+                name="rod_reach",
+                text="connecting_rod > lever (the rod reaches the ram path in every position)",
+                params=("connecting_rod", "lever"),
+                margin=lambda p: p["connecting_rod"] - p["lever"],
+                strict=True,
+                explain=lambda p: (
+                    f"connecting_rod {p['connecting_rod']:g} ≤ lever {p['lever']:g}: the rod "
+                    f"cannot reach the ram path when the lever lies along the pivot line"
+                ),
+            ),
+        ),
+        position=position,
+        transmission=transmission,
+        facts=facts,
+    )
+)
