@@ -40,9 +40,7 @@ def cos_law(a: S, b: S, c: S) -> S:
     return ((a - c) * (a + c) + b * b) / (2 * a * b)
 
 
-def circle_circle_left(
-    ax: S, ay: S, ra: S, bx: S, by: S, rb: S
-) -> tuple[S, S]:
+def circle_circle_left(ax: S, ay: S, ra: S, bx: S, by: S, rb: S) -> tuple[S, S]:
     """The intersection of circle(A, ra) and circle(B, rb) to the left of the directed line A→B.
 
     The assembly branch is explicit: the mirror circuit is the other intersection.

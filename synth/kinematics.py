@@ -69,9 +69,8 @@ def stationary_points(
     g, g1, _ = f(grid, pv)
     if not np.all(np.isfinite(g)):
         bad = grid[np.nonzero(~np.all(np.isfinite(g), axis=0))[0][0]]
-        raise InvalidDesign(
-            f"the design cannot be assembled at crank angle {math.degrees(bad):.6g}°", (), "assembly"
-        )
+        msg = f"the design cannot be assembled at crank angle {math.degrees(bad):.6g}°"
+        raise InvalidDesign(msg, (), "assembly")
     nxt = np.roll(g1, -1, axis=1)
     rows, k = np.nonzero((g1 < 0) & (nxt > 0) | (g1 > 0) & (nxt < 0))
     # exact stationary points on the grid, and kinks (a change point's flat configuration,
@@ -172,6 +171,7 @@ def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -
             tuple(joints),
         ),
         "grashof": grashof_class(*m.fourbar(p)) if m.fourbar else None,
+        "reversals": int(np.count_nonzero(on_s)),
     }
 
 

@@ -56,6 +56,9 @@ class Analysis:
     return_stroke: Stroke
     transmission: Transmission
     grashof: str | None
+    # stationary points of s per revolution where the slider reverses: 2 for a clean quick
+    # return; more means the slider dithers near a dead centre and the strokes are ill-defined
+    reversals: int
     curves: Curves | None = None
 
     def to_dict(self) -> dict[str, Any]:

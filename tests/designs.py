@@ -8,14 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-TYPES = (
-    "scotch_yoke",
-    "offset_slider_crank",
-    "crank_shaper",
-    "whitworth",
-    "crank_rocker_slider",
-    "drag_link_slider",
-)
+from .bruteforce import TYPES
 
 
 def _scotch_yoke(rng):

@@ -78,8 +78,17 @@ def test_boundary_designs_are_valid():
     synth.analyze("offset_slider_crank", {"crank": 1.0, "coupler": 2.5, "offset": 1.5})
     synth.analyze("crank_shaper", {"crank": 40.0, "pivot_distance": 160.0, "lever": 200.0})
     for r3 in (0.15, 0.40):
-        synth.analyze("drag_link_slider", {"ground": 0.1, "crank": 0.225, "coupler": r3,
-                      "follower": 0.275, "follower_arm": 0.15, "connecting_rod": 0.3})
+        synth.analyze(
+            "drag_link_slider",
+            {
+                "ground": 0.1,
+                "crank": 0.225,
+                "coupler": r3,
+                "follower": 0.275,
+                "follower_arm": 0.15,
+                "connecting_rod": 0.3,
+            },
+        )
 
 
 BAD_PARAMS = [

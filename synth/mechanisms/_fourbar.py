@@ -11,7 +11,7 @@ from typing import Any
 import casadi as ca
 
 from ..geometry import circle_circle_left, cos_law
-from ._registry import Condition, Params
+from ._registry import Condition
 
 
 def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, Any]:
@@ -65,4 +65,3 @@ def grashof_class(ground: float, crank: float, coupler: float, rocker: float) ->
     if rocker == s:
         return "rocker-crank"
     return "double-rocker"
-

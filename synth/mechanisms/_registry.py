@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from ..errors import InvalidDesign, InvalidParameters, UnknownMechanism
@@ -65,9 +65,9 @@ class Mechanism:
     position: Callable[[Params, Any], Any]  # s(θ) along the slider path, complete parameters
     transmission: Callable[[Params, Any], dict[str, Any]]  # signed cos μ per pin-jointed coupler
     defaults: Callable[[Params], dict[str, Any]] = lambda p: {}  # derived defaults (polymorphic)
-    fourbar: Callable[[Params], tuple[Any, Any, Any, Any]] | None = None  # ground, crank, coupler, rocker
+    # the four-bar's (ground, crank, coupler, rocker), for its Grashof class
+    fourbar: Callable[[Params], tuple[Any, Any, Any, Any]] | None = None
     facts: Callable[[Params], dict[str, Any]] | None = None  # closed forms from mechanisms.md
-    notes: tuple[str, ...] = field(default=())
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -83,7 +83,7 @@ class Mechanism:
         )
 
     def variant(self, p: Params) -> frozenset[str]:
-        """The optional parts set to zero (e.g. ``ram_link`` 0 = slot drive): a structural choice."""
+        """The optional parts set to zero (``ram_link`` 0 = slot drive): a structural choice."""
         return frozenset(q.name for q in self.parameters if q.zero_means and p[q.name] == 0)
 
     def complete(self, given: Mapping[str, float]) -> dict[str, float]:

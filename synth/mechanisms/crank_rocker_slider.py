@@ -113,11 +113,19 @@ register(
             Parameter("coupler", "r3", "coupler AD"),
             Parameter("rocker", "r4", "rocker O4D"),
             Parameter("rocker_arm", "r5", "O4C: the pin on the rocker line driving the slider"),
-            Parameter("connecting_rod", "r6", "rod from C to the slider", default=0.0,
-                      zero_means="C drives the slider through a slot"),
-            Parameter("slider_height", "h", "O4 to the slider path along the mid-swing line",
-                      default_rule="rocker_arm·cos(Δψ/2): the path through C's extreme "
-                      "positions"),
+            Parameter(
+                "connecting_rod",
+                "r6",
+                "rod from C to the slider",
+                default=0.0,
+                zero_means="C drives the slider through a slot",
+            ),
+            Parameter(
+                "slider_height",
+                "h",
+                "O4 to the slider path along the mid-swing line",
+                default_rule="rocker_arm·cos(Δψ/2): the path through C's extreme positions",
+            ),
         ),
         conditions=(
             *grashof_conditions(LINKS, "crank", "crank-rocker"),

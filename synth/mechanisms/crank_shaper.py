@@ -5,7 +5,7 @@ O4 = (−d, 0); the lever angle ψ = atan2(B_y, B_x + d) oscillates (r2 < d) and
 P = O4 + L(cos ψ, sin ψ). The ram runs on the line x = −d + h (perpendicular to the pivot line):
 
     ram_link l = 0 (the tip drives the ram through a block in a slot):  s = P_y
-    ram_link l > 0 (a link PR):                                          s = P_y + sqrt(l² − (h − L cos ψ)²)
+    ram_link l > 0 (a link PR):             s = P_y + sqrt(l² − (h − L cos ψ)²)
 
 ==============  ======  =============================================================
 name            symbol  meaning
@@ -100,11 +100,20 @@ register(
             Parameter("crank", "r2", "crank CB"),
             Parameter("pivot_distance", "d", "lever pivot to crank pivot, AC"),
             Parameter("lever", "L", "slotted lever AP, pivot to tip"),
-            Parameter("ram_link", "l", "link PR from the lever tip to the ram", default=0.0,
-                      zero_means="the lever tip drives the ram through a block in a slot"),
-            Parameter("ram_height", "h", "lever pivot to the ram path, along the pivot line",
-                      default_rule="lever·cos ψmax (sin ψmax = crank/pivot_distance): the path "
-                      "through the tip's extreme positions"),
+            Parameter(
+                "ram_link",
+                "l",
+                "link PR from the lever tip to the ram",
+                default=0.0,
+                zero_means="the lever tip drives the ram through a block in a slot",
+            ),
+            Parameter(
+                "ram_height",
+                "h",
+                "lever pivot to the ram path, along the pivot line",
+                default_rule="lever·cos ψmax (sin ψmax = crank/pivot_distance): the path "
+                "through the tip's extreme positions",
+            ),
         ),
         conditions=(
             Condition(

@@ -57,8 +57,9 @@ register(
         parameters=(
             Parameter("crank", "r2", "crank O2B"),
             Parameter("coupler", "r3", "connecting rod BC (crank pin to slider)"),
-            Parameter("offset", "e", "signed offset of the slider path from the crank pivot",
-                      signed=True),
+            Parameter(
+                "offset", "e", "signed offset of the slider path from the crank pivot", signed=True
+            ),
         ),
         conditions=(
             Condition(

@@ -1,0 +1,22 @@
+# The service image: slim Python 3.11, dependencies from the hash-pinned lock, non-root.
+#   docker build -t quickreturn-synth . && docker run -p 8000:8000 quickreturn-synth
+FROM python:3.11-slim
+
+ENV PYTHONDONTWRITEBYTECODE=1 \
+    PYTHONUNBUFFERED=1 \
+    OMP_NUM_THREADS=1 \
+    OPENBLAS_NUM_THREADS=1 \
+    WEB_CONCURRENCY=1
+
+WORKDIR /app
+COPY requirements.lock .
+RUN pip install --no-cache-dir --require-hashes -r requirements.lock
+COPY synth synth
+COPY api api
+
+RUN useradd --create-home --uid 10001 app
+USER app
+EXPOSE 8000
+HEALTHCHECK --interval=30s --timeout=3s --start-period=10s \
+    CMD python -c "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8000/health', timeout=2)"
+CMD ["sh", "-c", "exec uvicorn api.main:app --host 0.0.0.0 --port 8000 --workers ${WEB_CONCURRENCY}"]

@@ -1,0 +1,34 @@
+"""The closed forms of mechanisms.md agree with the root-found extremes on random designs.
+
+The closed forms (each type's ``facts``) are only used by synthesis; the analysis never reads
+them. Here each is checked against ``synth.analyze`` (root finding on ds/dθ), and both are
+checked against the brute-force simulation in test_bruteforce_agreement.py.
+"""
+
+import math
+
+import pytest
+
+import synth
+from synth.mechanisms import get
+
+from .designs import TYPES, random_designs
+
+N = 200
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_closed_forms_match_root_found_extremes(mtype):
+    m = get(mtype)
+    for p in random_designs(mtype, N, seed=1):
+        a = synth.analyze(mtype, p)
+        facts = {k: float(v) for k, v in m.facts(a.params).items()}
+        assert a.time_ratio == pytest.approx(facts["time_ratio"], rel=1e-9), p
+        assert a.stroke == pytest.approx(facts["stroke"], rel=1e-9), p
+        assert a.transmission.min_deg == pytest.approx(
+            math.degrees(facts["min_transmission"]), abs=1e-7
+        ), p
+        if "theta2a" in facts:  # seed 002 eq. (3a): TDC, the piston farthest out
+            assert math.radians(a.extremes["max"].crank_angle_deg) == pytest.approx(
+                facts["theta2a"], abs=1e-9
+            )
