@@ -44,7 +44,8 @@ def test_same_code_on_floats_sx_and_mx(mtype):
             got = [float(v) for v in fn.call([theta, list(full.values())])]
             np.testing.assert_allclose(got, floats, rtol=1e-14, atol=1e-14)
         facts = m.facts(full)
-        assert all(math.isfinite(float(v)) for v in facts.values())
+        assert all(math.isfinite(float(v)) for v in facts["transmission_cos"])
+        assert math.isfinite(float(facts["time_ratio"])) and float(facts["stroke"]) > 0
 
 
 def test_curves_only_where_asked():

@@ -26,6 +26,7 @@ class Parameter:
     default: float | None = None  # a constant default (makes the parameter optional)
     default_rule: str | None = None  # words for a default derived from the others (optional too)
     signed: bool = False  # may be zero or negative (an offset)
+    link: bool = True  # a link length (counts in the mechanism's size); False for placements
     zero_means: str | None = None  # 0 is allowed and selects a variant (e.g. a slot drive)
 
     @property
@@ -35,17 +36,18 @@ class Parameter:
 
 @dataclass(frozen=True)
 class Condition:
-    """A validity condition: ``margin(p) >= 0`` (``> 0`` when strict) on complete parameters.
+    """A validity condition: every term of ``margin(p)`` ≥ 0 (> 0 when strict).
 
-    ``margin`` is polymorphic (a constraint in the formulation); ``explain`` states a violation
-    with its numbers, e.g. "coupler 2 < crank 1 + |offset| 1.5: the crank cannot turn fully".
-    ``applies`` limits the condition to a variant (e.g. only with a ram link).
+    ``margin`` is polymorphic and returns smooth terms (|x| ≤ y is two terms), so each is a
+    constraint in the formulation; ``explain`` states a violation with its numbers, e.g.
+    "coupler 2 < crank 1 + |offset| 1.5: the crank cannot turn fully". ``applies`` limits the
+    condition to a variant (e.g. only with a ram link).
     """
 
     name: str
     text: str
     params: tuple[str, ...]
-    margin: Callable[[Params], Any]
+    margin: Callable[[Params], tuple[Any, ...]]
     explain: Callable[[Params], str]
     strict: bool = False
     applies: Callable[[Params], bool] = lambda p: True
@@ -67,7 +69,10 @@ class Mechanism:
     defaults: Callable[[Params], dict[str, Any]] = lambda p: {}  # derived defaults (polymorphic)
     # the four-bar's (ground, crank, coupler, rocker), for its Grashof class
     fourbar: Callable[[Params], tuple[Any, Any, Any, Any]] | None = None
-    facts: Callable[[Params], dict[str, Any]] | None = None  # closed forms from mechanisms.md
+    # closed forms from mechanisms.md: "time_ratio" (or its inverse: the closed forms follow the
+    # orientation, the analysis reports max(TR, 1/TR)), "stroke" and "transmission_cos" (the
+    # signed cos μ terms whose largest |·| is the worst transmission; empty for slot drives)
+    facts: Callable[[Params], dict[str, Any]] | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -116,7 +121,7 @@ class Mechanism:
         for c in self.conditions:
             if not c.applies(p):
                 continue
-            m = float(c.margin(p))
+            m = min(float(t) for t in c.margin(p))
             if not (m > 0 if c.strict else m >= 0):  # also catches NaN
                 raise InvalidDesign(c.explain(p), c.params, c.name)
 

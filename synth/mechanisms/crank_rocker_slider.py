@@ -56,10 +56,11 @@ def _delta(p, th):
     return mx * ux + my * uy, mx * uy - my * ux, cos_mu
 
 
-def _reach(p):
+def _offsets(p):
+    """Signed distances from C to the slider path at mid-swing and at the swing's ends."""
     ge, gf = _swing(p)
     h, r5 = p["slider_height"], p["rocker_arm"]
-    return ca.fmax(ca.fabs(h - r5), ca.fabs(h - r5 * ca.cos((ge - gf) / 2)))
+    return h - r5, h - r5 * ca.cos((ge - gf) / 2)
 
 
 def position(p, th):
@@ -87,15 +88,15 @@ def defaults(p):
 def facts(p):
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     r5, r6 = p["rocker_arm"], p["connecting_rod"]
-    dphi = ca.fabs(triangle_angle(r1, r3 - r2, r4) - triangle_angle(r1, r3 + r2, r4))
+    # the folded toggle's O2D is shorter, so its angle to the ground line is the larger one
+    dphi = triangle_angle(r1, r3 - r2, r4) - triangle_angle(r1, r3 + r2, r4)
     ge, gf = _swing(p)
-    worst = ca.fmax(ca.fabs(cos_law(r3, r4, r1 - r2)), ca.fabs(cos_law(r3, r4, r1 + r2)))
-    if not absent(r6):
-        worst = ca.fmax(worst, _reach(p) / r6)
+    rod = () if absent(r6) else tuple(t / r6 for t in _offsets(p))
     return {
         "time_ratio": (ca.pi + dphi) / (ca.pi - dphi),
         "stroke": 2 * r5 * ca.sin((ge - gf) / 2),
-        "min_transmission": ca.acos(worst),
+        # coupler–rocker with the crank on the ground line; rod at mid-swing and swing ends
+        "transmission_cos": (cos_law(r3, r4, r1 - r2), cos_law(r3, r4, r1 + r2), *rod),
     }
 
 
@@ -134,10 +135,13 @@ register(
                 text="connecting_rod ≥ max |slider_height − rocker_arm·cos δ| over the swing "
                 "(when connecting_rod > 0)",
                 params=("connecting_rod", "slider_height", "rocker_arm"),
-                margin=lambda p: p["connecting_rod"] - _reach(p),
+                margin=lambda p: tuple(
+                    p["connecting_rod"] + sg * t for t in _offsets(p) for sg in (1, -1)
+                ),
                 applies=lambda p: not absent(p["connecting_rod"]),
                 explain=lambda p: (
-                    f"connecting_rod {p['connecting_rod']:g} < {float(_reach(p)):g}, the largest "
+                    f"connecting_rod {p['connecting_rod']:g} < "
+                    f"{max(abs(float(t)) for t in _offsets(p)):g}, the largest "
                     f"distance from the pin C to the slider path (slider_height "
                     f"{p['slider_height']:g}): the rod cannot reach the slider over the whole "
                     f"swing"

@@ -26,8 +26,6 @@ transmission at the ram link cos μ = (h − L cos ψ)/l; the slot drive alone t
 
 from __future__ import annotations
 
-import math
-
 import casadi as ca
 
 from ..geometry import leg, unit
@@ -45,10 +43,11 @@ def _cos_psi_max(p):
     return leg(d, r2) / d
 
 
-def _reach(p):
-    """The largest distance from the lever tip to the ram path over the swing."""
+def _offsets(p):
+    """The signed distances from the lever tip to the ram path at mid-swing and at the ends:
+    the largest |·| over the swing is one of them (h − L cos ψ is monotonic in cos ψ)."""
     h, L = p["ram_height"], p["lever"]
-    return ca.fmax(ca.fabs(h - L), ca.fabs(h - L * _cos_psi_max(p)))
+    return h - L, h - L * _cos_psi_max(p)
 
 
 def position(p, th):
@@ -73,12 +72,11 @@ def defaults(p):
 
 def facts(p):
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["ram_link"]
-    half = ca.asin(r2 / d)
-    mu = math.pi / 2 if absent(l) else ca.acos(_reach(p) / l)
+    half = ca.atan2(r2, leg(d, r2))  # ψmax = asin(r2/d)
     return {
         "time_ratio": (ca.pi + 2 * half) / (ca.pi - 2 * half),
         "stroke": 2 * L * r2 / d,
-        "min_transmission": mu,
+        "transmission_cos": () if absent(l) else tuple(t / l for t in _offsets(p)),
     }
 
 
@@ -120,7 +118,7 @@ register(
                 name="oscillating_lever",
                 text="crank < pivot_distance (the lever oscillates; otherwise a Whitworth)",
                 params=("crank", "pivot_distance"),
-                margin=lambda p: p["pivot_distance"] - p["crank"],
+                margin=lambda p: (p["pivot_distance"] - p["crank"],),
                 strict=True,
                 explain=lambda p: (
                     f"crank {p['crank']:g} ≥ pivot_distance {p['pivot_distance']:g}: the lever "
@@ -131,7 +129,7 @@ register(
                 name="block_on_lever",
                 text="pivot_distance + crank ≤ lever (the crank-pin block stays on the lever)",
                 params=("lever", "pivot_distance", "crank"),
-                margin=lambda p: p["lever"] - p["pivot_distance"] - p["crank"],
+                margin=lambda p: (p["lever"] - p["pivot_distance"] - p["crank"],),
                 explain=lambda p: (
                     f"lever {p['lever']:g} < pivot_distance {p['pivot_distance']:g} + crank "
                     f"{p['crank']:g} = {p['pivot_distance'] + p['crank']:g}: the crank-pin block "
@@ -142,10 +140,13 @@ register(
                 name="ram_link_reach",
                 text="ram_link ≥ max |ram_height − lever·cos ψ| over the swing (when ram_link > 0)",
                 params=("ram_link", "ram_height", "lever"),
-                margin=lambda p: p["ram_link"] - _reach(p),
+                margin=lambda p: tuple(
+                    p["ram_link"] + sg * t for t in _offsets(p) for sg in (1, -1)
+                ),
                 applies=lambda p: not absent(p["ram_link"]),
                 explain=lambda p: (
-                    f"ram_link {p['ram_link']:g} < {float(_reach(p)):g}, the largest distance "
+                    f"ram_link {p['ram_link']:g} < {max(abs(float(t)) for t in _offsets(p)):g}, "
+                    f"the largest distance "
                     f"from the lever tip to the ram path (ram_height {p['ram_height']:g}): the "
                     f"ram link cannot reach the ram over the whole swing"
                 ),

@@ -57,12 +57,12 @@ def facts(p):
     r5, r6 = p["follower_arm"], p["connecting_rod"]
     t2a = triangle_angle(r2, r4 + r1, r3)  # eq. (3a)
     t2b = triangle_angle(r2, r4 - r1, r3)  # eq. (3b)
-    tr = (ca.pi - t2a + t2b) / (ca.pi + t2a - t2b)  # eq. (5); its inverse if the strokes swap
-    worst = ca.fmax(ca.fabs(cos_law(r3, r4, r2 - r1)), ca.fabs(cos_law(r3, r4, r2 + r1)))
+    tr = (ca.pi - t2a + t2b) / (ca.pi + t2a - t2b)  # eq. (5)
     return {
-        "time_ratio": ca.fmax(tr, 1 / tr),
+        "time_ratio": tr,
         "stroke": 2 * r5,
-        "min_transmission": ca.acos(ca.fmax(worst, r5 / r6)),
+        # coupler–follower with the crank on the ground line; rod with the follower upright
+        "transmission_cos": (cos_law(r3, r4, r2 - r1), cos_law(r3, r4, r2 + r1), r5 / r6),
         "theta2a": t2a,
         "theta2b": t2b,
     }
@@ -90,7 +90,7 @@ register(
                 name="rod_reach",
                 text="connecting_rod > follower_arm (the rod reaches the piston path)",
                 params=("connecting_rod", "follower_arm"),
-                margin=lambda p: p["connecting_rod"] - p["follower_arm"],
+                margin=lambda p: (p["connecting_rod"] - p["follower_arm"],),
                 strict=True,
                 explain=lambda p: (
                     f"connecting_rod {p['connecting_rod']:g} ≤ follower_arm "

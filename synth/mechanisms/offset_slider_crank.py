@@ -37,12 +37,13 @@ def transmission(p, th):
 
 
 def facts(p):
-    r2, r3, e = p["crank"], p["coupler"], ca.fabs(p["offset"])
-    beta = ca.asin(e / (r3 - r2)) - ca.asin(e / (r3 + r2))
+    r2, r3, e = p["crank"], p["coupler"], p["offset"]
+    # β = asin(e/(r3−r2)) − asin(e/(r3+r2)) with atan2; odd in e: TR < 1 is the mirror's 1/TR
+    beta = ca.atan2(e, leg(r3 - r2, e)) - ca.atan2(e, leg(r3 + r2, e))
     return {
         "time_ratio": (ca.pi + beta) / (ca.pi - beta),
         "stroke": leg(r3 + r2, e) - leg(r3 - r2, e),
-        "min_transmission": ca.acos((r2 + e) / r3),
+        "transmission_cos": ((e + r2) / r3, (e - r2) / r3),  # B_y = ∓r2
     }
 
 
@@ -66,7 +67,10 @@ register(
                 name="full_rotation",
                 text="coupler ≥ crank + |offset| (the crank turns a full revolution)",
                 params=("coupler", "crank", "offset"),
-                margin=lambda p: p["coupler"] - p["crank"] - ca.fabs(p["offset"]),
+                margin=lambda p: (
+                    p["coupler"] - p["crank"] - p["offset"],
+                    p["coupler"] - p["crank"] + p["offset"],
+                ),
                 explain=lambda p: (
                     f"coupler {p['coupler']:g} < crank {p['crank']:g} + |offset| "
                     f"{abs(p['offset']):g} = {p['crank'] + abs(p['offset']):g}: the crank cannot "

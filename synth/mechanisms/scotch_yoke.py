@@ -16,8 +16,6 @@ drives along the slot's normal, so the transmission angle is 90° throughout.
 
 from __future__ import annotations
 
-import math
-
 import casadi as ca
 
 from ._registry import Mechanism, Parameter, register
@@ -32,7 +30,7 @@ def transmission(p, th):
 
 
 def facts(p):
-    return {"time_ratio": 1.0, "stroke": 2 * p["crank"], "min_transmission": math.pi / 2}
+    return {"time_ratio": 1.0, "stroke": 2 * p["crank"], "transmission_cos": ()}
 
 
 register(

@@ -51,7 +51,7 @@ def facts(p):
     return {
         "time_ratio": (ca.pi - q) / q,
         "stroke": 2 * L,
-        "min_transmission": ca.acos(L / l),
+        "transmission_cos": (L / l,),
     }
 
 
@@ -74,7 +74,7 @@ register(
                 name="rotating_lever",
                 text="crank > pivot_distance (the lever turns fully; otherwise a crank shaper)",
                 params=("crank", "pivot_distance"),
-                margin=lambda p: p["crank"] - p["pivot_distance"],
+                margin=lambda p: (p["crank"] - p["pivot_distance"],),
                 strict=True,
                 explain=lambda p: (
                     f"crank {p['crank']:g} ≤ pivot_distance {p['pivot_distance']:g}: the lever "
@@ -85,7 +85,7 @@ register(
                 name="rod_reach",
                 text="connecting_rod > lever (the rod reaches the ram path in every position)",
                 params=("connecting_rod", "lever"),
-                margin=lambda p: p["connecting_rod"] - p["lever"],
+                margin=lambda p: (p["connecting_rod"] - p["lever"],),
                 strict=True,
                 explain=lambda p: (
                     f"connecting_rod {p['connecting_rod']:g} ≤ lever {p['lever']:g}: the rod "
