@@ -11,7 +11,9 @@ from importlib.metadata import PackageNotFoundError, version
 from . import mechanisms
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
 from .kinematics import analyze
-from .results import Analysis
+from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult
+from .sweep import sweep
+from .synthesis import Spec, synthesize
 
 try:
     __version__ = version("quickreturn-synth")
@@ -20,10 +22,17 @@ except PackageNotFoundError:  # run from a checkout without installing
 
 __all__ = [
     "Analysis",
+    "Candidate",
+    "Infeasible",
     "InvalidDesign",
     "InvalidParameters",
+    "Spec",
+    "SweepResult",
     "SynthError",
+    "SynthesisResult",
     "UnknownMechanism",
     "analyze",
     "mechanisms",
+    "sweep",
+    "synthesize",
 ]

@@ -143,7 +143,7 @@ def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -
         raise InvalidDesign("the slider does not move: no dead centres found", (), "stroke")
     s_theta, s_val = theta[on_s], values[on_s]
     i_max, i_min = np.argmax(s_val), np.argmin(s_val)
-    t_max, t_min = s_theta[i_max], s_theta[i_min]
+    t_max, t_min = float(s_theta[i_max]), float(s_theta[i_min])
     up = (t_max - t_min) % TWO_PI  # crank travel while the slider goes min -> max (+ direction)
     down = TWO_PI - up
     slow_up = up >= down

@@ -68,3 +68,64 @@ class Analysis:
         else:
             out["curves"] = {k: np.asarray(v).tolist() for k, v in out["curves"].items()}
         return out
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A verified design (POST /v1/synthesize): every parameter, fixed and found."""
+
+    type: str
+    params: dict[str, float]
+    time_ratio: float
+    stroke: float
+    min_transmission_angle_deg: float
+    objective_value: float
+    method: str  # closed_form, closed_form+ipopt, ipopt
+    residuals: dict[str, float]  # relative: time_ratio, stroke
+    verified: bool
+    grashof: str | None
+    size: float  # sum of the link lengths
+
+
+@dataclass(frozen=True)
+class Infeasible:
+    """Why a type gave no candidate: a code and a reason with numbers."""
+
+    type: str
+    code: str
+    reason: str
+
+
+@dataclass(frozen=True)
+class SynthesisResult:
+    candidates: tuple[Candidate, ...]
+    infeasible: tuple[Infeasible, ...]
+    complete: bool
+    elapsed_ms: float
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class Extremum:
+    time_ratio: float
+    value: float  # of the varied parameter
+
+
+@dataclass(frozen=True)
+class SweepResult:
+    """One parameter varied, the rest held (POST /v1/sweep). None where the design is invalid."""
+
+    type: str
+    vary: str
+    values: list[float]
+    time_ratio: list[float | None]
+    stroke: list[float | None]
+    min_transmission_angle_deg: list[float | None]
+    valid: list[bool]
+    valid_interval: list[tuple[float, float]]  # exact, within [start, stop]
+    time_ratio_range: dict[str, Extremum] | None  # "min", "max" over the valid part
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)

@@ -23,8 +23,8 @@ def test_closed_forms_match_root_found_extremes(mtype):
     for p in random_designs(mtype, N, seed=1):
         a = synth.analyze(mtype, p)
         facts = m.facts(a.params)
-        tr = float(facts["time_ratio"])
-        assert a.time_ratio == pytest.approx(max(tr, 1 / tr), rel=1e-9), p
+        beta = abs(float(facts["beta"]))
+        assert a.time_ratio == pytest.approx((math.pi + beta) / (math.pi - beta), rel=1e-9), p
         assert a.stroke == pytest.approx(float(facts["stroke"]), rel=1e-9), p
         worst = max((abs(float(c)) for c in facts["transmission_cos"]), default=0.0)
         assert a.transmission.min_deg == pytest.approx(math.degrees(math.acos(worst)), abs=1e-7), p

@@ -27,11 +27,20 @@ class Parameter:
     default_rule: str | None = None  # words for a default derived from the others (optional too)
     signed: bool = False  # may be zero or negative (an offset)
     link: bool = True  # a link length (counts in the mechanism's size); False for placements
+    bounds: tuple[float, float] = (0.1, 5.0)  # default synthesis bounds, × the stroke
     zero_means: str | None = None  # 0 is allowed and selects a variant (e.g. a slot drive)
 
     @property
     def required(self) -> bool:
         return self.default is None and self.default_rule is None
+
+
+class Unreachable(Exception):
+    """Raised by a type's ``inverse`` when the targets and fixed parts admit no design."""
+
+    def __init__(self, code: str, reason: str) -> None:
+        super().__init__(reason)
+        self.code, self.reason = code, reason
 
 
 @dataclass(frozen=True)
@@ -69,10 +78,15 @@ class Mechanism:
     defaults: Callable[[Params], dict[str, Any]] = lambda p: {}  # derived defaults (polymorphic)
     # the four-bar's (ground, crank, coupler, rocker), for its Grashof class
     fourbar: Callable[[Params], tuple[Any, Any, Any, Any]] | None = None
-    # closed forms from mechanisms.md: "time_ratio" (or its inverse: the closed forms follow the
-    # orientation, the analysis reports max(TR, 1/TR)), "stroke" and "transmission_cos" (the
-    # signed cos μ terms whose largest |·| is the worst transmission; empty for slot drives)
+    # closed forms from mechanisms.md: "beta", the crank angle by which the strokes differ from
+    # π (the slow one takes π + |β|, the quick one π − |β|: TR = (π + |β|)/(π − |β|); the sign
+    # follows the circuit's orientation), "stroke" and "transmission_cos" (the signed cos μ
+    # terms whose largest |·| is the worst transmission; empty for slot drives)
     facts: Callable[[Params], dict[str, Any]] | None = None
+    # the targets' fast path: inverse(fixed, time_ratio, stroke) -> the finite set of the
+    # parameters the targets determine (caller's units), None when the free set is a family,
+    # or raises Unreachable
+    inverse: Callable[[dict[str, float], float, float], list[dict[str, float]] | None] | None = None
 
     @property
     def names(self) -> tuple[str, ...]:

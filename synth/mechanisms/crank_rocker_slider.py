@@ -93,7 +93,7 @@ def facts(p):
     ge, gf = _swing(p)
     rod = () if absent(r6) else tuple(t / r6 for t in _offsets(p))
     return {
-        "time_ratio": (ca.pi + dphi) / (ca.pi - dphi),
+        "beta": dphi,
         "stroke": 2 * r5 * ca.sin((ge - gf) / 2),
         # coupler–rocker with the crank on the ground line; rod at mid-swing and swing ends
         "transmission_cos": (cos_law(r3, r4, r1 - r2), cos_law(r3, r4, r1 + r2), *rod),
@@ -126,6 +126,7 @@ register(
                 "h",
                 "O4 to the slider path along the mid-swing line",
                 default_rule="rocker_arm·cos(Δψ/2): the path through C's extreme positions",
+                link=False,
             ),
         ),
         conditions=(

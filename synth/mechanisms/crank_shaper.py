@@ -26,10 +26,13 @@ transmission at the ram link cos μ = (h − L cos ψ)/l; the slot drive alone t
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 
 from ..geometry import leg, unit
-from ._registry import Condition, Mechanism, Parameter, absent, register
+from ._inverse import crank_pivot_lever
+from ._registry import Condition, Mechanism, Parameter, Unreachable, absent, register
 
 
 def _lever(p, th):
@@ -74,10 +77,23 @@ def facts(p):
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["ram_link"]
     half = ca.atan2(r2, leg(d, r2))  # ψmax = asin(r2/d)
     return {
-        "time_ratio": (ca.pi + 2 * half) / (ca.pi - 2 * half),
+        "beta": 2 * half,  # TR = (π + 2ψmax)/(π − 2ψmax)
         "stroke": 2 * L * r2 / d,
         "transmission_cos": () if absent(l) else tuple(t / l for t in _offsets(p)),
     }
+
+
+def inverse(fixed, tr, stroke):
+    """sin ψmax = crank/pivot_distance = sin(π(TR − 1)/(2(TR + 1))); lever = stroke/(2 sin ψmax)."""
+    if tr <= 1:
+        raise Unreachable("TIME_RATIO_UNREACHABLE", "crank_shaper has time ratio > 1 always")
+    k = math.sin(math.pi * (tr - 1) / (2 * (tr + 1)))
+
+    def tr_of(ratio):
+        a = math.asin(min(ratio, 1.0))
+        return (math.pi + 2 * a) / (math.pi - 2 * a)
+
+    return crank_pivot_lever(fixed, k, stroke / (2 * k), tr_of, lambda L: 2 * L * k)
 
 
 register(
@@ -111,6 +127,7 @@ register(
                 "lever pivot to the ram path, along the pivot line",
                 default_rule="lever·cos ψmax (sin ψmax = crank/pivot_distance): the path "
                 "through the tip's extreme positions",
+                link=False,
             ),
         ),
         conditions=(
@@ -156,5 +173,6 @@ register(
         transmission=transmission,
         defaults=defaults,
         facts=facts,
+        inverse=inverse,
     )
 )

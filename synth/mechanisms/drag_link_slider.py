@@ -26,11 +26,11 @@ ground line, |AO4| = r2 ∓ r1 (the seed evaluates it at TDC/BDC instead: not th
 
 from __future__ import annotations
 
-import casadi as ca
+import math
 
 from ..geometry import cos_law, leg, triangle_angle
 from ._fourbar import grashof_conditions, output_pin
-from ._registry import Condition, Mechanism, Parameter, register
+from ._registry import Condition, Mechanism, Parameter, Unreachable, register
 
 LINKS = ("ground", "crank", "coupler", "follower")
 
@@ -57,15 +57,43 @@ def facts(p):
     r5, r6 = p["follower_arm"], p["connecting_rod"]
     t2a = triangle_angle(r2, r4 + r1, r3)  # eq. (3a)
     t2b = triangle_angle(r2, r4 - r1, r3)  # eq. (3b)
-    tr = (ca.pi - t2a + t2b) / (ca.pi + t2a - t2b)  # eq. (5)
     return {
-        "time_ratio": tr,
+        "beta": t2b - t2a,  # eq. (5): TR = (π − θ2a + θ2b)/(π + θ2a − θ2b)
         "stroke": 2 * r5,
         # coupler–follower with the crank on the ground line; rod with the follower upright
         "transmission_cos": (cos_law(r3, r4, r2 - r1), cos_law(r3, r4, r2 + r1), r5 / r6),
         "theta2a": t2a,
         "theta2b": t2b,
     }
+
+
+def inverse(fixed, tr, stroke):
+    """Seed 002 eqs. (7)–(13): with ground, crank and follower fixed, zero, one or two couplers
+    give the time ratio; follower_arm = stroke/2."""
+    if not {"ground", "crank", "follower"} <= fixed.keys() or "coupler" in fixed:
+        return None
+    r1, r2, r4 = fixed["ground"], fixed["crank"], fixed["follower"]
+    arm = fixed.get("follower_arm", stroke / 2)
+    if not math.isclose(arm, stroke / 2, rel_tol=1e-12):
+        raise Unreachable(
+            "FIXED_PARTS_CONTRADICT_TARGETS",
+            f"follower_arm {arm:g} gives stroke {2 * arm:g}, not {stroke:g}",
+        )
+    f = (tr - 1) * math.pi / (tr + 1)  # eq. (7): θ2b = θ2a + f
+    a = (r4 + r1) - (r4 - r1) * math.cos(f)  # eqs. (10)–(11): A cos θ2a + B sin θ2a = C
+    b = (r4 - r1) * math.sin(f)
+    c = 2 * r4 * r1 / r2
+    rr = math.hypot(a, b)
+    if rr < c:
+        return []
+    # eq. (12) in the double-root-safe form atan2(sqrt((R − C)(R + C)), C) (numerics.md)
+    half = math.atan2(math.sqrt((rr - c) * (rr + c)), c)
+    out = []
+    for t2a in {math.atan2(b, a) - half, math.atan2(b, a) + half}:
+        r3_sq = r2**2 + (r4 + r1) ** 2 - 2 * r2 * (r4 + r1) * math.cos(t2a)  # eq. (13)
+        coupler = {"coupler": math.sqrt(r3_sq)}
+        out.append(coupler if "follower_arm" in fixed else {**coupler, "follower_arm": arm})
+    return out
 
 
 register(
@@ -103,5 +131,6 @@ register(
         transmission=transmission,
         fourbar=lambda p: tuple(p[n] for n in LINKS),
         facts=facts,
+        inverse=inverse,
     )
 )

@@ -20,10 +20,12 @@ TR = (π+β)/(π−β); μ_min = acos((r2+|e|)/r3).
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 
 from ..geometry import leg
-from ._registry import Condition, Mechanism, Parameter, register
+from ._registry import Condition, Mechanism, Parameter, Unreachable, register
 
 
 def position(p, th):
@@ -41,10 +43,37 @@ def facts(p):
     # β = asin(e/(r3−r2)) − asin(e/(r3+r2)) with atan2; odd in e: TR < 1 is the mirror's 1/TR
     beta = ca.atan2(e, leg(r3 - r2, e)) - ca.atan2(e, leg(r3 + r2, e))
     return {
-        "time_ratio": (ca.pi + beta) / (ca.pi - beta),
+        "beta": beta,
         "stroke": leg(r3 + r2, e) - leg(r3 - r2, e),
         "transmission_cos": ((e + r2) / r3, (e - r2) / r3),  # B_y = ∓r2
     }
+
+
+def inverse(fixed, tr, stroke):
+    """With the offset fixed: the folded dead centre's x1 solves
+    x1² + S x1 + e² − e S / tan β = 0 (tan β from the two dead centres' directions); then
+    crank = (v − u)/2, coupler = (u + v)/2 with u = |O2C1|, v = |O2C2|."""
+    if "offset" not in fixed or {"crank", "coupler"} & fixed.keys():
+        return None
+    e, s = abs(fixed["offset"]), stroke
+    beta = math.pi * (tr - 1) / (tr + 1)
+    if (beta == 0) != (e == 0):  # TR 1 if and only if the slider path is centred
+        raise Unreachable(
+            "FIXED_PARTS_CONTRADICT_TARGETS",
+            f"offset {fixed['offset']:g} gives time ratio {'1' if e == 0 else '> 1'}, not {tr:g}",
+        )
+    if e == 0:
+        return None  # centred: crank = stroke/2 and any longer coupler, a family
+    disc = s * s - 4 * e * e + 4 * e * s / math.tan(beta)
+    x1 = (-s + math.sqrt(disc)) / 2 if disc > 0 else -1.0
+    if x1 <= 0:
+        raise Unreachable(
+            "FIXED_PARTS_CONTRADICT_TARGETS",
+            f"offset {fixed['offset']:g} is too large for time ratio {tr:g} and stroke {s:g}: "
+            f"needs |offset| < stroke/tan β = {s / math.tan(beta):.9g}",
+        )
+    u, v = math.hypot(x1, e), math.hypot(x1 + s, e)
+    return [{"crank": (v - u) / 2, "coupler": (u + v) / 2}]
 
 
 register(
@@ -59,7 +88,12 @@ register(
             Parameter("crank", "r2", "crank O2B"),
             Parameter("coupler", "r3", "connecting rod BC (crank pin to slider)"),
             Parameter(
-                "offset", "e", "signed offset of the slider path from the crank pivot", signed=True
+                "offset",
+                "e",
+                "signed offset of the slider path from the crank pivot",
+                signed=True,
+                link=False,
+                bounds=(0.0, 5.0),  # the mirror (−e) has the same TR and stroke
             ),
         ),
         conditions=(
@@ -81,5 +115,6 @@ register(
         position=position,
         transmission=transmission,
         facts=facts,
+        inverse=inverse,
     )
 )

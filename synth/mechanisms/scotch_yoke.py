@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from ._registry import Mechanism, Parameter, register
+from ._registry import Mechanism, Parameter, Unreachable, register
 
 
 def position(p, th):
@@ -30,7 +30,21 @@ def transmission(p, th):
 
 
 def facts(p):
-    return {"time_ratio": 1.0, "stroke": 2 * p["crank"], "transmission_cos": ()}
+    return {"beta": 0.0, "stroke": 2 * p["crank"], "transmission_cos": ()}
+
+
+def inverse(fixed, tr, stroke):
+    """crank = stroke/2; the time ratio is 1 for every design."""
+    if tr != 1:
+        raise Unreachable(
+            "TIME_RATIO_UNREACHABLE", f"scotch_yoke has time ratio 1 for every design, not {tr:g}"
+        )
+    if "crank" in fixed and fixed["crank"] != stroke / 2:
+        raise Unreachable(
+            "FIXED_PARTS_CONTRADICT_TARGETS",
+            f"crank {fixed['crank']:g} gives stroke {2 * fixed['crank']:g}, not {stroke:g}",
+        )
+    return [{} if "crank" in fixed else {"crank": stroke / 2}]
 
 
 register(
@@ -46,5 +60,6 @@ register(
         position=position,
         transmission=transmission,
         facts=facts,
+        inverse=inverse,
     )
 )

@@ -23,10 +23,13 @@ TR = (π − acos(d/r2)) / acos(d/r2); stroke = 2L; transmission cos μ = L cos 
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 
 from ..geometry import leg, unit
-from ._registry import Condition, Mechanism, Parameter, register
+from ._inverse import crank_pivot_lever
+from ._registry import Condition, Mechanism, Parameter, Unreachable, register
 
 
 def _lever(p, th):
@@ -47,12 +50,25 @@ def transmission(p, th):
 
 def facts(p):
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["connecting_rod"]
-    q = ca.acos(d / r2)
+    q = ca.atan2(leg(r2, d), d)  # acos(d/r2)
     return {
-        "time_ratio": (ca.pi - q) / q,
+        "beta": ca.pi - 2 * q,  # TR = (π − q)/q
         "stroke": 2 * L,
         "transmission_cos": (L / l,),
     }
+
+
+def inverse(fixed, tr, stroke):
+    """pivot_distance/crank = cos(π/(1 + TR)) (the quick stroke's half angle); lever = stroke/2."""
+    if tr <= 1:
+        raise Unreachable("TIME_RATIO_UNREACHABLE", "whitworth has time ratio > 1 always")
+    c = math.cos(math.pi / (1 + tr))
+
+    def tr_of(ratio):
+        q = math.acos(min(1 / ratio, 1.0))
+        return (math.pi - q) / q
+
+    return crank_pivot_lever(fixed, 1 / c, stroke / 2, tr_of, lambda L: 2 * L)
 
 
 register(
@@ -96,5 +112,6 @@ register(
         position=position,
         transmission=transmission,
         facts=facts,
+        inverse=inverse,
     )
 )

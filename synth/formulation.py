@@ -1,0 +1,135 @@
+"""Registry → symbolic NLP for one (type, variant, free set, objective). No solver options here.
+
+Variables are the free parameters divided by the stroke (the design is synthesised at stroke 1
+and scaled at the end). The NLP parameters are the fixed values (also divided by the stroke),
+the target time ratio and cos of the transmission bound, so one built solver serves every
+request with the same structure. Every equation comes from the registry: the type's closed
+forms (``facts``) give time ratio, stroke and the transmission cosines, its conditions' margins
+give the validity constraints.
+
+Constraints (all smooth):
+
+- stroke = 1;
+- time ratio, through the stroke-angle excess β = π(TR − 1)/(TR + 1) (bounded, unlike TR, and
+  better conditioned near the Grashof limits): (β² − β*²)/(2β*) = 0 accepts either sign of the
+  closed form's β (the circuit's orientation) and reads ±(β − β*) near a root;
+- −cos μ_bound ≤ c_k ≤ cos μ_bound for every transmission cosine term;
+- every validity margin term ≥ 0 (≥ ``STRICT`` for strict conditions).
+
+Objectives: ``max_transmission_angle`` minimises t ≥ |c_k| (an epigraph variable) plus
+``TIE`` × size, so that a family of designs with the same best angle (a slot drive: 90° for
+every design) resolves to its smallest mechanism; ``min_size`` minimises the sum of link
+lengths. The diagnostics ``max_time_ratio`` and
+``min_time_ratio`` drop the time-ratio equality and push β² up or down.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from .geometry import extended_domain
+from .mechanisms import Mechanism
+
+OBJECTIVES = ("max_transmission_angle", "min_size")
+DIAGNOSTICS = ("max_time_ratio", "min_time_ratio")
+STRICT = 1e-7  # margin kept by strict conditions, in stroke units
+TIE = 1e-7  # weight of size against |cos μ| (costs < 1e-5° of transmission angle)
+
+
+def relevant(m: Mechanism, variant: frozenset[str]) -> tuple[str, ...]:
+    """The parameters the variant's kinematics depend on (a slot drive ignores ram_height)."""
+    th = ca.SX.sym("th")
+    sym = {q.name: ca.SX.sym(q.name) for q in m.parameters}
+    p = {k: (0.0 if k in variant else v) for k, v in sym.items()}
+    out = ca.vertcat(m.position(p, th), *m.transmission(p, th).values())
+    return tuple(k for k in m.names if k not in variant and ca.depends_on(out, sym[k]))
+
+
+@dataclass(frozen=True)
+class Formulation:
+    mtype: str
+    variant: frozenset[str]
+    free: tuple[str, ...]
+    fixed: tuple[str, ...]
+    objective: str
+    nlp: dict  # x, p, f, g for nlpsol
+    lbg: np.ndarray
+    ubg: np.ndarray
+    n_extra: int  # variables after the free parameters (the epigraph t)
+    equalities: ca.Function  # (x, p) -> (residuals, Jacobian): for polishing
+    score: ca.Function  # (x, p) -> (worst |cos μ|, size)
+
+
+def formulate(
+    m: Mechanism, variant: frozenset[str], free: tuple[str, ...], objective: str
+) -> Formulation:
+    with extended_domain():
+        return _formulate(m, variant, free, objective)
+
+
+def _formulate(
+    m: Mechanism, variant: frozenset[str], free: tuple[str, ...], objective: str
+) -> Formulation:
+    names = relevant(m, variant)
+    fixed = tuple(k for k in names if k not in free)
+    x = ca.SX.sym("x", len(free))
+    fx = ca.SX.sym("fixed", len(fixed))
+    tr_t, cos_b = ca.SX.sym("tr"), ca.SX.sym("cos_bound")
+    beta_t = ca.pi * (tr_t - 1) / (tr_t + 1)
+    p = {k: 0.0 for k in variant}
+    p.update({k: x[i] for i, k in enumerate(free)})
+    p.update({k: fx[i] for i, k in enumerate(fixed)})
+    p.update({k: v for k, v in m.defaults(p).items() if k not in p})  # irrelevant placements
+    facts = m.facts(p)
+    beta, cosines = facts["beta"], list(facts["transmission_cos"])
+    size = sum(p[q.name] for q in m.parameters if q.link and q.name not in variant)
+
+    g, lb, ub = [facts["stroke"] - 1], [0.0], [0.0]
+    if objective not in DIAGNOSTICS:
+        g.append(ca.if_else(beta_t == 0, beta, (beta - beta_t) * (beta + beta_t) / (2 * beta_t)))
+        lb.append(0.0), ub.append(0.0)
+    n_eq = len(g)
+    for c in cosines:
+        g += [c - cos_b, -c - cos_b]
+        lb += [-ca.inf, -ca.inf]
+        ub += [0.0, 0.0]
+    for cond in m.conditions:
+        if cond.applies({k: (0.0 if k in variant else 1.0) for k in m.names}):
+            for term in cond.margin(p):
+                g.append(term)
+                lb.append(STRICT if cond.strict else 0.0)
+                ub.append(ca.inf)
+
+    extra = []
+    if objective == "max_transmission_angle" and cosines:
+        t = ca.SX.sym("t")
+        extra = [t]
+        for c in cosines:
+            g += [c - t, -c - t]
+            lb += [-ca.inf, -ca.inf]
+            ub += [0.0, 0.0]
+        f = t + TIE * size
+    elif objective in OBJECTIVES:
+        f = size
+    else:
+        f = (-1 if objective == "max_time_ratio" else 1) * beta**2
+
+    worst = ca.mmax(ca.fabs(ca.vertcat(*cosines))) if cosines else ca.SX(0)
+    eqs = ca.vertcat(*g[:n_eq])
+    params = ca.vertcat(fx, tr_t, cos_b)
+    return Formulation(
+        mtype=m.type,
+        variant=variant,
+        free=free,
+        fixed=fixed,
+        objective=objective,
+        nlp={"x": ca.vertcat(x, *extra), "p": params, "f": f, "g": ca.vertcat(*g)},
+        lbg=np.array(lb, dtype=float),
+        ubg=np.array(ub, dtype=float),
+        n_extra=len(extra),
+        equalities=ca.Function("eq", [x, params], [eqs, ca.jacobian(eqs, x)]),
+        score=ca.Function("score", [x, params], [worst, size]),
+    )

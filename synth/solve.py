@@ -1,0 +1,113 @@
+"""IPOPT on a formulation: per-thread solver cache, deterministic multistart, polishing.
+
+A CasADi ``nlpsol`` is never shared between threads (numerics.md: that crashes the process):
+each thread builds its own, once per (type, variant, free set, objective). Every solve is
+bounded in iterations and wall time. Starts come from a Halton sequence over the bounds (no
+clock, no random seed: the same request gives the same starts), lengths spread in log scale.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+from scipy.stats import qmc
+
+from .formulation import Formulation, formulate
+from .mechanisms import Mechanism
+
+MAX_ITER = 200
+MAX_WALL_S = 0.5  # one solve; the request's budget is checked between solves
+IPOPT = {
+    "print_time": False,
+    "show_eval_warnings": False,  # NaN in a line search is handled by IPOPT (it cuts the step)
+    "ipopt.print_level": 0,
+    "ipopt.sb": "yes",
+    "ipopt.max_iter": MAX_ITER,
+    "ipopt.max_wall_time": MAX_WALL_S,
+    "ipopt.tol": 1e-10,
+    "ipopt.constr_viol_tol": 1e-11,
+}
+_local = threading.local()
+
+
+@dataclass(frozen=True)
+class Built:
+    form: Formulation
+    solver: ca.Function
+
+
+def built(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], objective: str) -> Built:
+    """The formulation and its IPOPT solver, built once per thread and structure."""
+    cache: dict = _local.__dict__.setdefault("solvers", {})
+    key = (m.type, variant, free, objective)
+    if key not in cache:
+        form = formulate(m, variant, free, objective)
+        cache[key] = Built(form, ca.nlpsol(f"{m.type}_{objective}", "ipopt", form.nlp, IPOPT))
+    return cache[key]
+
+
+@dataclass(frozen=True)
+class Local:
+    """One local solution, in stroke units."""
+
+    x: dict[str, float]  # the free parameters
+    status: str
+    iterations: int
+
+
+def starts(lo: np.ndarray, hi: np.ndarray, log: np.ndarray, n: int) -> np.ndarray:
+    """n deterministic points in the box: Halton, log-uniform where ``log`` (positive bounds)."""
+    if lo.size == 0:
+        return np.zeros((min(n, 1), 0))
+    u = qmc.Halton(d=lo.size, scramble=False).random(n + 1)[1:]  # skip the corner point 0
+    llo, lhi = np.log(np.where(log, lo, 1.0)), np.log(np.where(log, hi, 1.0))
+    return np.where(log, np.exp(llo + u * (lhi - llo)), lo + u * (hi - lo))
+
+
+def multistart(
+    b: Built,
+    fixed: np.ndarray,
+    tr: float,
+    cos_bound: float,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    start_points: np.ndarray,
+    deadline: float,
+) -> Iterator[Local]:
+    """Solve from each start until the deadline; yield the converged, polished solutions."""
+    form = b.form
+    pv = np.concatenate([fixed, [tr, cos_bound]])
+    n_free = len(form.free)
+    lbx = np.concatenate([lo, [-np.inf] * form.n_extra])
+    ubx = np.concatenate([hi, [np.inf] * form.n_extra])
+    for x0 in start_points:
+        if time.monotonic() >= deadline:
+            return
+        x0 = np.concatenate([x0, [1.0] * form.n_extra])
+        sol = b.solver(x0=x0, p=pv, lbx=lbx, ubx=ubx, lbg=form.lbg, ubg=form.ubg)
+        stats = b.solver.stats()
+        status = stats["return_status"]
+        if status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+            continue
+        x = polish(form.equalities, np.asarray(sol["x"]).ravel()[:n_free], pv, lo, hi)
+        if x is not None:
+            yield Local(dict(zip(form.free, x, strict=True)), status, stats["iter_count"])
+
+
+def polish(
+    eq: ca.Function, x: np.ndarray, pv: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> np.ndarray | None:
+    """A few minimum-norm Newton steps onto the equalities (IPOPT stops at ~1e-10)."""
+    for _ in range(4):
+        r, jac = (np.asarray(v) for v in eq(x, pv))
+        r = r.ravel()
+        if np.max(np.abs(r), initial=0.0) <= 1e-15:
+            break
+        step, *_ = np.linalg.lstsq(jac, r, rcond=None)
+        x = np.clip(x - step, lo, hi)
+    return x if np.all(np.isfinite(x)) else None

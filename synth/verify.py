@@ -1,0 +1,37 @@
+"""A-posteriori check of every candidate by the forward analysis (root-found dead centres).
+
+The analysis shares no formula with the synthesis: the time ratio and stroke it reports come
+from root finding on ds/dθ of the position function, not from the closed forms the NLP used.
+"""
+
+from __future__ import annotations
+
+from .errors import SynthError
+from .kinematics import analyze
+from .results import Analysis
+
+TOL = 1e-9  # relative, on every target and constraint
+
+
+def verify(
+    mtype: str, params: dict[str, float], time_ratio: float, stroke: float, bound_deg: float
+) -> tuple[Analysis, dict[str, float]] | None:
+    """The analysis and the relative residuals if the design meets every target, else None.
+
+    A design must also run cleanly: exactly two slider reversals per revolution (one working
+    and one return stroke).
+    """
+    try:
+        a = analyze(mtype, params)
+    except SynthError:
+        return None
+    residuals = {
+        "time_ratio": abs(a.time_ratio - time_ratio) / time_ratio,
+        "stroke": abs(a.stroke - stroke) / stroke,
+    }
+    ok = (
+        a.reversals == 2
+        and max(residuals.values()) <= TOL
+        and a.transmission.min_deg >= bound_deg - TOL * max(bound_deg, 1.0)
+    )
+    return (a, residuals) if ok else None

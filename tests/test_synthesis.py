@@ -1,0 +1,166 @@
+"""synth.synthesize: the seed 002 project, textbook inversions, infeasible requests, determinism.
+
+Every candidate is re-checked here against the brute-force simulator (tests/bruteforce.py),
+which shares no code with synth.
+"""
+
+import math
+
+import pytest
+
+import synth
+
+from . import bruteforce
+from . import reference_cases as ref
+from .test_reference_cases import seed002_couplers
+
+
+def assert_meets(c, tr, stroke, bound_deg):
+    """Independent check: the brute-force simulation of the candidate meets the targets."""
+    b = bruteforce.simulate(c.type, c.params)
+    assert b["time_ratio"] == pytest.approx(tr, rel=1e-9)
+    assert b["stroke"] == pytest.approx(stroke, rel=1e-9)
+    assert b["min_transmission_deg"] >= bound_deg - 1e-7
+    assert c.verified and max(c.residuals.values()) <= 1e-9
+    assert c.min_transmission_angle_deg == pytest.approx(b["min_transmission_deg"], abs=1e-6)
+
+
+PROJECT = {"type": "drag_link_slider", "fixed": {**ref.DRAG_LINK_FIXED, "connecting_rod": 0.3}}
+
+
+def test_seed002_project_gives_exactly_the_two_couplers():
+    r = synth.synthesize(ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 0.0, mechanisms=[PROJECT])
+    assert r.complete and not r.infeasible
+    couplers = sorted(c.params["coupler"] for c in r.candidates)
+    assert len(couplers) == 2
+    # eqs. (7)–(13) written out in the reference test, against the printed 0.1544 / 0.2504
+    assert couplers == pytest.approx(seed002_couplers(ref.DRAG_LINK_TR), rel=1e-12)
+    assert couplers == pytest.approx(ref.DRAG_LINK_COUPLERS, abs=1e-4)
+    for c in r.candidates:
+        assert c.params["follower_arm"] == pytest.approx(0.15, rel=1e-12)
+        assert c.method == "closed_form" and c.grashof == "drag-link"
+        assert_meets(c, ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 0.0)
+    # best first: the 0.2504 coupler transmits at 27.01°, the 0.1544 one at 9.09°
+    assert [round(c.min_transmission_angle_deg, 2) for c in r.candidates] == [27.01, 9.09]
+
+
+def test_seed002_project_with_a_20deg_bound_keeps_only_the_long_coupler():
+    r = synth.synthesize(ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 20.0, mechanisms=[PROJECT])
+    (c,) = r.candidates
+    assert c.params["coupler"] == pytest.approx(0.2504, abs=1e-4)
+    assert_meets(c, ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 20.0)
+
+
+def test_textbook_crank_shaper_inversion():
+    spec = {"type": "crank_shaper", "fixed": {"pivot_distance": 240.0}}
+    r = synth.synthesize(2.0, 450.0, mechanisms=[spec])
+    best = r.candidates[0]  # the slot drive: 90°, the smaller mechanism
+    assert best.params["crank"] == pytest.approx(120.0, rel=1e-12)
+    assert best.params["lever"] == pytest.approx(450.0, rel=1e-12)
+    assert best.params["ram_link"] == 0.0 and best.method == "closed_form"
+    for c in r.candidates:
+        assert_meets(c, 2.0, 450.0, 0.0)
+
+
+def test_textbook_whitworth_inversion():
+    spec = {"type": "whitworth", "fixed": {"pivot_distance": 50.0}}
+    r = synth.synthesize(2.73524, 300.0, mechanisms=[spec])
+    best = r.candidates[0]
+    assert best.params["crank"] == pytest.approx(75.0, rel=1e-6)  # TR is given to 6 digits
+    assert best.params["lever"] == pytest.approx(150.0, rel=1e-12)
+    assert_meets(best, 2.73524, 300.0, 0.0)
+
+
+def test_every_type_by_default_and_ranked():
+    r = synth.synthesize(1.5, 0.3, 20.0, max_candidates=50)
+    assert r.complete and r.candidates
+    mus = [round(c.min_transmission_angle_deg, 9) for c in r.candidates]
+    assert mus == sorted(mus, reverse=True)
+    assert {c.type for c in r.candidates} == {
+        "offset_slider_crank", "crank_shaper", "whitworth", "crank_rocker_slider",
+        "drag_link_slider",
+    }  # fmt: skip
+    for c in r.candidates:
+        assert_meets(c, 1.5, 0.3, 20.0)
+
+
+def test_min_size_ranks_by_size():
+    r = synth.synthesize(1.5, 0.3, 20.0, objective="min_size", max_candidates=50)
+    sizes = [c.size for c in r.candidates]
+    assert sizes == sorted(sizes) and r.candidates[0].objective_value == sizes[0]
+    for c in r.candidates:
+        placements = ("offset", "ram_height", "slider_height")
+        assert c.size == pytest.approx(sum(v for k, v in c.params.items() if k not in placements))
+        assert_meets(c, 1.5, 0.3, 20.0)
+
+
+def test_time_ratio_beyond_reach_says_how_far_the_type_goes():
+    r = synth.synthesize(3.0, 100.0, 30.0, mechanisms=[{"type": "offset_slider_crank"}])
+    assert not r.candidates
+    (why,) = r.infeasible
+    assert why.code == "TIME_RATIO_UNREACHABLE"
+    top = float(why.reason.split(" … ")[1].split()[0])
+    assert 1.2 < top < 3.0 and "transmission angle ≥ 30°" in why.reason
+    # the reported reach is real: a design at that TR with the bound exists (just below it)
+    below = synth.synthesize(top * 0.999, 100.0, 30.0, mechanisms=[{"type": "offset_slider_crank"}])
+    assert below.candidates
+
+
+def test_transmission_bound_above_any_design():
+    r = synth.synthesize(ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 50.0, mechanisms=[PROJECT])
+    (why,) = r.infeasible
+    assert why.code == "TRANSMISSION_UNREACHABLE"
+    assert "27.008" in why.reason and "below the bound 50°" in why.reason
+
+
+def test_fixed_parts_that_contradict_the_targets():
+    spec = {"type": "crank_shaper", "fixed": {"pivot_distance": 240.0, "lever": 400.0}}
+    (why,) = synth.synthesize(2.0, 450.0, mechanisms=[spec]).infeasible
+    assert why.code == "FIXED_PARTS_CONTRADICT_TARGETS"
+    assert why.reason.startswith("lever 400 gives stroke 400, not 450")
+    spec = {"type": "crank_shaper", "fixed": {"crank": 300.0, "pivot_distance": 240.0}}
+    (why,) = synth.synthesize(2.0, 450.0, mechanisms=[spec]).infeasible
+    assert why.code == "FIXED_PARTS_INVALID"
+    assert "crank 300 ≥ pivot_distance 240" in why.reason
+    (why,) = synth.synthesize(1.5, 10.0, mechanisms=[{"type": "scotch_yoke"}]).infeasible
+    assert why.code == "TIME_RATIO_UNREACHABLE" and "time ratio 1 for every design" in why.reason
+
+
+def test_same_request_same_answer():
+    def run():
+        r = synth.synthesize(1.5, 0.3, 20.0).to_dict()
+        r.pop("elapsed_ms")
+        return r
+
+    assert run() == run()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"time_ratio": 0.9}, "time_ratio"),
+        ({"time_ratio": math.nan}, "time_ratio"),
+        ({"stroke": 0.0}, "stroke"),
+        ({"min_transmission_angle_deg": 90.0}, "min_transmission_angle_deg"),
+        ({"objective": "cheapest"}, "objective"),
+        ({"max_candidates": 0}, "max_candidates"),
+        ({"time_budget_ms": -1.0}, "time_budget_ms"),
+    ],
+)
+def test_bad_targets_name_the_field(kwargs, field):
+    args = {"time_ratio": 1.5, "stroke": 1.0, **kwargs}
+    with pytest.raises(synth.InvalidParameters) as e:
+        synth.synthesize(**args)
+    assert e.value.loc == (field,)
+
+
+def test_bad_specs_name_the_field():
+    both = {"type": "whitworth", "fixed": {"lever": 1.0}, "bounds": {"lever": (1, 2)}}
+    with pytest.raises(synth.InvalidParameters, match="both fixed and bounded"):
+        synth.synthesize(1.5, 1.0, mechanisms=[both])
+    with pytest.raises(synth.InvalidParameters, match=r"bounds \[2, 1\]"):
+        synth.synthesize(1.5, 1.0, mechanisms=[{"type": "whitworth", "bounds": {"lever": (2, 1)}}])
+    with pytest.raises(synth.InvalidParameters, match="has no parameter 'rod'"):
+        synth.synthesize(1.5, 1.0, mechanisms=[{"type": "whitworth", "fixed": {"rod": 1.0}}])
+    with pytest.raises(synth.UnknownMechanism):
+        synth.synthesize(1.5, 1.0, mechanisms=[{"type": "cam"}])
