@@ -164,3 +164,10 @@ def test_bad_specs_name_the_field():
         synth.synthesize(1.5, 1.0, mechanisms=[{"type": "whitworth", "fixed": {"rod": 1.0}}])
     with pytest.raises(synth.UnknownMechanism):
         synth.synthesize(1.5, 1.0, mechanisms=[{"type": "cam"}])
+
+
+def test_time_budget_gives_a_partial_answer():
+    r = synth.synthesize(1.5, 0.3, 20.0, time_budget_ms=0.01)
+    assert r.complete is False
+    for c in r.candidates:  # what was found is still verified
+        assert_meets(c, 1.5, 0.3, 20.0)
