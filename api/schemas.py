@@ -1,10 +1,179 @@
-"""Pydantic models of the REST contract, generated from the registry where they describe types."""
+"""Pydantic models of the REST contract; every per-type model is generated from the registry.
+
+Floats are finite (``allow_inf_nan=False``) and strictly typed, unknown fields are rejected,
+lengths lie in [``LENGTH_MIN``, ``LENGTH_MAX``] (or are 0 where zero selects a variant; an
+offset takes either sign), and every size is capped.
+"""
 
 from __future__ import annotations
 
-from pydantic import BaseModel, Field
+from typing import Annotated, Any, Literal, Union
 
-from synth.mechanisms import Mechanism
+from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
+
+from synth.kinematics import MAX_CURVE_POINTS
+from synth.mechanisms import Mechanism, Parameter, all_types, get
+from synth.sweep import MAX_POINTS
+from synth.synthesis import MAX_CANDIDATES
+
+from .config import get_settings
+
+LENGTH_MIN, LENGTH_MAX = 1e-9, 1e12
+STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+
+
+def _camel(name: str) -> str:
+    return "".join(w.capitalize() for w in name.split("_"))
+
+
+def _length(q: Parameter, optional: bool) -> tuple[Any, Any]:
+    limits: dict[str, float] = {"le": LENGTH_MAX}
+    if q.signed:
+        limits["ge"] = -LENGTH_MAX
+    elif q.zero_means:
+        limits["ge"] = 0.0
+    else:
+        limits["ge"] = LENGTH_MIN
+    desc = f"{q.symbol}: {q.description}" + (f"; 0: {q.zero_means}" if q.zero_means else "")
+    if optional:
+        return float | None, Field(None, description=desc, **limits)
+    return float, Field(..., description=desc, **limits)
+
+
+def _params(m: Mechanism, suffix: str, all_optional: bool) -> type[BaseModel]:
+    fields = {q.name: _length(q, all_optional or not q.required) for q in m.parameters}
+    return create_model(f"{_camel(m.type)}{suffix}", __config__=STRICT, **fields)
+
+
+class Bounds(BaseModel):
+    model_config = STRICT
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Bounds:
+        for name, b in self:
+            if b is not None and b[0] > b[1]:
+                raise ValueError(f"{name}: lower bound {b[0]:g} > upper bound {b[1]:g}")
+        return self
+
+
+def _bounds(m: Mechanism) -> type[BaseModel]:
+    pair = Annotated[list[Finite], Field(min_length=2, max_length=2)] | None
+    fields = {q.name: (pair, Field(None, description=f"[lower, upper] for {q.name}"))
+              for q in m.parameters}  # fmt: skip
+    return create_model(f"{_camel(m.type)}Bounds", __base__=Bounds, **fields)
+
+
+def _design(m: Mechanism) -> type[BaseModel]:
+    return create_model(
+        _camel(m.type),
+        __config__=STRICT,
+        __doc__=m.title,
+        type=(Literal[m.type], ...),  # type: ignore[valid-type]
+        params=(_params(m, "Params", all_optional=False), ...),
+    )
+
+
+class Spec(BaseModel):
+    model_config = STRICT
+
+    @model_validator(mode="after")
+    def _fixed_or_bounded(self) -> Spec:
+        fixed = {k for k, v in self.fixed if v is not None}
+        both = sorted(fixed & {k for k, v in self.bounds if v is not None})
+        if both:
+            raise ValueError(f"{', '.join(both)}: both fixed and bounded; give one")
+        return self
+
+
+def _spec(m: Mechanism) -> type[BaseModel]:
+    fixed = _params(m, "Fixed", all_optional=True)
+    return create_model(
+        f"{_camel(m.type)}Spec",
+        __base__=Spec,
+        type=(Literal[m.type], ...),  # type: ignore[valid-type]
+        fixed=(fixed, Field(default_factory=fixed, description="parameters kept as they are")),
+        bounds=(_bounds(m), Field(default_factory=_bounds(m), description="limits on free ones")),
+    )
+
+
+def _union(make) -> Any:
+    """One model per registered type, told apart by ``type``."""
+    models = tuple(make(get(t)) for t in all_types())
+    return Annotated[Union[models], Field(discriminator="type")]  # noqa: UP007
+
+
+Design = _union(_design)
+TypeSpec = _union(_spec)
+
+
+# --- requests ----------------------------------------------------------------------------
+
+
+class AnalyzeRequest(BaseModel):
+    model_config = STRICT
+    mechanism: Design
+    crank_speed: float = Field(1.0, ge=-1e6, le=1e6, description="ω, rad/s")
+    crank_acceleration: float = Field(0.0, ge=-1e9, le=1e9, description="α, rad/s²")
+    crank_angles_deg: list[Annotated[float, Field(ge=-1e6, le=1e6)]] | None = Field(
+        None, max_length=MAX_CURVE_POINTS, description="curves at exactly these angles"
+    )
+    samples: int | None = Field(
+        None, ge=1, le=MAX_CURVE_POINTS, description="curves at evenly spaced angles"
+    )
+
+    @model_validator(mode="after")
+    def _one_curve_kind(self) -> AnalyzeRequest:
+        if self.crank_angles_deg is not None and self.samples is not None:
+            raise ValueError("give crank_angles_deg or samples, not both")
+        return self
+
+
+class SynthesizeRequest(BaseModel):
+    model_config = STRICT
+    time_ratio: float = Field(..., ge=1.0, le=1e3, description="slow/quick crank angle, ≥ 1")
+    stroke: float = Field(..., ge=LENGTH_MIN, le=LENGTH_MAX)
+    min_transmission_angle_deg: float = Field(0.0, ge=0.0, lt=90.0)
+    mechanisms: list[TypeSpec] | None = Field(
+        None, max_length=24, description="omitted: every quick-return type, nothing fixed"
+    )
+    objective: Literal["max_transmission_angle", "min_size"] = "max_transmission_angle"
+    max_candidates: int = Field(5, ge=1, le=MAX_CANDIDATES)
+    time_budget_ms: float = Field(
+        min(2000.0, get_settings().max_budget_ms), gt=0.0, le=get_settings().max_budget_ms
+    )
+
+
+class SweepRequest(BaseModel):
+    model_config = STRICT
+    mechanism: Design
+    vary: str = Field(..., description="the parameter to vary")
+    start: float = Field(..., ge=-LENGTH_MAX, le=LENGTH_MAX)
+    stop: float = Field(..., ge=-LENGTH_MAX, le=LENGTH_MAX)
+    points: int = Field(101, ge=1, le=MAX_POINTS)
+
+    @model_validator(mode="after")
+    def _range(self) -> SweepRequest:
+        if self.start > self.stop:
+            raise ValueError(f"start {self.start:g} > stop {self.stop:g}")
+        names = get(self.mechanism.type).names
+        if self.vary not in names:
+            raise ValueError(f"vary: {self.vary!r} is not a parameter of {self.mechanism.type}"
+                             f" ({', '.join(names)})")  # fmt: skip
+        return self
+
+
+# --- responses ---------------------------------------------------------------------------
+
+
+class ErrorItem(BaseModel):
+    loc: list[str | int]
+    msg: str
+    type: str
+
+
+class NotFound(BaseModel):
+    detail: list[ErrorItem]
 
 
 class Health(BaseModel):
@@ -21,6 +190,7 @@ class ParameterInfo(BaseModel):
     default_rule: str | None = Field(None, description="a default derived from the others")
     signed: bool = Field(False, description="may be zero or negative")
     zero_means: str | None = Field(None, description="0 is allowed and selects this variant")
+    bounds: tuple[float, float] = Field(description="default synthesis bounds, × the stroke")
 
 
 class MechanismInfo(BaseModel):
@@ -48,6 +218,7 @@ class MechanismInfo(BaseModel):
                     default_rule=q.default_rule,
                     signed=q.signed,
                     zero_means=q.zero_means,
+                    bounds=q.bounds,
                 )
                 for q in m.parameters
             ],
@@ -55,3 +226,91 @@ class MechanismInfo(BaseModel):
             quick_return=m.quick_return,
             seeds=list(m.seeds),
         )
+
+
+class Extreme(BaseModel):
+    position: float
+    crank_angle_deg: float
+
+
+class Stroke(BaseModel):
+    crank_angle_deg: float
+    direction: int
+
+
+class Joint(BaseModel):
+    joint: str
+    min_deg: float
+    max_deg: float
+
+
+class Transmission(BaseModel):
+    min_deg: float
+    max_deg: float
+    joints: list[Joint]
+
+
+class Curves(BaseModel):
+    crank_angle_deg: list[float]
+    position: list[float]
+    velocity: list[float]
+    acceleration: list[float]
+    transmission_deg: list[float]
+
+
+class AnalyzeResponse(BaseModel):
+    type: str
+    params: dict[str, float]
+    time_ratio: float
+    stroke: float
+    extremes: dict[Literal["min", "max"], Extreme]
+    working_stroke: Stroke
+    return_stroke: Stroke
+    transmission: Transmission
+    grashof: str | None
+    reversals: int = Field(description="slider reversals per revolution (2: a clean design)")
+    curves: Curves | None = None
+
+
+class Candidate(BaseModel):
+    type: str
+    params: dict[str, float]
+    time_ratio: float
+    stroke: float
+    min_transmission_angle_deg: float
+    objective_value: float
+    method: str
+    residuals: dict[str, float]
+    verified: bool
+    grashof: str | None
+    size: float
+
+
+class Infeasible(BaseModel):
+    type: str
+    code: str
+    reason: str
+
+
+class SynthesizeResponse(BaseModel):
+    candidates: list[Candidate]
+    infeasible: list[Infeasible]
+    complete: bool
+    elapsed_ms: float
+
+
+class Extremum(BaseModel):
+    time_ratio: float
+    value: float
+
+
+class SweepResponse(BaseModel):
+    type: str
+    vary: str
+    values: list[float]
+    time_ratio: list[float | None]
+    stroke: list[float | None]
+    min_transmission_angle_deg: list[float | None]
+    valid: list[bool]
+    valid_interval: list[tuple[float, float]]
+    time_ratio_range: dict[Literal["min", "max"], Extremum] | None

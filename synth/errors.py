@@ -15,6 +15,17 @@ class SynthError(ValueError):
         self.msg = msg
         self.loc = tuple(loc)
         self.kind = kind
+        self.where: tuple[str, ...] = ()  # set by a caller: where the parameters sit in a request
+
+    def __reduce__(self):  # survive pickling (a process pool sends errors back)
+        return (_restore, (type(self), self.__dict__))
+
+
+def _restore(cls: type[SynthError], state: dict) -> SynthError:
+    err = cls.__new__(cls)
+    Exception.__init__(err, state["msg"])
+    err.__dict__.update(state)
+    return err
 
 
 class UnknownMechanism(SynthError):
@@ -37,7 +48,9 @@ class InvalidParameters(SynthError):
 
 
 class InvalidDesign(SynthError):
-    """A well-formed design that cannot run: it cannot assemble, or the crank cannot turn fully."""
+    """A well-formed design that cannot run: it cannot assemble, or the crank cannot turn fully.
+
+    ``loc`` lists every parameter the failed condition involves."""
 
     def __init__(self, msg: str, loc: tuple[str, ...], condition: str) -> None:
         super().__init__(msg, loc, "invalid_design")

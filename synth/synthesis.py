@@ -32,7 +32,7 @@ from .solve import built, multistart, starts
 from .verify import verify
 
 STARTS = 8  # multistart size for a whole family
-STARTS_LEFTOVER = 4  # for what a closed form leaves free
+STARTS_LEFTOVER = 4  # for what a closed form leaves free, and for diagnosing a refusal
 MAX_CANDIDATES = 50
 SAME = 1e-4  # two designs within this (× stroke) in every parameter are one local optimum
 
@@ -150,7 +150,14 @@ def _one_type(m: Mechanism, spec: Spec, t: Targets) -> tuple[list[Candidate], In
         return [], _diagnose(m, spec, t, open_variants[-1])
     if reasons:
         return [], reasons[0]
-    return [], Infeasible(m.type, "BUDGET_EXHAUSTED", "the time budget ran out before a design")
+    return [], Infeasible(m.type, "BUDGET_EXHAUSTED", _budget_reason(m, t))
+
+
+def _budget_reason(m: Mechanism, t: Targets) -> str:
+    return (
+        f"the time budget ran out before a {m.type} design or a proof that none exists was "
+        f"found; ask again with a larger time_budget_ms"
+    )
 
 
 def _ipopt(
@@ -221,11 +228,13 @@ def _diagnose(m: Mechanism, spec: Spec, t: Targets, open_variant) -> Infeasible:
         )
     best = None
     if t.bound_deg > 0:
-        for x in _ipopt(m, variant, free, fixed, spec, t, STARTS, "max_transmission_angle", 1.0):
+        for x in _ipopt(
+            m, variant, free, fixed, spec, t, STARTS_LEFTOVER, "max_transmission_angle", 1.0
+        ):
             mu = _analysed(m, {**spec.fixed, **x, **dict.fromkeys(variant, 0.0)}, t)
             if mu is not None and (best is None or mu[1] > best):
                 best = mu[1]
-    if best is not None:
+    if best is not None and best < t.bound_deg:
         return Infeasible(
             m.type,
             "TRANSMISSION_UNREACHABLE",
@@ -235,10 +244,12 @@ def _diagnose(m: Mechanism, spec: Spec, t: Targets, open_variant) -> Infeasible:
         )
     trs = []
     for objective in ("max_time_ratio", "min_time_ratio"):
-        for x in _ipopt(m, variant, free, fixed, spec, t, STARTS, objective):
+        for x in _ipopt(m, variant, free, fixed, spec, t, STARTS_LEFTOVER, objective):
             r = _analysed(m, {**spec.fixed, **x, **dict.fromkeys(variant, 0.0)}, t)
             if r is not None and r[1] >= t.bound_deg - 1e-9:
                 trs.append(r[0])
+    if time.monotonic() >= t.deadline:
+        return Infeasible(m.type, "BUDGET_EXHAUSTED", _budget_reason(m, t))
     if trs:
         return Infeasible(
             m.type,

@@ -1,21 +1,36 @@
-"""HTTP tests of the endpoints so far (TestClient)."""
+"""HTTP tests of every endpoint (TestClient, the shipped process-pool engine)."""
 
+import math
+
+import numpy as np
+import pytest
 from fastapi.testclient import TestClient
 
 import synth
 from api.main import app
 from synth.mechanisms import all_types, get
 
-client = TestClient(app)
+from . import bruteforce
+from . import reference_cases as ref
 
 
-def test_health():
+@pytest.fixture(scope="module")
+def client():
+    with TestClient(app) as c:
+        yield c
+
+
+def design(mtype, **params):
+    return {"type": mtype, "params": params}
+
+
+def test_health(client):
     r = client.get("/health")
     assert r.status_code == 200
     assert r.json() == {"status": "ok", "version": synth.__version__}
 
 
-def test_mechanisms_listing_comes_from_the_registry():
+def test_mechanisms_listing_comes_from_the_registry(client):
     r = client.get("/v1/mechanisms")
     assert r.status_code == 200
     body = r.json()
@@ -30,7 +45,7 @@ def test_mechanisms_listing_comes_from_the_registry():
             assert q["symbol"] and q["description"]
 
 
-def test_one_mechanism_and_defaults():
+def test_one_mechanism_and_defaults(client):
     m = client.get("/v1/mechanisms/crank_shaper").json()
     params = {q["name"]: q for q in m["parameters"]}
     assert params["crank"]["required"] and params["crank"]["symbol"] == "r2"
@@ -38,9 +53,172 @@ def test_one_mechanism_and_defaults():
     assert params["ram_height"]["default_rule"].startswith("lever·cos ψmax")
 
 
-def test_unknown_type_is_404_with_the_known_types():
+def test_unknown_type_is_404_with_the_known_types(client):
     r = client.get("/v1/mechanisms/slider_crank")
     assert r.status_code == 404
     (err,) = r.json()["detail"]
     assert err["loc"] == ["path", "type"]
     assert "known types: scotch_yoke" in err["msg"]
+
+
+def test_analyze_seed000_table(client):
+    body = {"mechanism": design("crank_shaper", **ref.SEED000_PARAMS), "samples": 36}
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 200
+    out = r.json()
+    x = ref.SEED000_SCALE_ZERO + np.array(out["curves"]["position"])
+    np.testing.assert_allclose(x, ref.SEED000_THEORY[:-1], atol=0.005 + 1e-9)
+    assert out["time_ratio"] == pytest.approx(1.38340, abs=5e-6)
+    assert out["extremes"]["max"]["crank_angle_deg"] == pytest.approx(104.48, abs=0.005)
+    assert out["grashof"] is None and out["reversals"] == 2
+
+
+def test_analyze_seed003_scotch_yoke(client):
+    body = {"mechanism": design("scotch_yoke", crank=35.0), "crank_angles_deg": [20.0]}
+    out = client.post("/v1/analyze", json=body).json()
+    assert 35.0 - out["curves"]["position"][0] == pytest.approx(2.11, abs=0.005)
+    assert -out["curves"]["velocity"][0] == pytest.approx(11.97, abs=0.005)
+    assert -out["curves"]["acceleration"][0] == pytest.approx(32.89, abs=0.005)
+    assert out["time_ratio"] == pytest.approx(1.0) and out["transmission"]["min_deg"] == 90.0
+
+
+def test_analyze_seed002_at_60deg(client):
+    p = {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504}
+    body = {"mechanism": design("drag_link_slider", **p), "crank_speed": 10.0,
+            "crank_angles_deg": [60.0]}  # fmt: skip
+    out = client.post("/v1/analyze", json=body).json()
+    h = 1e-4
+    s = bruteforce.position("drag_link_slider", p, math.radians(60) + np.array([-h, 0.0, h]))
+    assert out["curves"]["velocity"][0] == pytest.approx((s[2] - s[0]) / (2 * h) * 10, rel=1e-7)
+    assert out["curves"]["crank_angle_deg"] == [60.0]
+    joints = {j["joint"]: j for j in out["transmission"]["joints"]}
+    assert joints["coupler-follower"]["min_deg"] == pytest.approx(27.01, abs=0.01)
+    assert out["grashof"] == "drag-link"
+
+
+def test_analyze_without_curves_has_no_curves(client):
+    body = {"mechanism": design("whitworth", crank=75, pivot_distance=50, lever=150,
+                                connecting_rod=200)}  # fmt: skip
+    out = client.post("/v1/analyze", json=body).json()
+    assert "curves" not in out
+    assert out["time_ratio"] == pytest.approx(2.73524, abs=5e-6)
+    assert out["stroke"] == pytest.approx(300.0, rel=1e-12)
+
+
+def test_invalid_design_names_each_parameter(client):
+    body = {"mechanism": design("whitworth", crank=75, pivot_distance=50, lever=150,
+                                connecting_rod=135)}  # fmt: skip
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 422
+    detail = r.json()["detail"]
+    assert [d["loc"] for d in detail] == [
+        ["body", "mechanism", "params", "connecting_rod"],
+        ["body", "mechanism", "params", "lever"],
+    ]
+    assert detail[0]["msg"].startswith("connecting_rod 135 ≤ lever 150")
+    assert detail[0]["type"] == "invalid_design"
+
+
+def test_synthesize_seed002(client):
+    spec = {"type": "drag_link_slider", "fixed": {**ref.DRAG_LINK_FIXED, "connecting_rod": 0.3}}
+    body = {"time_ratio": 1.5, "stroke": 0.3, "mechanisms": [spec]}
+    out = client.post("/v1/synthesize", json=body).json()
+    couplers = [c["params"]["coupler"] for c in out["candidates"]]
+    assert couplers == pytest.approx([0.2504, 0.1544], abs=1e-4)
+    assert out["complete"] and out["infeasible"] == []
+    assert all(c["verified"] and c["method"] == "closed_form" for c in out["candidates"])
+    body["min_transmission_angle_deg"] = 20.0
+    out = client.post("/v1/synthesize", json=body).json()
+    assert [c["params"]["coupler"] for c in out["candidates"]] == pytest.approx([0.2504], abs=1e-4)
+
+
+def test_synthesize_infeasible_is_200_with_reasons(client):
+    body = {"time_ratio": 3.0, "stroke": 100.0, "min_transmission_angle_deg": 30.0,
+            "mechanisms": [{"type": "offset_slider_crank"}]}  # fmt: skip
+    r = client.post("/v1/synthesize", json=body)
+    assert r.status_code == 200
+    out = r.json()
+    assert out["candidates"] == []
+    assert out["infeasible"][0]["code"] == "TIME_RATIO_UNREACHABLE"
+
+
+def test_sweep_seed002_fig5(client):
+    body = {"mechanism": design("drag_link_slider", **ref.DRAG_LINK_PROJECT, coupler=0.3),
+            "vary": "coupler", "start": 0.1, "stop": 0.5, "points": 41}  # fmt: skip
+    out = client.post("/v1/sweep", json=body).json()
+    assert out["valid_interval"] == [[pytest.approx(0.15), pytest.approx(0.40)]]
+    assert out["time_ratio_range"]["min"]["time_ratio"] == pytest.approx(1.4298, abs=5e-5)
+    assert out["time_ratio_range"]["max"]["time_ratio"] == pytest.approx(3.538, abs=5e-4)
+    assert out["time_ratio"][0] is None and out["valid"][0] is False
+
+
+SHAPER = {"crank": 40.0, "pivot_distance": 160.0, "lever": 240.0}
+ANALYZE = {"mechanism": design("crank_shaper", **SHAPER)}
+SYNTH = {"time_ratio": 1.5, "stroke": 1.0}
+SPEC = {"type": "whitworth"}
+SWEEP = {"mechanism": design("crank_shaper", **SHAPER), "vary": "crank", "start": 10.0,
+         "stop": 50.0}  # fmt: skip
+
+
+def with_(base, path, value):
+    """A copy of ``base`` with the value at ``path`` (a list of keys) replaced."""
+    import copy
+
+    out = copy.deepcopy(base)
+    node = out
+    for k in path[:-1]:
+        node = node[k]
+    node[path[-1]] = value
+    return out
+
+
+BAD = [
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], "NaN"), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], "Infinity"), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], "-inf"), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], -40.0), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], 0.0), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], 1e300), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "rod"], 1.0), "rod"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params"], {"crank": 40.0}), "pivot_distance"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "type"], "cam"), "mechanism"),
+    ("/v1/analyze", with_(ANALYZE, ["colour"], "red"), "colour"),
+    ("/v1/analyze", with_(ANALYZE, ["samples"], 100_001), "samples"),
+    ("/v1/analyze", with_(ANALYZE, ["samples"], 0), "samples"),
+    ("/v1/analyze", with_(ANALYZE, ["crank_angles_deg"], [0.0] * 100_001), "crank_angles_deg"),
+    ("/v1/analyze", with_(ANALYZE, ["crank_angles_deg"], [0.0, "nan"]), "crank_angles_deg"),
+    ("/v1/analyze", {**ANALYZE, "samples": 4, "crank_angles_deg": [1.0]}, "not both"),
+    ("/v1/analyze", with_(ANALYZE, ["crank_speed"], "inf"), "crank_speed"),
+    ("/v1/synthesize", {**SYNTH, "time_ratio": 0.5}, "time_ratio"),
+    ("/v1/synthesize", {**SYNTH, "time_ratio": "NaN"}, "time_ratio"),
+    ("/v1/synthesize", {**SYNTH, "stroke": -1.0}, "stroke"),
+    ("/v1/synthesize", {**SYNTH, "stroke": 0}, "stroke"),
+    ("/v1/synthesize", {**SYNTH, "min_transmission_angle_deg": 90.0}, "min_transmission_angle_deg"),
+    ("/v1/synthesize", {**SYNTH, "max_candidates": 51}, "max_candidates"),
+    ("/v1/synthesize", {**SYNTH, "time_budget_ms": 0}, "time_budget_ms"),
+    ("/v1/synthesize", {**SYNTH, "objective": "cheapest"}, "objective"),
+    ("/v1/synthesize", {**SYNTH, "stroke_mm": 1.0}, "stroke_mm"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "fixed": {"rod": 1.0}}]}, "rod"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "fixed": {"lever": 0.0}}]}, "lever"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "bounds": {"lever": [2.0, 1.0]}}]},
+     "lower bound 2 > upper bound 1"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "bounds": {"lever": [1.0, "inf"]}}]},
+     "lever"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [
+        {**SPEC, "fixed": {"lever": 1.0}, "bounds": {"lever": [0.5, 2.0]}}]},
+     "lever: both fixed and bounded"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{"type": "cam"}]}, "mechanisms"),
+    ("/v1/sweep", {**SWEEP, "points": 10_001}, "points"),
+    ("/v1/sweep", {**SWEEP, "start": 60.0}, "start 60 > stop 50"),
+    ("/v1/sweep", {**SWEEP, "vary": "colour"}, "'colour' is not a parameter of crank_shaper"),
+    ("/v1/sweep", {**SWEEP, "start": -10.0}, "start"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("path", "body", "named"), BAD)
+def test_bad_bodies_are_422_naming_the_field(client, path, body, named):
+    r = client.post(path, json=body)
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"]
+    assert isinstance(detail, list) and detail
+    assert any(named in map(str, d["loc"]) or named in d["msg"] for d in detail), detail

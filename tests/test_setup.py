@@ -1,4 +1,9 @@
-"""The two commands on a fresh checkout: `make serve` builds .venv from the lock and answers."""
+"""The two commands on a fresh checkout, and the real server over a real socket.
+
+`make serve` must build .venv from the lock file and answer /health; the running service then
+answers analyze and synthesize, and ≥ 16 parallel mixed requests each get exactly the serial
+answer while the service stays up.
+"""
 
 import json
 import os
@@ -8,9 +13,12 @@ import socket
 import subprocess
 import time
 import urllib.request
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+
+from . import reference_cases as ref
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -34,14 +42,25 @@ def fresh_checkout(dest: Path) -> Path:
     return dest
 
 
+def call(port: int, path: str, body: dict | None = None) -> tuple[int, dict]:
+    data = None if body is None else json.dumps(body).encode()
+    req = urllib.request.Request(
+        f"http://127.0.0.1:{port}{path}", data=data, headers={"Content-Type": "application/json"}
+    )
+    try:
+        with urllib.request.urlopen(req, timeout=120) as r:
+            return r.status, json.loads(r.read())
+    except urllib.error.HTTPError as e:
+        return e.code, json.loads(e.read())
+
+
 def wait_for_health(port: int, proc: subprocess.Popen, timeout: float) -> dict:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if proc.poll() is not None:
             raise AssertionError(f"make serve exited with {proc.returncode}")
         try:
-            with urllib.request.urlopen(f"http://127.0.0.1:{port}/health", timeout=1) as r:
-                return json.loads(r.read())
+            return call(port, "/health")[1]
         except OSError:
             time.sleep(0.2)
     raise AssertionError(f"no /health on port {port} within {timeout} s")
@@ -53,20 +72,62 @@ def test_readme_starts_with_the_two_commands():
     assert any(line.startswith("make test") for line in head)
 
 
-@pytest.mark.skipif(shutil.which("make") is None, reason="needs make")
-def test_make_serve_on_a_fresh_checkout(tmp_path):
-    work = fresh_checkout(tmp_path / "checkout")
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    if shutil.which("make") is None:
+        pytest.skip("needs make")
+    work = fresh_checkout(tmp_path_factory.mktemp("fresh") / "checkout")
     assert not (work / ".venv").exists()
     port = free_port()
     proc = subprocess.Popen(
         ["make", "serve", f"PORT={port}"], cwd=work, start_new_session=True,
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
         env={k: v for k, v in os.environ.items() if not k.startswith("VIRTUAL_ENV")},
     )  # fmt: skip
     try:
         assert wait_for_health(port, proc, timeout=600)["status"] == "ok"
-        with urllib.request.urlopen(f"http://127.0.0.1:{port}/v1/mechanisms", timeout=5) as r:
-            assert len(json.loads(r.read())) == 6
+        yield port
     finally:
         os.killpg(proc.pid, signal.SIGTERM)
         proc.wait(timeout=30)
+
+
+ANALYZE = {"mechanism": {"type": "drag_link_slider",
+                         "params": {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504}},
+           "crank_speed": 10.0, "crank_angles_deg": [60.0]}  # fmt: skip
+SHAPER = {"mechanism": {"type": "crank_shaper",
+                        "params": {"crank": 40, "pivot_distance": 160, "lever": 240}},
+          "samples": 360}  # fmt: skip
+PROJECT = {"time_ratio": 1.5, "stroke": 0.3, "mechanisms": [
+    {"type": "drag_link_slider", "fixed": {**ref.DRAG_LINK_FIXED, "connecting_rod": 0.3}}]}
+TEXTBOOK = {"time_ratio": 2.73524, "stroke": 300.0, "time_budget_ms": 1000,
+            "mechanisms": [{"type": "whitworth", "fixed": {"pivot_distance": 50}}]}  # fmt: skip
+MIXED = [("/v1/analyze", ANALYZE), ("/v1/analyze", SHAPER),
+         ("/v1/synthesize", PROJECT), ("/v1/synthesize", TEXTBOOK)]  # fmt: skip
+
+
+def stable(body: dict) -> dict:
+    return {k: v for k, v in body.items() if k != "elapsed_ms"}
+
+
+def test_make_serve_on_a_fresh_checkout_answers_over_a_socket(server):
+    status, out = call(server, "/v1/analyze", ANALYZE)
+    assert status == 200 and out["time_ratio"] == pytest.approx(1.49995, abs=1e-5)
+    status, out = call(server, "/v1/synthesize", PROJECT)
+    assert status == 200
+    assert [c["params"]["coupler"] for c in out["candidates"]] == pytest.approx(
+        [0.2504, 0.1544], abs=1e-4
+    )
+    status, out = call(server, "/v1/analyze", {"mechanism": {"type": "cam", "params": {}}})
+    assert status == 422
+
+
+def test_parallel_mixed_requests_match_the_serial_answers(server):
+    serial = [stable(call(server, path, body)[1]) for path, body in MIXED]
+    jobs = [MIXED[k % len(MIXED)] for k in range(32)]
+    with ThreadPoolExecutor(16) as pool:
+        answers = list(pool.map(lambda job: call(server, *job), jobs))
+    for k, (status, body) in enumerate(answers):
+        assert status == 200
+        assert stable(body) == serial[k % len(MIXED)]
+    assert call(server, "/health")[1]["status"] == "ok"

@@ -4,7 +4,7 @@ from fastapi import APIRouter
 
 from synth import mechanisms
 
-from ..schemas import MechanismInfo
+from ..schemas import MechanismInfo, NotFound
 
 router = APIRouter(prefix="/v1/mechanisms", tags=["mechanisms"])
 
@@ -15,7 +15,11 @@ def list_mechanisms() -> list[MechanismInfo]:
     return [MechanismInfo.of(mechanisms.get(t)) for t in mechanisms.all_types()]
 
 
-@router.get("/{type}", response_model=MechanismInfo)
+@router.get(
+    "/{type}",
+    response_model=MechanismInfo,
+    responses={404: {"model": NotFound, "description": "unknown type; the known ones listed"}},
+)
 def get_mechanism(type: str) -> MechanismInfo:
     """One mechanism type; an unknown type is a 404 listing the known ones."""
     return MechanismInfo.of(mechanisms.get(type))

@@ -1,0 +1,77 @@
+"""Runs synth's solves off the event loop, bounded to the cores.
+
+Two executors, chosen by settings: a process pool (each worker process has its own CasADi
+solvers; the GIL is not shared) or a thread pool (each thread builds its own solvers: one
+``nlpsol`` is never called from two threads, numerics.md). Either way at most ``workers``
+solves run at once and the rest queue.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import multiprocessing
+import os
+from concurrent.futures import BrokenExecutor, Executor, ProcessPoolExecutor, ThreadPoolExecutor
+from functools import partial
+from typing import Any
+
+import synth
+
+from .config import Settings, get_settings
+
+_OPS = {"analyze": synth.analyze, "synthesize": synth.synthesize, "sweep": synth.sweep}
+
+
+def _init_worker() -> None:
+    # one BLAS/OpenMP thread per worker: the pool is the parallelism
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+def _call(op: str, kwargs: dict[str, Any]) -> Any:
+    return _OPS[op](**kwargs)
+
+
+def _warm() -> None:
+    """Build the solvers and kinematics a default request needs (in the worker)."""
+    synth.synthesize(1.5, 1.0, 10.0, time_budget_ms=5000)
+    for t in synth.mechanisms.all_types():
+        m = synth.mechanisms.get(t)
+        synth.kinematics.model(m, frozenset())
+
+
+class Engine:
+    def __init__(self, settings: Settings) -> None:
+        self.settings = settings
+        self.executor = self._new_executor()
+
+    def _new_executor(self) -> Executor:
+        n = self.settings.workers
+        if self.settings.executor == "process":
+            ctx = multiprocessing.get_context("spawn")  # no fork of a threaded server
+            return ProcessPoolExecutor(n, mp_context=ctx, initializer=_init_worker)
+        return ThreadPoolExecutor(n, thread_name_prefix="solver")
+
+    @classmethod
+    def of(cls, app: Any) -> Engine:
+        """The app's engine, made on first use (also when no lifespan ran)."""
+        if not hasattr(app.state, "engine"):
+            app.state.engine = cls(get_settings())
+        return app.state.engine
+
+    async def run(self, op: str, **kwargs: Any) -> Any:
+        loop = asyncio.get_running_loop()
+        try:
+            return await loop.run_in_executor(self.executor, partial(_call, op, kwargs))
+        except BrokenExecutor:
+            # a worker died (killed, out of memory): replace the pool, and try once more
+            self.executor = self._new_executor()
+            return await loop.run_in_executor(self.executor, partial(_call, op, kwargs))
+
+    def warm(self) -> None:
+        """Start the workers and build solvers in the background (does not block start-up)."""
+        for _ in range(self.settings.workers):
+            self.executor.submit(_warm)
+
+    def close(self) -> None:
+        self.executor.shutdown(wait=False, cancel_futures=True)

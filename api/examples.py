@@ -1,0 +1,89 @@
+"""Worked examples for /docs, from the seeds' reference cases (shared/design/mechanisms.md)."""
+
+from fastapi.openapi.models import Example
+
+DRAG_LINK = {
+    "ground": 0.1,
+    "crank": 0.225,
+    "coupler": 0.2504,
+    "follower": 0.275,
+    "follower_arm": 0.15,
+    "connecting_rod": 0.3,
+}
+
+ANALYZE = {
+    "seed002": Example(
+        summary="Seed 002: the drag-link project at θ2 = 60°, ω2 = 10 rad/s",
+        value={
+            "mechanism": {"type": "drag_link_slider", "params": DRAG_LINK},
+            "crank_speed": 10.0,
+            "crank_angles_deg": [60.0],
+        },
+    ),
+    "seed000": Example(
+        summary="Seed 000: the lab's crank and slotted lever, every 10°",
+        value={
+            "mechanism": {
+                "type": "crank_shaper",
+                "params": {"crank": 40, "pivot_distance": 160, "lever": 240},
+            },
+            "samples": 36,
+        },
+    ),
+    "seed004": Example(
+        summary="Seed 004, Example 3: Whitworth (with a rod longer than the lever)",
+        value={
+            "mechanism": {
+                "type": "whitworth",
+                "params": {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200},
+            }
+        },
+    ),
+}
+
+SYNTHESIZE = {
+    "seed002": Example(
+        summary="Seed 002: a new coupler for the existing drag-link (two solutions)",
+        value={
+            "time_ratio": 1.5,
+            "stroke": 0.3,
+            "min_transmission_angle_deg": 0,
+            "mechanisms": [
+                {
+                    "type": "drag_link_slider",
+                    "fixed": {
+                        "ground": 0.1,
+                        "crank": 0.225,
+                        "follower": 0.275,
+                        "connecting_rod": 0.3,
+                    },
+                }
+            ],
+        },
+    ),
+    "textbook": Example(
+        summary="Seed 004, Example 2 inverted: TR 2, stroke 450, pivot distance 240",
+        value={
+            "time_ratio": 2,
+            "stroke": 450,
+            "mechanisms": [{"type": "crank_shaper", "fixed": {"pivot_distance": 240}}],
+        },
+    ),
+    "every_type": Example(
+        summary="Every quick-return type for TR 1.5, stroke 0.3, transmission ≥ 20°",
+        value={"time_ratio": 1.5, "stroke": 0.3, "min_transmission_angle_deg": 20},
+    ),
+}
+
+SWEEP = {
+    "seed002_fig5": Example(
+        summary="Seed 002, Fig. 5: the adjustable coupler's range",
+        value={
+            "mechanism": {"type": "drag_link_slider", "params": DRAG_LINK},
+            "vary": "coupler",
+            "start": 0.1,
+            "stop": 0.5,
+            "points": 101,
+        },
+    ),
+}

@@ -1,0 +1,21 @@
+"""The one way a router calls synth: through the engine, with domain errors located in the body."""
+
+from typing import Any
+
+from fastapi import Request
+
+from synth.errors import InvalidDesign, SynthError
+
+from ..engine import Engine
+
+
+async def run(request: Request, params_loc: tuple[str, ...], op: str, **kwargs: Any) -> Any:
+    """Run ``op`` on the engine; an error about the design's parameters is placed at
+    ``params_loc`` in the request body."""
+    try:
+        return await Engine.of(request.app).run(op, **kwargs)
+    except SynthError as e:
+        params = kwargs.get("params", ())
+        if isinstance(e, InvalidDesign) or (e.loc and e.loc[0] in params):
+            e.where = params_loc
+        raise

@@ -1,0 +1,30 @@
+"""POST /v1/sweep: one parameter varied, the exact valid interval and time-ratio range."""
+
+from typing import Annotated
+
+from fastapi import APIRouter, Body, Request
+
+from ..examples import SWEEP
+from ..schemas import SweepRequest, SweepResponse
+from .common import run
+
+router = APIRouter(tags=["analysis"])
+
+
+@router.post("/v1/sweep", response_model=SweepResponse)
+async def sweep(
+    request: Request, body: Annotated[SweepRequest, Body(openapi_examples=SWEEP)]
+) -> SweepResponse:
+    """What range must an adjustable part cover (seed 002, Fig. 5)."""
+    r = await run(
+        request,
+        ("mechanism", "params"),
+        "sweep",
+        mechanism=body.mechanism.type,
+        params=body.mechanism.params.model_dump(exclude_none=True),
+        vary=body.vary,
+        start=body.start,
+        stop=body.stop,
+        points=body.points,
+    )
+    return SweepResponse(**r.to_dict())

@@ -1,0 +1,42 @@
+"""POST /v1/synthesize: targets to verified candidates, ranked; reasons where none."""
+
+from typing import Annotated
+
+from fastapi import APIRouter, Body, Request
+
+from ..examples import SYNTHESIZE
+from ..schemas import SynthesizeRequest, SynthesizeResponse
+from .common import run
+
+router = APIRouter(tags=["synthesis"])
+
+
+@router.post("/v1/synthesize", response_model=SynthesizeResponse)
+async def synthesize(
+    request: Request, body: Annotated[SynthesizeRequest, Body(openapi_examples=SYNTHESIZE)]
+) -> SynthesizeResponse:
+    """Every good design for the time ratio, stroke and transmission bound, each verified by
+    the forward analysis; an impossible request gives no candidates and a reason per type."""
+    specs = None
+    if body.mechanisms is not None:
+        specs = [
+            {
+                "type": s.type,
+                "fixed": s.fixed.model_dump(exclude_none=True),
+                "bounds": s.bounds.model_dump(exclude_none=True),
+            }
+            for s in body.mechanisms
+        ]
+    r = await run(
+        request,
+        (),
+        "synthesize",
+        time_ratio=body.time_ratio,
+        stroke=body.stroke,
+        min_transmission_angle_deg=body.min_transmission_angle_deg,
+        mechanisms=specs,
+        objective=body.objective,
+        max_candidates=body.max_candidates,
+        time_budget_ms=body.time_budget_ms,
+    )
+    return SynthesizeResponse(**r.to_dict())
