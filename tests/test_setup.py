@@ -98,8 +98,13 @@ ANALYZE = {"mechanism": {"type": "drag_link_slider",
 SHAPER = {"mechanism": {"type": "crank_shaper",
                         "params": {"crank": 40, "pivot_distance": 160, "lever": 240}},
           "samples": 360}  # fmt: skip
-PROJECT = {"time_ratio": 1.5, "stroke": 0.3, "mechanisms": [
-    {"type": "drag_link_slider", "fixed": {**ref.DRAG_LINK_FIXED, "connecting_rod": 0.3}}]}
+PROJECT = {
+    "time_ratio": 1.5,
+    "stroke": 0.3,
+    "mechanisms": [
+        {"type": "drag_link_slider", "fixed": {**ref.DRAG_LINK_FIXED, "connecting_rod": 0.3}}
+    ],
+}
 TEXTBOOK = {"time_ratio": 2.73524, "stroke": 300.0, "time_budget_ms": 1000,
             "mechanisms": [{"type": "whitworth", "fixed": {"pivot_distance": 50}}]}  # fmt: skip
 MIXED = [("/v1/analyze", ANALYZE), ("/v1/analyze", SHAPER),
