@@ -258,6 +258,15 @@ class Curves(BaseModel):
     transmission_deg: list[float]
 
 
+class Conditioning(BaseModel):
+    dead_point_margin_deg: float = Field(description="the minimum transmission angle")
+    validity_margin: float | None = Field(
+        description="smallest validity margin / largest length (0: on a limit)"
+    )
+    limiting_condition: str | None
+    flags: list[str] = Field(description="near_dead_point, near_validity_limit, dithering")
+
+
 class AnalyzeResponse(BaseModel):
     type: str
     params: dict[str, float]
@@ -269,6 +278,7 @@ class AnalyzeResponse(BaseModel):
     transmission: Transmission
     grashof: str | None
     reversals: int = Field(description="slider reversals per revolution (2: a clean design)")
+    conditioning: Conditioning
     curves: Curves | None = None
 
 
@@ -284,6 +294,8 @@ class Candidate(BaseModel):
     verified: bool
     grashof: str | None
     size: float
+    conditioning: Conditioning
+    active: list[str] = Field(description="constraints at their limit (bound, variable bounds)")
 
 
 class Infeasible(BaseModel):

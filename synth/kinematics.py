@@ -19,7 +19,17 @@ import numpy as np
 from .errors import InvalidDesign, InvalidParameters
 from .mechanisms import Mechanism, get
 from .mechanisms._fourbar import grashof_class
-from .results import Analysis, Curves, Extreme, Joint, Stroke, Transmission
+from .results import (
+    NEAR_DEAD_POINT_DEG,
+    NEAR_LIMIT,
+    Analysis,
+    Conditioning,
+    Curves,
+    Extreme,
+    Joint,
+    Stroke,
+    Transmission,
+)
 
 GRID = 128  # samples per revolution that bracket the stationary points
 MAX_CURVE_POINTS = 100_000
@@ -172,7 +182,27 @@ def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -
         ),
         "grashof": grashof_class(*m.fourbar(p)) if m.fourbar else None,
         "reversals": int(np.count_nonzero(on_s)),
+        "conditioning": conditioning(
+            m, p, min((jt.min_deg for jt in joints), default=90.0), int(np.count_nonzero(on_s))
+        ),
     }
+
+
+def conditioning(m: Mechanism, p: dict[str, float], mu_deg: float, reversals: int) -> Conditioning:
+    """Distance to a dead point and to the nearest validity limit, flagged when small."""
+    scale = max(abs(v) for v in p.values())
+    margins = [
+        (min(float(t) for t in c.margin(p)) / scale, c.name) for c in m.conditions if c.applies(p)
+    ]
+    margin, name = min(margins, default=(None, None))
+    flags = []
+    if mu_deg < NEAR_DEAD_POINT_DEG:
+        flags.append("near_dead_point")
+    if margin is not None and margin < NEAR_LIMIT:
+        flags.append("near_validity_limit")
+    if reversals > 2:
+        flags.append("dithering")
+    return Conditioning(mu_deg, margin, name, tuple(flags))
 
 
 def _curves(f: Model, pv, omega, alpha, angles_deg, samples) -> Curves:

@@ -35,6 +35,26 @@ class Transmission:
 
 
 @dataclass(frozen=True)
+class Conditioning:
+    """How close a design is to trouble, and flags where it is close.
+
+    ``dead_point_margin_deg`` is the minimum transmission angle: the angular distance to a dead
+    point (0°, where the drive locks). ``validity_margin`` is the smallest validity-condition
+    margin over the design's largest length (0: on a limit, e.g. a Grashof change point), and
+    ``limiting_condition`` names that condition.
+    """
+
+    dead_point_margin_deg: float
+    validity_margin: float | None
+    limiting_condition: str | None
+    flags: tuple[str, ...]
+
+
+NEAR_DEAD_POINT_DEG = 5.0
+NEAR_LIMIT = 1e-3
+
+
+@dataclass(frozen=True)
 class Curves:
     crank_angle_deg: np.ndarray
     position: np.ndarray
@@ -59,6 +79,7 @@ class Analysis:
     # stationary points of s per revolution where the slider reverses: 2 for a clean quick
     # return; more means the slider dithers near a dead centre and the strokes are ill-defined
     reversals: int
+    conditioning: Conditioning
     curves: Curves | None = None
 
     def to_dict(self) -> dict[str, Any]:
@@ -85,6 +106,8 @@ class Candidate:
     verified: bool
     grashof: str | None
     size: float  # sum of the link lengths
+    conditioning: Conditioning
+    active: tuple[str, ...]  # constraints at (within 1e-6 of) their limit: bound, bounds
 
 
 @dataclass(frozen=True)

@@ -139,9 +139,11 @@ def _one_type(m: Mechanism, spec: Spec, t: Targets) -> tuple[list[Candidate], In
                 method = "ipopt" if method == "ipopt" else "closed_form+ipopt"
                 n = STARTS if sets is None else STARTS_LEFTOVER
                 designs = _ipopt(m, variant, left, {**fixed, **determined}, spec, t, n, t.objective)
+            limits = {k: _bounds(m, k, spec, t.stroke) for k in left}
+            limits.update({k: b for k, b in spec.bounds.items() if k in determined})
             for x in designs:
                 params = {**spec.fixed, **determined, **x, **{k: 0.0 for k in variant}}
-                c = _candidate(m, params, method, t)
+                c = _candidate(m, params, method, t, limits)
                 if c is not None and not any(_same(c, o, t.stroke) for o in found):
                     found.append(c)
     if found:
@@ -192,7 +194,9 @@ def _ipopt(
         yield {k: v * s for k, v in sol.x.items()}
 
 
-def _candidate(m: Mechanism, params: dict[str, float], method: str, t: Targets):
+def _candidate(
+    m: Mechanism, params: dict[str, float], method: str, t: Targets, limits: dict
+) -> Candidate | None:
     try:
         params = m.complete(params)
     except SynthError:
@@ -215,7 +219,23 @@ def _candidate(m: Mechanism, params: dict[str, float], method: str, t: Targets):
         verified=True,
         grashof=a.grashof,
         size=size,
+        conditioning=a.conditioning,
+        active=_active(params, mu, t, limits),
     )
+
+
+def _active(params: dict[str, float], mu: float, t: Targets, bounds: dict) -> tuple[str, ...]:
+    """The constraints at their limit (within 1e-6, relative): the bound, the variables' bounds."""
+    out = []
+    if t.bound_deg > 0 and mu - t.bound_deg <= 1e-6 * max(t.bound_deg, 1.0):
+        out.append("min_transmission_angle")
+    for name, (lo, hi) in bounds.items():
+        v = params[name]
+        if abs(v - lo) <= 1e-6 * max(abs(lo), t.stroke):
+            out.append(f"{name} ≥ {lo:g}")
+        elif abs(v - hi) <= 1e-6 * max(abs(hi), t.stroke):
+            out.append(f"{name} ≤ {hi:g}")
+    return tuple(out)
 
 
 def _diagnose(m: Mechanism, spec: Spec, t: Targets, open_variant) -> Infeasible:

@@ -121,3 +121,15 @@ def test_zero_selects_a_variant_but_negative_does_not():
 def test_unknown_type_lists_the_known_ones():
     with pytest.raises(UnknownMechanism, match="known types: scotch_yoke, offset_slider_crank"):
         synth.analyze("slider_crank", {"crank": 1.0})
+
+
+def test_conditioning_flags_a_change_point_and_a_dead_point():
+    """Seed 002's coupler 0.40 is on the Grashof limit: the linkage folds flat (μ = 0°)."""
+    p = {"ground": 0.1, "crank": 0.225, "coupler": 0.40, "follower": 0.275,
+         "follower_arm": 0.15, "connecting_rod": 0.3}  # fmt: skip
+    c = synth.analyze("drag_link_slider", p).conditioning
+    assert c.validity_margin == 0.0 and c.limiting_condition == "grashof_coupler"
+    assert c.dead_point_margin_deg == 0.0
+    assert c.flags == ("near_dead_point", "near_validity_limit")
+    ok = synth.analyze("drag_link_slider", {**p, "coupler": 0.2504}).conditioning
+    assert ok.flags == () and ok.validity_margin == pytest.approx((0.5 - 0.3504) / 0.3)
