@@ -132,4 +132,6 @@ def test_conditioning_flags_a_change_point_and_a_dead_point():
     assert c.dead_point_margin_deg == 0.0
     assert c.flags == ("near_dead_point", "near_validity_limit")
     ok = synth.analyze("drag_link_slider", {**p, "coupler": 0.2504}).conditioning
-    assert ok.flags == () and ok.validity_margin == pytest.approx((0.5 - 0.3504) / 0.3)
+    # nearest limit: ground + follower ≤ crank + coupler, 0.1004 short of it, over 0.3
+    assert ok.flags == () and ok.limiting_condition == "grashof_follower"
+    assert ok.validity_margin == pytest.approx((0.225 + 0.2504 - 0.1 - 0.275) / 0.3)
