@@ -9,7 +9,7 @@ BIN    := $(VENV)/bin
 export OMP_NUM_THREADS ?= 1
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: serve test lint lock clean
+.PHONY: serve test stress lint lock clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -30,6 +30,10 @@ serve: $(VENV)/.runtime
 
 test: $(VENV)/.dev
 	$(BIN)/python -m pytest -q
+
+# the numerical-stability suite at full length (≥ 10 000 hypothesis cases per type and property)
+stress: $(VENV)/.dev
+	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q -m stress tests/test_stress.py
 
 lint: $(VENV)/.dev
 	$(BIN)/ruff check .

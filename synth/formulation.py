@@ -30,7 +30,6 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .geometry import extended_domain
 from .mechanisms import Mechanism
 
 OBJECTIVES = ("max_transmission_angle", "min_size")
@@ -64,13 +63,6 @@ class Formulation:
 
 
 def formulate(
-    m: Mechanism, variant: frozenset[str], free: tuple[str, ...], objective: str
-) -> Formulation:
-    with extended_domain():
-        return _formulate(m, variant, free, objective)
-
-
-def _formulate(
     m: Mechanism, variant: frozenset[str], free: tuple[str, ...], objective: str
 ) -> Formulation:
     names = relevant(m, variant)

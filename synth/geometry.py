@@ -8,39 +8,41 @@ squares, ``atan2`` instead of ``acos`` (see ``shared/design/numerics.md``).
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
-from contextvars import ContextVar
 from typing import TypeVar
 
 import casadi as ca
 
 S = TypeVar("S", float, ca.DM, ca.SX, ca.MX)
 
-# Inside a formulation, square roots are extended past their domain (an optimiser's iterate may
-# leave the valid region between steps; the validity constraints bring it back). Analysis never
-# sets this: there a negative argument is a design that cannot run, and shows as NaN.
-_EXTENDED = ContextVar("extended_domain", default=False)
-
-
-@contextmanager
-def extended_domain() -> Iterator[None]:
-    token = _EXTENDED.set(True)
-    try:
-        yield
-    finally:
-        _EXTENDED.reset(token)
-
 
 def sqrt(x: S) -> S:
-    """sqrt; in an extended-domain block, sqrt(max(x, 1e-300)): finite, zero slope below 0."""
-    return ca.sqrt(ca.fmax(x, 1e-300)) if _EXTENDED.get() else ca.sqrt(x)
+    """sqrt(max(x, 1e-300)): a root whose argument is negative only by rounding (a design
+    exactly on a limit, checked by the validity conditions) is 0, not NaN, and its slope stays
+    finite (0 below the floor). An optimiser's iterate that leaves the valid region between
+    steps sees a flat extension and is pulled back by the validity constraints."""
+    return ca.sqrt(ca.fmax(x, 1e-300))
+
+
+def where(cond, a: S, b: S) -> S:
+    """a where cond else b, on floats (a Python branch) or symbols (``if_else``; the branch not
+    taken may be inf or NaN without harm)."""
+    if isinstance(cond, bool):
+        return a if cond else b
+    return ca.if_else(cond, a, b)
 
 
 def unit(x: S, y: S) -> tuple[S, S]:
     """The unit vector along (x, y)."""
     r = sqrt(x * x + y * y)
     return x / r, y / r
+
+
+def lever(r2: S, d: S, th: S) -> tuple[S, S]:
+    """The unit vector from the pivot (−d, 0) to the crank pin r2(cos θ, sin θ).
+
+    Its x-component d + r2 cos θ is written (d − r2) + 2 r2 cos²(θ/2): exact when the pin
+    passes near the pivot (d ≈ r2, the largest time ratios), where the plain sum cancels."""
+    return unit((d - r2) + 2 * r2 * ca.cos(th / 2) ** 2, r2 * ca.sin(th))
 
 
 def leg(hyp: S, side: S) -> S:

@@ -81,6 +81,7 @@ def stationary_points(
         bad = grid[np.nonzero(~np.all(np.isfinite(g), axis=0))[0][0]]
         msg = f"the design cannot be assembled at crank angle {math.degrees(bad):.6g}°"
         raise InvalidDesign(msg, (), "assembly")
+    _refuse_dwell(grid, g1[0])
     nxt = np.roll(g1, -1, axis=1)
     rows, k = np.nonzero((g1 < 0) & (nxt > 0) | (g1 > 0) & (nxt < 0))
     # exact stationary points on the grid, and kinks (a change point's flat configuration,
@@ -88,11 +89,13 @@ def stationary_points(
     zr, zk = np.nonzero((g1 == 0) | ~np.isfinite(g1))
     lo, hi = grid[k], grid[k] + TWO_PI / n
     f_lo = g1[rows, k]
+    scale = np.max(np.abs(np.where(np.isfinite(g1), g1, 0)), axis=1)[rows]
     # start from the secant (regula falsi) point: already close on a fine grid
     with np.errstate(divide="ignore", invalid="ignore"):
         x = lo + (hi - lo) * f_lo / (f_lo - nxt[rows, k])
     x = np.where(np.isfinite(x), x, 0.5 * (lo + hi))
-    for _ in range(60):
+    dx_old = hi - lo
+    for _ in range(100):
         if x.size == 0:
             break
         _, d1, d2 = f(x, pv)
@@ -102,18 +105,39 @@ def stationary_points(
         lo, hi = np.where(same, x, lo), np.where(same, hi, x)
         with np.errstate(divide="ignore", invalid="ignore"):
             step = fx / dfx
-        newton = x - step
-        ok = np.isfinite(newton) & (newton >= lo) & (newton <= hi)
-        x_new = np.where(ok, newton, 0.5 * (lo + hi))
+        # Newton where it stays in the bracket and at least halves the step before last
+        # (rtsafe); else bisection, so the bracket shrinks at least as fast as by bisection
+        newton = np.isfinite(step) & (x - step >= lo) & (x - step <= hi)
+        newton &= np.abs(step) <= 0.5 * np.abs(dx_old)
+        dx = np.where(newton, step, x - 0.5 * (lo + hi))
+        dx_old = np.where(newton, dx_old, dx)
         tol = 4 * np.finfo(float).eps * np.maximum(1, x)
-        done = (fx == 0) | (np.abs(x_new - x) <= tol) | (hi - lo <= tol)
-        x = np.where(fx == 0, x, x_new)
+        # a tiny Newton step is convergence only where the derivative is ~0 too: at a kink
+        # (a change point, a rod at its reach) it jumps across 0, and bisection must finish
+        small = np.abs(fx) <= 1e-12 * scale
+        done = (fx == 0) | (hi - lo <= tol) | ((np.abs(dx) <= tol) & newton & small)
+        x = np.where(fx == 0, x, x - dx)
         if np.all(done):
             break
     rows = np.concatenate([rows, zr])
     x = np.concatenate([x, grid[zk]]) % TWO_PI
     values = f(x, pv)[0][rows, np.arange(x.size)] if x.size else np.empty(0)
     return rows, x, values
+
+
+def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:
+    """A slider that stands still over an interval (a linkage folded onto itself, e.g. an
+    offset slider-crank with coupler = crank and no offset) has no defined strokes."""
+    still = np.abs(ds) <= 1e-12 * np.max(np.abs(ds))
+    run = still & np.roll(still, 1) & np.roll(still, -1)
+    if np.any(run):
+        raise InvalidDesign(
+            f"the slider stands still over about {360 * np.count_nonzero(still) / len(grid):.3g}°"
+            " of the crank's turn: the linkage folds onto itself, so its strokes and time ratio"
+            " are undefined",
+            (),
+            "dwell",
+        )
 
 
 def analyze(
@@ -162,7 +186,7 @@ def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -
         c = values[rows == j]
         lo, hi = float(np.min(c)), float(np.max(c))
         worst = min(1.0, max(abs(lo), abs(hi)))
-        best = 0.0 if lo < 0 < hi else min(abs(lo), abs(hi))
+        best = 0.0 if lo < 0 < hi else min(1.0, abs(lo), abs(hi))
         joints.append(Joint(name, math.degrees(math.acos(worst)), math.degrees(math.acos(best))))
     return {
         "type": m.type,

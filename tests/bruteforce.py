@@ -121,6 +121,9 @@ def _stationary(f, n):
         return float(_d_dtheta(f, np.array([t]))[0])
 
     roots = []
+    # a grid point whose derivative is zero up to rounding is a root (θ = 0 and 2π are one
+    # angle, and rounding may give their derivatives opposite signs)
+    dg = np.where(np.abs(dg) <= 1e-13 * np.max(np.abs(dg)), 0.0, dg)
     for i in np.nonzero(dg[:-1] * dg[1:] <= 0)[0]:
         if dg[i] == 0:
             t = th[i]
@@ -238,7 +241,8 @@ def _offset_slider_crank(p, th):
     r2, r3, e = p["crank"], p["coupler"], p["offset"]
     bx, by = _crank_pin(r2, th)
     dy = e - by  # slider C = (s, e)
-    dx = _sqrt(r3 * r3 - dy * dy, r3 * r3, "coupler cannot reach the slider path")
+    # factored, not r3² − dy²: a design on its limit has dy → r3 (precision, not a new formula)
+    dx = _sqrt((r3 - dy) * (r3 + dy), r3 * r3, "coupler cannot reach the slider path")
     # path direction +x, normal +y
     return bx + dx, {"coupler-slider": dy / r3}
 

@@ -14,6 +14,7 @@ from typing import Any
 from ..errors import InvalidDesign, InvalidParameters, UnknownMechanism
 
 Params = Mapping[str, Any]  # parameter name -> float, DM, SX or MX
+ROUNDING = 1e-12  # relative slack of the non-strict validity conditions
 
 
 @dataclass(frozen=True)
@@ -131,12 +132,16 @@ class Mechanism:
         return {q.name: p[q.name] for q in self.parameters}
 
     def check(self, p: Params) -> None:
-        """Raise ``InvalidDesign`` for the first condition the complete parameters break."""
+        """Raise ``InvalidDesign`` for the first condition the complete parameters break.
+
+        A non-strict condition holds to rounding (−1e-12 × the largest length it involves): a
+        design built exactly on a limit in floating point is on it, not past it."""
         for c in self.conditions:
             if not c.applies(p):
                 continue
+            tol = ROUNDING * max(abs(float(p[k])) for k in c.params)
             m = min(float(t) for t in c.margin(p))
-            if not (m > 0 if c.strict else m >= 0):  # also catches NaN
+            if not (m > 0 if c.strict else m >= -tol):  # also catches NaN
                 raise InvalidDesign(c.explain(p), c.params, c.name)
 
 

@@ -30,7 +30,7 @@ import math
 
 import casadi as ca
 
-from ..geometry import leg, unit
+from ..geometry import leg, lever
 from ._inverse import crank_pivot_lever
 from ._registry import Condition, Mechanism, Parameter, Unreachable, absent, register
 
@@ -38,7 +38,7 @@ from ._registry import Condition, Mechanism, Parameter, Unreachable, absent, reg
 def _lever(p, th):
     """cos ψ, sin ψ of the lever O4→B."""
     r2, d = p["crank"], p["pivot_distance"]
-    return unit(r2 * ca.cos(th) + d, r2 * ca.sin(th))
+    return lever(r2, d, th)
 
 
 def _cos_psi_max(p):

@@ -24,13 +24,23 @@ import math
 
 import casadi as ca
 
-from ..geometry import leg
+from ..geometry import leg, sqrt, where
 from ._registry import Condition, Mechanism, Parameter, Unreachable, register
 
 
 def position(p, th):
     r2, r3, e = p["crank"], p["coupler"], p["offset"]
-    return r2 * ca.cos(th) + leg(r3, e - r2 * ca.sin(th))
+    # r3² − (e − B_y)² as (r3 − e + B_y)(r3 + e − B_y) with 1 ± sin θ = 2 sin²(θ/2 ± π/4):
+    # exact near the coupler's upright positions, where a design on its limit has a dead point
+    # (the plain difference loses every digit there)
+    below = (r3 - r2 - e) + 2 * r2 * ca.sin(th / 2 + ca.pi / 4) ** 2
+    above = (r3 - r2 + e) + 2 * r2 * ca.sin(th / 2 - ca.pi / 4) ** 2
+    bx, root = r2 * ca.cos(th), sqrt(below * above)
+    # with the crank pin well behind the pivot, B_x + root cancels when the coupler is barely
+    # longer than the crank (the slider stays near O2): there use (root² − B_x²)/(root − B_x)
+    # with root² − B_x² = (r3 − r2)(r3 + r2) − e(e − 2 B_y), exact for a small offset
+    folded = ((r3 - r2) * (r3 + r2) - e * (e - 2 * r2 * ca.sin(th))) / (root - bx)
+    return where(bx < -r2 / 2, folded, bx + root)
 
 
 def transmission(p, th):

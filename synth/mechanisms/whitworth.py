@@ -27,14 +27,14 @@ import math
 
 import casadi as ca
 
-from ..geometry import leg, unit
+from ..geometry import leg, lever
 from ._inverse import crank_pivot_lever
 from ._registry import Condition, Mechanism, Parameter, Unreachable, register
 
 
 def _lever(p, th):
     r2, d = p["crank"], p["pivot_distance"]
-    return unit(r2 * ca.cos(th) + d, r2 * ca.sin(th))
+    return lever(r2, d, th)
 
 
 def position(p, th):
