@@ -72,22 +72,25 @@ def stationary_points(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every stationary point of every row that changes the sign of its derivative.
 
-    Returns (row, θ, value) arrays. Roots are bracketed on an n-point grid and polished by a
-    vectorised safeguarded Newton iteration on g' with g''.
+    Returns (row, θ, value) arrays. Roots are bracketed on an n-point grid, refined where the
+    motion is fast (see ``_refine``), and polished by a vectorised safeguarded Newton
+    iteration on g' with g''.
     """
     grid = np.linspace(0.0, TWO_PI, n, endpoint=False)
-    g, g1, _ = f(grid, pv)
+    g, g1, g2 = f(grid, pv)
     if not np.all(np.isfinite(g)):
         bad = grid[np.nonzero(~np.all(np.isfinite(g), axis=0))[0][0]]
         msg = f"the design cannot be assembled at crank angle {math.degrees(bad):.6g}°"
         raise InvalidDesign(msg, (), "assembly")
     _refuse_dwell(grid, g1[0])
+    grid, g1 = _refine(f, pv, grid, g1, g2)
+    widths = np.diff(np.append(grid, TWO_PI))
     nxt = np.roll(g1, -1, axis=1)
     rows, k = np.nonzero((g1 < 0) & (nxt > 0) | (g1 > 0) & (nxt < 0))
     # exact stationary points on the grid, and kinks (a change point's flat configuration,
     # where the derivative of sqrt(0) is undefined)
     zr, zk = np.nonzero((g1 == 0) | ~np.isfinite(g1))
-    lo, hi = grid[k], grid[k] + TWO_PI / n
+    lo, hi = grid[k], grid[k] + widths[k]
     f_lo = g1[rows, k]
     scale = np.max(np.abs(np.where(np.isfinite(g1), g1, 0)), axis=1)[rows]
     # start from the secant (regula falsi) point: already close on a fine grid
@@ -123,6 +126,31 @@ def stationary_points(
     x = np.concatenate([x, grid[zk]]) % TWO_PI
     values = f(x, pv)[0][rows, np.arange(x.size)] if x.size else np.empty(0)
     return rows, x, values
+
+
+def _refine(f: Model, pv, grid, g1, g2, levels: int = 3, split: int = 16):
+    """Subdivide the cells where a pair of roots could hide between two grid points.
+
+    A cell whose ends have the same sign of g' can still hold two roots if g' turns inside it
+    (g'' changes sign) and is small against its rate of change, |g'| < |g''| × width (a quick
+    stroke squeezed into a few degrees, an extreme just inside a lever's swing): such cells are
+    split ``split`` ways, up to ``levels`` times."""
+    for _ in range(levels):
+        widths = np.diff(np.append(grid, TWO_PI))
+        nxt1, nxt2 = np.roll(g1, -1, axis=1), np.roll(g2, -1, axis=1)
+        with np.errstate(invalid="ignore"):
+            fast = (np.abs(g1) < np.abs(g2) * widths) | (np.abs(nxt1) < np.abs(nxt2) * widths)
+            suspect = np.any(fast & (g1 * nxt1 > 0) & (g2 * nxt2 <= 0), axis=0)
+        if not np.any(suspect):
+            break
+        k = np.nonzero(suspect)[0]
+        inner = (grid[k, None] + widths[k, None] * np.arange(1, split) / split).ravel()
+        _, n1, n2 = f(inner, pv)
+        order = np.argsort(np.concatenate([grid, inner]), kind="stable")
+        grid = np.concatenate([grid, inner])[order]
+        g1 = np.concatenate([g1, n1], axis=1)[:, order]
+        g2 = np.concatenate([g2, n2], axis=1)[:, order]
+    return grid, g1
 
 
 def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:
