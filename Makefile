@@ -33,7 +33,7 @@ test: $(VENV)/.dev
 
 # the numerical-stability suite at full length (≥ 10 000 hypothesis cases per type and property)
 stress: $(VENV)/.dev
-	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q -m stress tests/test_stress.py
+	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q tests/test_stress.py
 
 lint: $(VENV)/.dev
 	$(BIN)/ruff check .

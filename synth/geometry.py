@@ -45,6 +45,14 @@ def lever(r2: S, d: S, th: S) -> tuple[S, S]:
     return unit((d - r2) + 2 * r2 * ca.cos(th / 2) ** 2, r2 * ca.sin(th))
 
 
+def ahead(a: S, root: S, gap: S) -> S:
+    """a + root, the slider ahead of its pin: a is the pin's offset along the path and root the
+    rod's along-path reach, sqrt(l² − b²). Where a < 0 the sum cancels (a rod barely longer
+    than the arm, near its dead point), so there it is gap/(root − a) with gap = l² − a² − b²
+    supplied without cancellation (e.g. (l − r)(l + r) for a pin on a circle of radius r)."""
+    return where(a < 0, gap / (root - a), a + root)
+
+
 def leg(hyp: S, side: S) -> S:
     """sqrt(hyp² − side²), the other leg of a right triangle, written to keep precision."""
     return sqrt((hyp - side) * (hyp + side))

@@ -82,7 +82,7 @@ def stationary_points(
         bad = grid[np.nonzero(~np.all(np.isfinite(g), axis=0))[0][0]]
         msg = f"the design cannot be assembled at crank angle {math.degrees(bad):.6g}°"
         raise InvalidDesign(msg, (), "assembly")
-    _refuse_dwell(grid, g1[0])
+    _refuse_dwell(grid, g[0], g1[0])
     grid, g1 = _refine(f, pv, grid, g1, g2)
     widths = np.diff(np.append(grid, TWO_PI))
     nxt = np.roll(g1, -1, axis=1)
@@ -153,10 +153,10 @@ def _refine(f: Model, pv, grid, g1, g2, levels: int = 3, split: int = 16):
     return grid, g1
 
 
-def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:
+def _refuse_dwell(grid: np.ndarray, s: np.ndarray, ds: np.ndarray) -> None:
     """A slider that stands still over an interval (a linkage folded onto itself, e.g. an
     offset slider-crank with coupler = crank and no offset) has no defined strokes."""
-    still = np.abs(ds) <= 1e-12 * np.max(np.abs(ds))
+    still = np.abs(ds) <= 1e-14 * np.ptp(s)  # zero, up to rounding (per radian of crank)
     run = still & np.roll(still, 1) & np.roll(still, -1)
     if np.any(run):
         raise InvalidDesign(
@@ -208,6 +208,14 @@ def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -
     t_max, t_min = float(s_theta[i_max]), float(s_theta[i_min])
     up = (t_max - t_min) % TWO_PI  # crank travel while the slider goes min -> max (+ direction)
     down = TWO_PI - up
+    if min(up, down) < 1e-12:
+        raise InvalidDesign(
+            f"the slider's extremes fall at one crank angle ({math.degrees(t_max):.6g}°): the "
+            "linkage passes a change point there and its assembly circuit switches, so the "
+            "slider jumps",
+            (),
+            "change_point",
+        )
     slow_up = up >= down
     joints = []
     for j, name in enumerate(f.joints, start=1):

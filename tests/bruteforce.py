@@ -123,7 +123,7 @@ def _stationary(f, n):
     roots = []
     # a grid point whose derivative is zero up to rounding is a root (θ = 0 and 2π are one
     # angle, and rounding may give their derivatives opposite signs)
-    dg = np.where(np.abs(dg) <= 1e-13 * np.max(np.abs(dg)), 0.0, dg)
+    dg = np.where(np.abs(dg) <= 1e-15 * np.max(np.abs(dg)), 0.0, dg)
     for i in np.nonzero(dg[:-1] * dg[1:] <= 0)[0]:
         if dg[i] == 0:
             t = th[i]

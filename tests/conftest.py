@@ -9,6 +9,7 @@ os.environ.setdefault("SYNTH_MAX_BUDGET_MS", "1000")
 
 # `make test`: a bounded, reproducible subset; `make stress`: the long run (HYPOTHESIS_PROFILE)
 common = {"deadline": None, "suppress_health_check": list(HealthCheck)}
-settings.register_profile("default", max_examples=40, derandomize=True, **common)
+settings.register_profile("default", max_examples=40, derandomize=True, database=None, **common)
+settings.register_profile("medium", max_examples=1_000, **common)
 settings.register_profile("stress", max_examples=10_000, **common)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))

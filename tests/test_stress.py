@@ -13,6 +13,7 @@ scales 1e-6 … 1e6, link ratios 1e-3 … 1e3). The properties:
 """
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -25,9 +26,15 @@ from . import bruteforce, exact
 from .designs import TYPES
 from .strategies import design, log_uniform
 
-# Work in progress (issue 5): these properties still find violations at the exact validity
-# limits and at extreme time ratios (see the issue's note), so they run only in `make stress`.
-pytestmark = pytest.mark.stress
+# The accuracy guarantee is for results not flagged ``near_validity_limit`` (a validity margin
+# under 1e-3: a change point, a rod at its reach, is close). `make test` checks it there;
+# `make stress` also runs the flagged designs, where the open work of issue 5 lies (a slider
+# at a near-change-point stall still loses digits, see the issue's note).
+FLAGGED_TOO = os.environ.get("HYPOTHESIS_PROFILE") in ("medium", "stress")
+
+
+def guaranteed(a) -> bool:
+    return FLAGGED_TOO or "near_validity_limit" not in a.conditioning.flags
 
 
 def finite(*xs):
@@ -47,21 +54,46 @@ def tolerance(mtype, a) -> float:
 
     1e-9, unless the problem itself forbids it: where it is ill-conditioned (a time ratio of
     10⁴ moves by 5e7 × a relative change of the crank), 100 ulp of backward error, 1e-14 × the
-    condition number (from the 50-digit closed form, where it applies); and on a validity limit
-    to rounding (margin < 1e-12 of the design's size) the design sits on a square-root kink of
-    its own definition, where its numbers are defined to ~sqrt(eps): 1e-7.
+    condition number; and on a validity limit to rounding (margin < 1e-12 of the design's
+    size) the design sits on a square-root kink of its own definition, where its numbers are
+    defined to ~sqrt(eps): 1e-7. Only asked for when 1e-9 was missed (it costs simulations).
     """
-    tol = 1e-9
-    if exact.time_ratio_and_stroke(mtype, a.params) is not None:
-        tol = max(tol, 1e-14 * exact.condition(mtype, a.params))
-    if on_limit(a):
-        tol = max(tol, 1e-7)
-    return tol
+    tol = max(1e-9, 1e-14 * condition(mtype, a.params))
+    return max(tol, 1e-7) if on_limit(a) else tol
+
+
+STEP = 1e-10
+
+
+def condition(mtype, p) -> float:
+    """The relative condition number of (time ratio, stroke) in the parameters, by central
+    differences of the brute-force simulation (independent of synth). The relative step,
+    1e-10, is small enough to see a flat dead centre's non-linear sensitivity (its location
+    moves like the cube root of a perturbation) and large against the simulation's noise."""
+    worst = 0.0
+    try:
+        base = bruteforce.simulate(mtype, p)
+        for k, v in p.items():
+            if v == 0:
+                continue
+            up, down = (bruteforce.simulate(mtype, {**p, k: v * (1 + s)}) for s in (STEP, -STEP))
+            for q in ("time_ratio", "stroke"):
+                worst = max(worst, abs(up[q] - down[q]) / (2 * STEP * base[q]))
+    except ValueError:  # the simulation cannot run it, or a step leaves the valid region
+        return math.inf
+    return worst
 
 
 def on_limit(a) -> bool:
     margin = a.conditioning.validity_margin
     return margin is not None and margin < 1e-12
+
+
+def at_change_point(a) -> bool:
+    """On a Grashof limit the linkage can fold flat and take either circuit out of it (a
+    bifurcation): the left-hand-circuit convention then decides, and any two codes may follow
+    different branches. Such designs are checked for sanity, not compared."""
+    return on_limit(a) and (a.conditioning.limiting_condition or "").startswith("grashof")
 
 
 @pytest.mark.parametrize("mtype", TYPES)
@@ -71,18 +103,21 @@ def test_analysis_agrees_with_brute_force_at_the_edges(mtype, data):
     a = analyzed(mtype, p)
     if a is None:
         # refused designs sit on a limit up to rounding: the brute force must find them
-        # unrunnable or degenerate too (a dead point with zero transmission)
+        # unrunnable or degenerate too (a dead point: a rod within 1e-8 of its reach makes the
+        # slider stand still over part of the turn, at a transmission angle of ~0.01°)
         try:
             b = bruteforce.simulate(mtype, p)
         except ValueError:
             return
-        assert b["min_transmission_deg"] < 1e-3 or b["stroke"] == 0, (p, b)
+        assert b["min_transmission_deg"] < 0.01 or b["stroke"] == 0, (p, b)
         return
     values = [a.time_ratio, a.stroke, a.transmission.min_deg, a.transmission.max_deg,
               a.extremes["min"].position, a.extremes["max"].position]  # fmt: skip
     assert finite(*values)
     assert a.time_ratio >= 1 and a.stroke > 0
-    tol = tolerance(mtype, a)
+    if at_change_point(a) or not guaranteed(a):
+        return
+    tol = 1e-9
     try:
         b = bruteforce.simulate(mtype, p)
     except ValueError:
@@ -96,8 +131,12 @@ def test_analysis_agrees_with_brute_force_at_the_edges(mtype, data):
         assert a.transmission.min_deg == pytest.approx(b["min_transmission_deg"], abs=mu_tol), p
         if close(a, b, tol):
             return
+        tol = tolerance(mtype, a)
+        if close(a, b, tol):
+            return
     # the simulation itself loses digits at a square-root kink: the 50-digit closed form
     # referees where it applies
+    tol = tolerance(mtype, a) if b is None else tol
     ref = exact.time_ratio_and_stroke(mtype, a.params)
     if ref is None:
         assert b is None, (p, a.time_ratio, a.stroke, tol, b)
@@ -121,13 +160,15 @@ def test_scale_invariance(mtype, data):
     p = data.draw(design(mtype))
     k = data.draw(log_uniform(1e-6, 1e6))
     a, b = analyzed(mtype, p), analyzed(mtype, {n: v * k for n, v in p.items()})
-    assume(a is not None and b is not None)
+    assume(a is not None and b is not None and not at_change_point(a) and guaranteed(a))
     # scaling rounds every input by up to an ulp: the answer moves within its own accuracy
-    tol = max(1e-10, tolerance(mtype, a))
-    deg = 1e-4 if on_limit(a) else 1e-8
-    assert b.time_ratio == pytest.approx(a.time_ratio, rel=tol)
-    assert b.stroke == pytest.approx(a.stroke * k, rel=tol)
+    # near a dead point μ = acos(1 − ε) turns a rounding of ε into 1e-16/μ rad
+    mu = math.radians(a.transmission.min_deg)
+    deg = 1e-4 if on_limit(a) else 1e-8 + math.degrees(1e-14 / max(mu, 1e-12))
     assert b.transmission.min_deg == pytest.approx(a.transmission.min_deg, abs=deg)
+    same = {"time_ratio": a.time_ratio, "stroke": a.stroke * k}
+    if not close(b, same, 1e-10):
+        assert close(b, same, tolerance(mtype, a)), (p, k, a.time_ratio, b.time_ratio)
 
 
 @given(data=st.data())
@@ -137,8 +178,9 @@ def test_offset_mirror_invariance(data):
     b = analyzed("offset_slider_crank", {**p, "offset": -p["offset"]})
     assert (a is None) == (b is None)
     if a is not None:
-        assert b.time_ratio == pytest.approx(a.time_ratio, rel=1e-12)
-        assert b.stroke == pytest.approx(a.stroke, rel=1e-12)
+        mirrored = {"time_ratio": a.time_ratio, "stroke": a.stroke}
+        if not close(b, mirrored, 1e-12):  # the same design: as exact as it can be
+            assert close(b, mirrored, tolerance("offset_slider_crank", a)), p
         assert b.transmission.min_deg == pytest.approx(a.transmission.min_deg, abs=1e-9)
 
 

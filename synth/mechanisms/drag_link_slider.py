@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 
-from ..geometry import cos_law, leg, triangle_angle
+from ..geometry import ahead, cos_law, leg, triangle_angle
 from ._fourbar import grashof_conditions, output_pin
 from ._registry import Condition, Mechanism, Parameter, Unreachable, register
 
@@ -44,7 +44,8 @@ def _pin_c(p, th):
 
 def position(p, th):
     cx, cy, _ = _pin_c(p, th)
-    return cx + leg(p["connecting_rod"], cy)
+    r1, r5, r6 = p["ground"], p["follower_arm"], p["connecting_rod"]
+    return r1 + ahead(cx - r1, leg(r6, cy), (r6 - r5) * (r6 + r5))
 
 
 def transmission(p, th):
@@ -84,10 +85,11 @@ def inverse(fixed, tr, stroke):
     b = (r4 - r1) * math.sin(f)
     c = 2 * r4 * r1 / r2
     rr = math.hypot(a, b)
-    if rr < c:
+    if rr < c * (1 - 1e-12):
         return []
-    # eq. (12) in the double-root-safe form atan2(sqrt((R − C)(R + C)), C) (numerics.md)
-    half = math.atan2(math.sqrt((rr - c) * (rr + c)), c)
+    # eq. (12) in the double-root-safe form atan2(sqrt((R − C)(R + C)), C) (numerics.md); at
+    # the time ratio's extreme over the coupler the roots merge (R = C, up to rounding)
+    half = math.atan2(math.sqrt(max(rr - c, 0.0) * (rr + c)), c)
     out = []
     for t2a in {math.atan2(b, a) - half, math.atan2(b, a) + half}:
         r3_sq = r2**2 + (r4 + r1) ** 2 - 2 * r2 * (r4 + r1) * math.cos(t2a)  # eq. (13)

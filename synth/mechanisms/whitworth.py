@@ -27,7 +27,7 @@ import math
 
 import casadi as ca
 
-from ..geometry import leg, lever
+from ..geometry import ahead, leg, lever, sqrt, where
 from ._inverse import crank_pivot_lever
 from ._registry import Condition, Mechanism, Parameter, Unreachable, register
 
@@ -38,9 +38,17 @@ def _lever(p, th):
 
 
 def position(p, th):
-    L, l = p["lever"], p["connecting_rod"]
+    r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["connecting_rod"]
     c, s = _lever(p, th)
-    return -L * s + leg(l, L * c)
+    # sqrt(l² − L² cos² ψ) with l ∓ L cos ψ = (l − L) + L(1 ∓ cos ψ), 1 ∓ cos ψ from the
+    # crank pin's offsets without cancelling: exact when the rod is barely longer than the
+    # lever (its dead point at ψ = 0, π), where the plain difference loses every digit
+    x = (d - r2) + 2 * r2 * ca.cos(th / 2) ** 2
+    y = r2 * ca.sin(th)
+    r = sqrt(x * x + y * y)
+    up = ((l - L) + L * y * y / (r * (r + x))) * (l + L * c)  # cos ψ > 0
+    down = ((l - L) + L * y * y / (r * (r - x))) * (l - L * c)  # cos ψ < 0
+    return ahead(-L * s, sqrt(where(x > 0, up, down)), (l - L) * (l + L))
 
 
 def transmission(p, th):
