@@ -164,6 +164,33 @@ def _check_value(mtype: str, q: Parameter, value: Any) -> float:
     return x
 
 
+def reach_condition(
+    name: str,
+    link: str,
+    height: str,
+    arm: str,
+    offsets: Callable[[Params], tuple],
+    pin: str,
+    output: str,
+) -> Condition:
+    """A link from a swinging pin to a straight path must reach it at every position: link ≥
+    the largest |offset| of the pin from the path, where ``offsets`` gives the signed offsets
+    at which it is largest (mid-swing and the swing's ends)."""
+    return Condition(
+        name=name,
+        text=f"{link} ≥ the largest distance from {pin} to the {output} path over the swing "
+        f"(when {link} > 0)",
+        params=(link, height, arm),
+        margin=lambda p: tuple(p[link] + sg * t for t in offsets(p) for sg in (1, -1)),
+        applies=lambda p: not absent(p[link]),
+        explain=lambda p: (
+            f"{link} {p[link]:g} < {max(abs(float(t)) for t in offsets(p)):g}, the largest "
+            f"distance from {pin} to the {output} path ({height} {p[height]:g}): the {link} "
+            f"cannot reach the {output} over the whole swing"
+        ),
+    )
+
+
 _REGISTRY: dict[str, Mechanism] = {}
 
 

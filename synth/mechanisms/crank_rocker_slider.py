@@ -35,7 +35,7 @@ import casadi as ca
 
 from ..geometry import cos_law, leg, triangle_angle
 from ._fourbar import grashof_conditions, output_pin
-from ._registry import Condition, Mechanism, Parameter, absent, register
+from ._registry import Mechanism, Parameter, absent, reach_condition, register
 
 LINKS = ("ground", "crank", "coupler", "rocker")
 
@@ -131,22 +131,14 @@ register(
         ),
         conditions=(
             *grashof_conditions(LINKS, "crank", "crank-rocker"),
-            Condition(
-                name="rod_reach",
-                text="connecting_rod ≥ max |slider_height − rocker_arm·cos δ| over the swing "
-                "(when connecting_rod > 0)",
-                params=("connecting_rod", "slider_height", "rocker_arm"),
-                margin=lambda p: tuple(
-                    p["connecting_rod"] + sg * t for t in _offsets(p) for sg in (1, -1)
-                ),
-                applies=lambda p: not absent(p["connecting_rod"]),
-                explain=lambda p: (
-                    f"connecting_rod {p['connecting_rod']:g} < "
-                    f"{max(abs(float(t)) for t in _offsets(p)):g}, the largest "
-                    f"distance from the pin C to the slider path (slider_height "
-                    f"{p['slider_height']:g}): the rod cannot reach the slider over the whole "
-                    f"swing"
-                ),
+            reach_condition(
+                "rod_reach",
+                "connecting_rod",
+                "slider_height",
+                "rocker_arm",
+                _offsets,
+                "the pin C",
+                "slider",
             ),
         ),
         position=position,

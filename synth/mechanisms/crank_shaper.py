@@ -32,7 +32,15 @@ import casadi as ca
 
 from ..geometry import leg, lever
 from ._inverse import crank_pivot_lever
-from ._registry import Condition, Mechanism, Parameter, Unreachable, absent, register
+from ._registry import (
+    Condition,
+    Mechanism,
+    Parameter,
+    Unreachable,
+    absent,
+    reach_condition,
+    register,
+)
 
 
 def _lever(p, th):
@@ -153,20 +161,14 @@ register(
                     f"runs off the slotted lever"
                 ),
             ),
-            Condition(
-                name="ram_link_reach",
-                text="ram_link ≥ max |ram_height − lever·cos ψ| over the swing (when ram_link > 0)",
-                params=("ram_link", "ram_height", "lever"),
-                margin=lambda p: tuple(
-                    p["ram_link"] + sg * t for t in _offsets(p) for sg in (1, -1)
-                ),
-                applies=lambda p: not absent(p["ram_link"]),
-                explain=lambda p: (
-                    f"ram_link {p['ram_link']:g} < {max(abs(float(t)) for t in _offsets(p)):g}, "
-                    f"the largest distance "
-                    f"from the lever tip to the ram path (ram_height {p['ram_height']:g}): the "
-                    f"ram link cannot reach the ram over the whole swing"
-                ),
+            reach_condition(
+                "ram_link_reach",
+                "ram_link",
+                "ram_height",
+                "lever",
+                _offsets,
+                "the lever tip",
+                "ram",
             ),
         ),
         position=position,
