@@ -59,7 +59,6 @@ class Formulation:
     ubg: np.ndarray
     n_extra: int  # variables after the free parameters (the epigraph t)
     equalities: ca.Function  # (x, p) -> (residuals, Jacobian): for polishing
-    score: ca.Function  # (x, p) -> (worst |cos μ|, size)
 
 
 def formulate(
@@ -109,7 +108,6 @@ def formulate(
     else:
         f = (-1 if objective == "max_time_ratio" else 1) * beta**2
 
-    worst = ca.mmax(ca.fabs(ca.vertcat(*cosines))) if cosines else ca.SX(0)
     eqs = ca.vertcat(*g[:n_eq])
     params = ca.vertcat(fx, tr_t, cos_b)
     return Formulation(
@@ -123,5 +121,4 @@ def formulate(
         ubg=np.array(ub, dtype=float),
         n_extra=len(extra),
         equalities=ca.Function("eq", [x, params], [eqs, ca.jacobian(eqs, x)]),
-        score=ca.Function("score", [x, params], [worst, size]),
     )

@@ -51,15 +51,6 @@ def built(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], objectiv
     return cache[key]
 
 
-@dataclass(frozen=True)
-class Local:
-    """One local solution, in stroke units."""
-
-    x: dict[str, float]  # the free parameters
-    status: str
-    iterations: int
-
-
 def starts(lo: np.ndarray, hi: np.ndarray, log: np.ndarray, n: int) -> np.ndarray:
     """n deterministic points in the box: Halton, log-uniform where ``log`` (positive bounds)."""
     if lo.size == 0:
@@ -78,8 +69,9 @@ def multistart(
     hi: np.ndarray,
     start_points: np.ndarray,
     deadline: float,
-) -> Iterator[Local]:
-    """Solve from each start until the deadline; yield the converged, polished solutions."""
+) -> Iterator[dict[str, float]]:
+    """Solve from each start until the deadline; yield the converged, polished solutions (the
+    free parameters, in stroke units)."""
     form = b.form
     pv = np.concatenate([fixed, [tr, cos_bound]])
     n_free = len(form.free)
@@ -90,13 +82,12 @@ def multistart(
             return
         x0 = np.concatenate([x0, [1.0] * form.n_extra])
         sol = b.solver(x0=x0, p=pv, lbx=lbx, ubx=ubx, lbg=form.lbg, ubg=form.ubg)
-        stats = b.solver.stats()
-        status = stats["return_status"]
+        status = b.solver.stats()["return_status"]
         if status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
             continue
         x = polish(form.equalities, np.asarray(sol["x"]).ravel()[:n_free], pv, lo, hi)
         if x is not None:
-            yield Local(dict(zip(form.free, x, strict=True)), status, stats["iter_count"])
+            yield dict(zip(form.free, x, strict=True))
 
 
 def polish(

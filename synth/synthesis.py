@@ -191,7 +191,7 @@ def _ipopt(
     fx = np.array([fixed[k] / s for k in b.form.fixed])
     cb = t.cos_bound if cos_bound is None else cos_bound
     for sol in multistart(b, fx, t.time_ratio, cb, lo, hi, np.array(pts), t.deadline):
-        yield {k: v * s for k, v in sol.x.items()}
+        yield {k: v * s for k, v in sol.items()}
 
 
 def _candidate(
