@@ -58,8 +58,31 @@ def tolerance(mtype, a) -> float:
     size) the design sits on a square-root kink of its own definition, where its numbers are
     defined to ~sqrt(eps): 1e-7. Only asked for when 1e-9 was missed (it costs simulations).
     """
-    tol = max(1e-9, 1e-14 * condition(mtype, a.params))
+    tol = max(1e-9, 1e-14 * condition(mtype, a.params), flat_dead_centres(mtype, a))
     return max(tol, 1e-7) if on_limit(a) else tol
+
+
+def flat_dead_centres(mtype, a) -> float:
+    """The time-ratio accuracy the dead centres allow: a dead centre where d²s/dθ² is tiny (a
+    follower that nearly stalls there) is located only to ~1e-15 × max|ds/dθ| / |d²s/dθ²|,
+    whatever the code; each radian of it moves the time ratio by 1/working + 1/return angle.
+    The derivatives are the brute force's (complex step), at the analysis's dead centres."""
+
+    def ds(t):
+        return bruteforce._d_dtheta(lambda x: bruteforce.position(mtype, a.params, x), t)
+
+    h = 1e-6
+    worst = 0.0
+    try:
+        scale = np.max(np.abs(ds(np.linspace(0, 2 * np.pi, 721))))
+        for k in ("min", "max"):
+            t = math.radians(a.extremes[k].crank_angle_deg)
+            curvature = abs(ds(np.array([t + h]))[0] - ds(np.array([t - h]))[0]) / (2 * h)
+            worst = max(worst, 1e-15 * scale / max(curvature, 1e-300))
+    except ValueError:  # the simulation refuses a design on its limit (rounding)
+        return 0.0
+    slow, quick = (math.radians(s.crank_angle_deg) for s in (a.working_stroke, a.return_stroke))
+    return min(worst * (1 / slow + 1 / quick), 1.0)
 
 
 STEP = 1e-10
