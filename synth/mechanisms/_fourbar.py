@@ -10,16 +10,29 @@ from typing import Any
 
 import casadi as ca
 
-from ..geometry import circle_circle_left, cos_law
+from ..geometry import cos_law, sqrt
 from ._registry import Condition
 
 
 def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, Any]:
-    """(D_x, D_y, cos μ): the rocker/follower pin and the signed coupler–rocker transmission."""
+    """(D_x, D_y, cos μ): the rocker/follower pin and the signed coupler–rocker transmission.
+
+    The circle intersection of ``geometry.circle_circle_left``, with its Heron product written
+    for a four-bar: with d² = |AO4|² = (r2 − r1)² + 4 r1 r2 sin²(θ/2) = (r1 + r2)² − 4 r1 r2
+    cos²(θ/2), the factors (r3 + r4)² − d² and d² − (r3 − r4)² are sums of terms that a valid
+    (Grashof) linkage keeps ≥ 0, so near its folded and extended positions, where a near
+    change point's follower stalls, no digit cancels.
+    """
     ax, ay = r2 * ca.cos(th), r2 * ca.sin(th)
-    dx, dy = circle_circle_left(ax, ay, r3, r1, 0.0, r4)
-    a_o4_sq = (ax - r1) ** 2 + ay**2
-    return dx, dy, cos_law(r3, r4, ca.sqrt(a_o4_sq))
+    s2, c2 = ca.sin(th / 2) ** 2, ca.cos(th / 2) ** 2
+    d2 = (r2 - r1) ** 2 + 4 * r1 * r2 * s2
+    outer = (r3 + r4 - r1 - r2) * (r3 + r4 + r1 + r2) + 4 * r1 * r2 * c2
+    inner = (r2 - r1 - r3 + r4) * (r2 - r1 + r3 - r4) + 4 * r1 * r2 * s2
+    along = (d2 + (r3 - r4) * (r3 + r4)) / (2 * d2)
+    across = sqrt(outer * inner) / (2 * d2)
+    ux, uy = r1 - ax, -ay  # A→O4; D lies to its left
+    dx, dy = ax + along * ux - across * uy, ay + along * uy + across * ux
+    return dx, dy, cos_law(r3, r4, sqrt(d2))
 
 
 def grashof_conditions(
