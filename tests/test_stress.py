@@ -54,7 +54,7 @@ def tolerance(mtype, a) -> float:
 
     1e-9, unless the problem itself forbids it: where it is ill-conditioned (a time ratio of
     10⁴ moves by 5e7 × a relative change of the crank), 100 ulp of backward error, 1e-14 × the
-    condition number; and on a validity limit to rounding (margin < 1e-12 of the design's
+    condition number; and on a validity limit (margin < 1e-9 of the design's
     size) the design sits on a square-root kink of its own definition, where its numbers are
     defined to ~sqrt(eps): 1e-7. Only asked for when 1e-9 was missed (it costs simulations).
     """
@@ -64,7 +64,7 @@ def tolerance(mtype, a) -> float:
 
 def flat_dead_centres(mtype, a) -> float:
     """The time-ratio accuracy the dead centres allow: a dead centre where d²s/dθ² is tiny (a
-    follower that nearly stalls there) is located only to ~1e-15 × max|ds/dθ| / |d²s/dθ²|,
+    follower that nearly stalls there) is located only to ~100 ulp × max|ds/dθ| / |d²s/dθ²|,
     whatever the code; each radian of it moves the time ratio by 1/working + 1/return angle.
     The derivatives are the brute force's (complex step), at the analysis's dead centres."""
 
@@ -78,7 +78,7 @@ def flat_dead_centres(mtype, a) -> float:
         for k in ("min", "max"):
             t = math.radians(a.extremes[k].crank_angle_deg)
             curvature = abs(ds(np.array([t + h]))[0] - ds(np.array([t - h]))[0]) / (2 * h)
-            worst = max(worst, 1e-15 * scale / max(curvature, 1e-300))
+            worst = max(worst, 1e-14 * scale / max(curvature, 1e-300))
     except ValueError:  # the simulation refuses a design on its limit (rounding)
         return 0.0
     slow, quick = (math.radians(s.crank_angle_deg) for s in (a.working_stroke, a.return_stroke))
@@ -108,8 +108,9 @@ def condition(mtype, p) -> float:
 
 
 def on_limit(a) -> bool:
+    """Within 1e-9 of a validity limit (relative): numerically on it, at its square-root kink."""
     margin = a.conditioning.validity_margin
-    return margin is not None and margin < 1e-12
+    return margin is not None and margin < 1e-9
 
 
 def at_change_point(a) -> bool:
