@@ -70,17 +70,3 @@ def triangle_angle(a: S, b: S, c: S) -> S:
 def cos_law(a: S, b: S, c: S) -> S:
     """cos of the angle between sides a and b of a triangle with third side c."""
     return ((a - c) * (a + c) + b * b) / (2 * a * b)
-
-
-def circle_circle_left(ax: S, ay: S, ra: S, bx: S, by: S, rb: S) -> tuple[S, S]:
-    """The intersection of circle(A, ra) and circle(B, rb) to the left of the directed line A→B.
-
-    The assembly branch is explicit: the mirror circuit is the other intersection.
-    """
-    dx, dy = bx - ax, by - ay
-    d2 = dx * dx + dy * dy
-    along = (d2 + (ra - rb) * (ra + rb)) / (2 * d2)  # distance from A along A→B, over |AB|
-    d = sqrt(d2)
-    # height = sqrt(Heron product)/(2 d); divided by d once more to scale the left normal (−dy, dx)
-    across = sqrt((ra + rb - d) * (ra + rb + d) * (d - ra + rb) * (d + ra - rb)) / (2 * d2)
-    return ax + along * dx - across * dy, ay + along * dy + across * dx

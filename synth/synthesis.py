@@ -403,14 +403,10 @@ def _spec(s: Spec | Mapping[str, Any], i: int) -> Spec:
             ("mechanisms", str(i), "bounds", sorted(both)[0]),
         )
     for k, v in s.fixed.items():
-        q = m.parameter(k)
-        ok = math.isfinite(v) and (q.signed or v > 0 or (v == 0 and q.zero_means))
-        if not ok:
-            raise InvalidParameters(
-                f"{s.type}.{k} fixed at {v!r}: must be finite and > 0"
-                + (" (or 0)" if q.zero_means else ""),
-                ("mechanisms", str(i), "fixed", k),
-            )
+        try:
+            m.value(k, v)
+        except InvalidParameters as e:
+            raise InvalidParameters(e.msg, ("mechanisms", str(i), "fixed", k)) from None
     for k, (lo, hi) in s.bounds.items():
         q = m.parameter(k)
         if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi and (q.signed or lo >= 0)):

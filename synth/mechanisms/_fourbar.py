@@ -17,8 +17,8 @@ from ._registry import Condition
 def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, Any]:
     """(D_x, D_y, cos μ): the rocker/follower pin and the signed coupler–rocker transmission.
 
-    The circle intersection of ``geometry.circle_circle_left``, with its Heron product written
-    for a four-bar: with d² = |AO4|² = (r2 − r1)² + 4 r1 r2 sin²(θ/2) = (r1 + r2)² − 4 r1 r2
+    D is the intersection of circle(A, r3) and circle(O4, r4) left of A→O4, its Heron product
+    written for a four-bar: with d² = |AO4|² = (r2 − r1)² + 4 r1 r2 sin²(θ/2) = (r1 + r2)² − 4 r1 r2
     cos²(θ/2), the factors (r3 + r4)² − d² and d² − (r3 − r4)² are sums of terms that a valid
     (Grashof) linkage keeps ≥ 0, so near its folded and extended positions, where a near
     change point's follower stalls, no digit cancels.

@@ -106,6 +106,10 @@ class Mechanism:
         """The optional parts set to zero (``ram_link`` 0 = slot drive): a structural choice."""
         return frozenset(q.name for q in self.parameters if q.zero_means and p[q.name] == 0)
 
+    def value(self, name: str, value: Any) -> float:
+        """One parameter's value checked (see ``_check_value``)."""
+        return _check_value(self.type, self.parameter(name), value)
+
     def complete(self, given: Mapping[str, float]) -> dict[str, float]:
         """Check names and values, fill the defaults, and check every validity condition.
 
@@ -117,7 +121,7 @@ class Mechanism:
         p: dict[str, float] = {}
         for q in self.parameters:
             if q.name in given and given[q.name] is not None:
-                p[q.name] = _check_value(self.type, q, given[q.name])
+                p[q.name] = self.value(q.name, given[q.name])
             elif q.default is not None:
                 p[q.name] = q.default
             elif q.required:
@@ -146,6 +150,8 @@ class Mechanism:
 
 
 def _check_value(mtype: str, q: Parameter, value: Any) -> float:
+    """The value as a float, or InvalidParameters: finite, and for a length > 0 (or 0 where
+    zero selects a variant)."""
     try:
         x = float(value)
     except (TypeError, ValueError):
