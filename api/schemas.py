@@ -11,6 +11,7 @@ from typing import Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
 
+from synth import results
 from synth.kinematics import MAX_CURVE_POINTS
 from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.sweep import MAX_POINTS
@@ -228,29 +229,9 @@ class MechanismInfo(BaseModel):
         )
 
 
-class Extreme(BaseModel):
-    position: float
-    crank_angle_deg: float
-
-
-class Stroke(BaseModel):
-    crank_angle_deg: float
-    direction: int
-
-
-class Joint(BaseModel):
-    joint: str
-    min_deg: float
-    max_deg: float
-
-
-class Transmission(BaseModel):
-    min_deg: float
-    max_deg: float
-    joints: list[Joint]
-
-
 class Curves(BaseModel):
+    """Analysis curves as lists (synth keeps them as arrays)."""
+
     crank_angle_deg: list[float]
     position: list[float]
     velocity: list[float]
@@ -258,71 +239,23 @@ class Curves(BaseModel):
     transmission_deg: list[float]
 
 
-class Conditioning(BaseModel):
-    dead_point_margin_deg: float = Field(description="the minimum transmission angle")
-    validity_margin: float | None = Field(
-        description="smallest validity margin / largest length (0: on a limit)"
-    )
-    limiting_condition: str | None
-    flags: list[str] = Field(description="near_dead_point, near_validity_limit, dithering")
-
-
 class AnalyzeResponse(BaseModel):
+    """synth.Analysis, its curves as lists; the nested values are synth's own dataclasses."""
+
     type: str
     params: dict[str, float]
     time_ratio: float
     stroke: float
-    extremes: dict[Literal["min", "max"], Extreme]
-    working_stroke: Stroke
-    return_stroke: Stroke
-    transmission: Transmission
+    extremes: dict[Literal["min", "max"], results.Extreme]
+    working_stroke: results.Stroke
+    return_stroke: results.Stroke
+    transmission: results.Transmission
     grashof: str | None
     reversals: int = Field(description="slider reversals per revolution (2: a clean design)")
-    conditioning: Conditioning
+    conditioning: results.Conditioning
     curves: Curves | None = None
 
 
-class Candidate(BaseModel):
-    type: str
-    params: dict[str, float]
-    time_ratio: float
-    stroke: float
-    min_transmission_angle_deg: float
-    objective_value: float
-    method: str
-    residuals: dict[str, float]
-    verified: bool
-    grashof: str | None
-    size: float
-    conditioning: Conditioning
-    active: list[str] = Field(description="constraints at their limit (bound, variable bounds)")
-
-
-class Infeasible(BaseModel):
-    type: str
-    code: str
-    reason: str
-
-
-class SynthesizeResponse(BaseModel):
-    candidates: list[Candidate]
-    infeasible: list[Infeasible]
-    complete: bool
-    elapsed_ms: float
-
-
-class Extremum(BaseModel):
-    time_ratio: float
-    value: float
-
-
-class SweepResponse(BaseModel):
-    type: str
-    vary: str
-    values: list[float]
-    time_ratio: list[float | None]
-    stroke: list[float | None]
-    min_transmission_angle_deg: list[float | None]
-    valid: list[bool]
-    valid_interval: list[tuple[float, float]]
-    time_ratio_range: dict[Literal["min", "max"], Extremum] | None
+# synthesize and sweep answer with synth's result dataclasses as they are
+SynthesizeResponse = results.SynthesisResult
+SweepResponse = results.SweepResult

@@ -27,4 +27,4 @@ async def sweep(
         stop=body.stop,
         points=body.points,
     )
-    return SweepResponse(**r.to_dict())
+    return r

@@ -39,4 +39,4 @@ async def synthesize(
         max_candidates=body.max_candidates,
         time_budget_ms=body.time_budget_ms,
     )
-    return SynthesizeResponse(**r.to_dict())
+    return r
