@@ -88,7 +88,7 @@ def formulate(
         lb += [-ca.inf, -ca.inf]
         ub += [0.0, 0.0]
     for cond in m.conditions:
-        if cond.applies({k: (0.0 if k in variant else 1.0) for k in m.names}):
+        if cond.applies(variant):
             for term in cond.margin(p):
                 g.append(term)
                 lb.append(STRICT if cond.strict else 0.0)

@@ -252,7 +252,9 @@ def conditioning(m: Mechanism, p: dict[str, float], mu_deg: float, reversals: in
     """Distance to a dead point and to the nearest validity limit, flagged when small."""
     scale = max(abs(v) for v in p.values())
     margins = [
-        (min(float(t) for t in c.margin(p)) / scale, c.name) for c in m.conditions if c.applies(p)
+        (min(float(t) for t in c.margin(p)) / scale, c.name)
+        for c in m.conditions
+        if c.applies(m.variant(p))
     ]
     margin, name = min(margins, default=(None, None))
     flags = []

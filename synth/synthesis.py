@@ -335,7 +335,7 @@ def _fixed_violation(m: Mechanism, variant: frozenset[str], fixed: Mapping[str, 
     """The message of a validity condition broken by the fixed parts alone, if any."""
     p = {**fixed, **dict.fromkeys(variant, 0.0)}
     for c in m.conditions:
-        if not c.applies({k: p.get(k, 1.0) for k in m.names}):
+        if not c.applies(variant):
             continue
         try:
             terms = [float(x) for x in c.margin(p)]

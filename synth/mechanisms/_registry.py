@@ -50,8 +50,9 @@ class Condition:
 
     ``margin`` is polymorphic and returns smooth terms (|x| ≤ y is two terms), so each is a
     constraint in the formulation; ``explain`` states a violation with its numbers, e.g.
-    "coupler 2 < crank 1 + |offset| 1.5: the crank cannot turn fully". ``applies`` limits the
-    condition to a variant (e.g. only with a ram link).
+    "coupler 2 < crank 1 + |offset| 1.5: the crank cannot turn fully". ``needs`` names the
+    optional part the condition is about (it holds only in the variants that have it, e.g. a
+    ram link's reach).
     """
 
     name: str
@@ -60,7 +61,11 @@ class Condition:
     margin: Callable[[Params], tuple[Any, ...]]
     explain: Callable[[Params], str]
     strict: bool = False
-    applies: Callable[[Params], bool] = lambda p: True
+    needs: str | None = None
+
+    def applies(self, variant: frozenset[str]) -> bool:
+        """Whether the condition holds in a variant (the set of optional parts left out)."""
+        return self.needs is None or self.needs not in variant
 
 
 @dataclass(frozen=True)
@@ -141,7 +146,7 @@ class Mechanism:
         A non-strict condition holds to rounding (−1e-12 × the largest length it involves): a
         design built exactly on a limit in floating point is on it, not past it."""
         for c in self.conditions:
-            if not c.applies(p):
+            if not c.applies(self.variant(p)):
                 continue
             tol = ROUNDING * max(abs(float(p[k])) for k in c.params)
             m = min(float(t) for t in c.margin(p))
@@ -188,7 +193,7 @@ def reach_condition(
         f"(when {link} > 0)",
         params=(link, height, arm),
         margin=lambda p: tuple(p[link] + sg * t for t in offsets(p) for sg in (1, -1)),
-        applies=lambda p: not absent(p[link]),
+        needs=link,
         explain=lambda p: (
             f"{link} {p[link]:g} < {max(abs(float(t)) for t in offsets(p)):g}, the largest "
             f"distance from {pin} to the {output} path ({height} {p[height]:g}): the {link} "
