@@ -26,11 +26,12 @@ lengths. The diagnostics ``max_time_ratio`` and
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import casadi as ca
 import numpy as np
 
-from .mechanisms import Mechanism
+from .mechanisms import Mechanism, get
 
 OBJECTIVES = ("max_transmission_angle", "min_size")
 DIAGNOSTICS = ("max_time_ratio", "min_time_ratio")
@@ -40,6 +41,13 @@ TIE = 1e-7  # weight of size against |cos μ| (costs < 1e-5° of transmission an
 
 def relevant(m: Mechanism, variant: frozenset[str]) -> tuple[str, ...]:
     """The parameters the variant's kinematics depend on (a slot drive ignores ram_height)."""
+    return _relevant(m.type, variant)
+
+
+@cache
+def _relevant(mtype: str, variant: frozenset[str]) -> tuple[str, ...]:
+    # a symbolic dependency check (~5 ms): once per type and variant, not once per request
+    m = get(mtype)
     th = ca.SX.sym("th")
     sym = {q.name: ca.SX.sym(q.name) for q in m.parameters}
     p = {k: (0.0 if k in variant else v) for k, v in sym.items()}
