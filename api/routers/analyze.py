@@ -6,7 +6,7 @@ from fastapi import APIRouter, Body, Request
 
 from ..examples import ANALYZE
 from ..schemas import AnalyzeRequest, AnalyzeResponse
-from .common import run
+from .common import run_design
 
 router = APIRouter(tags=["analysis"])
 
@@ -17,12 +17,10 @@ async def analyze(
 ) -> AnalyzeResponse:
     """Time ratio, stroke, dead centres, strokes and transmission angles of a design; curves at
     exactly ``crank_angles_deg`` or at ``samples`` evenly spaced angles, and only then."""
-    a = await run(
+    a = await run_design(
         request,
-        ("mechanism", "params"),
         "analyze",
-        mechanism=body.mechanism.type,
-        params=body.mechanism.params.model_dump(exclude_none=True),
+        body.mechanism,
         crank_speed=body.crank_speed,
         crank_acceleration=body.crank_acceleration,
         crank_angles_deg=body.crank_angles_deg,

@@ -19,3 +19,10 @@ async def run(request: Request, params_loc: tuple[str, ...], op: str, **kwargs: 
         if isinstance(e, InvalidDesign) or (e.loc and e.loc[0] in params):
             e.where = params_loc
         raise
+
+
+async def run_design(request: Request, op: str, design: Any, **kwargs: Any) -> Any:
+    """``run`` for an operation on one design of the request (``body.mechanism``)."""
+    params = design.params.model_dump(exclude_none=True)
+    loc = ("mechanism", "params")
+    return await run(request, loc, op, mechanism=design.type, params=params, **kwargs)

@@ -6,7 +6,7 @@ from fastapi import APIRouter, Body, Request
 
 from ..examples import SWEEP
 from ..schemas import SweepRequest, SweepResponse
-from .common import run
+from .common import run_design
 
 router = APIRouter(tags=["analysis"])
 
@@ -16,12 +16,10 @@ async def sweep(
     request: Request, body: Annotated[SweepRequest, Body(openapi_examples=SWEEP)]
 ) -> SweepResponse:
     """What range must an adjustable part cover (seed 002, Fig. 5)."""
-    r = await run(
+    r = await run_design(
         request,
-        ("mechanism", "params"),
         "sweep",
-        mechanism=body.mechanism.type,
-        params=body.mechanism.params.model_dump(exclude_none=True),
+        body.mechanism,
         vary=body.vary,
         start=body.start,
         stop=body.stop,
