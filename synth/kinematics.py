@@ -51,6 +51,13 @@ class Model:
         g2 = ca.jacobian(g1, th)
         self.joints = tuple(joints)
         self.fn = ca.Function(f"{m.type}_kinematics", [th, pv], [ca.vertcat(g, g1, g2)])
+        self.dead = None
+        if m.dead_centres is not None:
+            h = m.dead_centres(p, th)
+            fn = ca.Function(
+                f"{m.type}_dead_centres", [th, pv], [ca.vertcat(h, ca.jacobian(h, th))]
+            )
+            self.dead = lambda theta, pv: tuple(fn(np.atleast_1d(theta)[None, :], pv).full())
 
     def __call__(self, theta: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, ...]:
         """g, g', g'' at each θ: arrays of shape (rows, len(θ))."""
@@ -82,7 +89,7 @@ def stationary_points(
         bad = grid[np.nonzero(~np.all(np.isfinite(g), axis=0))[0][0]]
         msg = f"the design cannot be assembled at crank angle {math.degrees(bad):.6g}°"
         raise InvalidDesign(msg, (), "assembly")
-    _refuse_dwell(grid, g[0], g1[0])
+    _refuse_dwell(grid, g1[0])
     grid, g1 = _refine(f, pv, grid, g1, g2)
     widths = np.diff(np.append(grid, TWO_PI))
     nxt = np.roll(g1, -1, axis=1)
@@ -91,41 +98,72 @@ def stationary_points(
     # where the derivative of sqrt(0) is undefined)
     zr, zk = np.nonzero((g1 == 0) | ~np.isfinite(g1))
     lo, hi = grid[k], grid[k] + widths[k]
-    f_lo = g1[rows, k]
     scale = np.max(np.abs(np.where(np.isfinite(g1), g1, 0)), axis=1)[rows]
+
+    def derivatives(x):
+        _, d1, d2 = f(x, pv)
+        idx = np.arange(x.size)
+        return d1[rows, idx], d2[rows, idx]
+
+    x = _rtsafe(derivatives, lo, hi, g1[rows, k], nxt[rows, k], scale)
+    if f.dead is not None:
+        x = _dead_centres(f, pv, rows, x, TWO_PI / n)
+    rows = np.concatenate([rows, zr])
+    x = np.concatenate([x, grid[zk]]) % TWO_PI
+    values = f(x, pv)[0][rows, np.arange(x.size)] if x.size else np.empty(0)
+    return rows, x, values
+
+
+def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
+    """The roots of fd (x -> (value, derivative), vectorised) in the brackets [lo, hi], where
+    it changes sign from f_lo to f_hi: Newton from the secant point while it stays in the
+    bracket and at least halves the step before last, else bisection (rtsafe), to machine
+    precision; ``scale`` is the function's size, to tell a root from a kink."""
     # start from the secant (regula falsi) point: already close on a fine grid
     with np.errstate(divide="ignore", invalid="ignore"):
-        x = lo + (hi - lo) * f_lo / (f_lo - nxt[rows, k])
+        x = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     x = np.where(np.isfinite(x), x, 0.5 * (lo + hi))
     dx_old = hi - lo
     for _ in range(100):
         if x.size == 0:
             break
-        _, d1, d2 = f(x, pv)
-        idx = np.arange(x.size)
-        fx, dfx = d1[rows, idx], d2[rows, idx]
+        fx, dfx = fd(x)
         same = np.sign(fx) == np.sign(f_lo)
         lo, hi = np.where(same, x, lo), np.where(same, hi, x)
         with np.errstate(divide="ignore", invalid="ignore"):
             step = fx / dfx
-        # Newton where it stays in the bracket and at least halves the step before last
-        # (rtsafe); else bisection, so the bracket shrinks at least as fast as by bisection
         newton = np.isfinite(step) & (x - step >= lo) & (x - step <= hi)
         newton &= np.abs(step) <= 0.5 * np.abs(dx_old)
         dx = np.where(newton, step, x - 0.5 * (lo + hi))
         dx_old = np.where(newton, dx_old, dx)
         tol = 4 * np.finfo(float).eps * np.maximum(1, x)
-        # a tiny Newton step is convergence only where the derivative is ~0 too: at a kink
-        # (a change point, a rod at its reach) it jumps across 0, and bisection must finish
+        # a tiny Newton step is convergence only where the function is ~0 too: at a kink (a
+        # change point, a rod at its reach) it jumps across 0, and bisection must finish
         small = np.abs(fx) <= 1e-12 * scale
         done = (fx == 0) | (hi - lo <= tol) | ((np.abs(dx) <= tol) & newton & small)
         x = np.where(fx == 0, x, x - dx)
         if np.all(done):
             break
-    rows = np.concatenate([rows, zr])
-    x = np.concatenate([x, grid[zk]]) % TWO_PI
-    values = f(x, pv)[0][rows, np.arange(x.size)] if x.size else np.empty(0)
-    return rows, x, values
+    return x
+
+
+def _dead_centres(f: Model, pv, rows, x, width: float) -> np.ndarray:
+    """Move the slider's stationary points onto the zeros of the type's dead-centre function,
+    searched within a grid cell (and a quarter of the gap to the next one) of each."""
+    on_s = np.nonzero(rows == 0)[0]
+    if on_s.size < 2:
+        return x
+    t = x[on_s]
+    gap = np.abs((t[:, None] - t[None, :] + math.pi) % TWO_PI - math.pi)
+    np.fill_diagonal(gap, np.inf)
+    w = np.minimum(width, 0.25 * gap.min(axis=1))
+    lo, hi = t - w, t + w
+    h_lo, h_hi = f.dead(lo, pv)[0], f.dead(hi, pv)[0]
+    ok = np.sign(h_lo) * np.sign(h_hi) < 0
+    scale = np.maximum(np.abs(h_lo), np.abs(h_hi))[ok]
+    x = x.copy()
+    x[on_s[ok]] = _rtsafe(lambda y: f.dead(y, pv), lo[ok], hi[ok], h_lo[ok], h_hi[ok], scale)
+    return x
 
 
 def _refine(f: Model, pv, grid, g1, g2, levels: int = 3, split: int = 16):
@@ -153,10 +191,15 @@ def _refine(f: Model, pv, grid, g1, g2, levels: int = 3, split: int = 16):
     return grid, g1
 
 
-def _refuse_dwell(grid: np.ndarray, s: np.ndarray, ds: np.ndarray) -> None:
+def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:
     """A slider that stands still over an interval (a linkage folded onto itself, e.g. an
-    offset slider-crank with coupler = crank and no offset) has no defined strokes."""
-    still = np.abs(ds) <= 1e-14 * np.ptp(s)  # zero, up to rounding (per radian of crank)
+    offset slider-crank with coupler = crank and no offset) has no defined strokes.
+
+    Standing still is ds/dθ = 0 exactly at three grid points in a row: the cancellation-free
+    position formulas give an exact 0 for a folded linkage, while a near-stall keeps its tiny
+    but real motion (a drag-link kite 1e-9 off its change point moves its slider by ~1e-23 of
+    the stroke per radian over 20° of the turn, and its strokes are well defined)."""
+    still = ds == 0
     run = still & np.roll(still, 1) & np.roll(still, -1)
     if np.any(run):
         raise InvalidDesign(

@@ -81,6 +81,10 @@ class Mechanism:
     conditions: tuple[Condition, ...]
     position: Callable[[Params, Any], Any]  # s(θ) along the slider path, complete parameters
     transmission: Callable[[Params, Any], dict[str, Any]]  # signed cos μ per pin-jointed coupler
+    # a function of (p, θ) whose zeros are exactly the slider's dead centres, each a simple
+    # zero, for a type whose ds/dθ has a near-multiple zero there (a follower that nearly
+    # stalls at its dead centre): the analysis locates the dead centres on it instead
+    dead_centres: Callable[[Params, Any], Any] | None = None
     defaults: Callable[[Params], dict[str, Any]] = lambda p: {}  # derived defaults (polymorphic)
     # the four-bar's (ground, crank, coupler, rocker), for its Grashof class
     fourbar: Callable[[Params], tuple[Any, Any, Any, Any]] | None = None

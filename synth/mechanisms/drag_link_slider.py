@@ -48,6 +48,15 @@ def position(p, th):
     return r1 + ahead(cx - r1, leg(r6, cy), (r6 - r5) * (r6 + r5))
 
 
+def dead_centres(p, th):
+    """C_y: the piston is at a dead centre exactly when the follower lies on the ground line,
+    as ds/dθ = −r5 φ' sin φ (1 + r5 cos φ/root), the last factor > 0 (r6 > r5). Near a change
+    point the follower nearly stalls right there (the four-bar folds flat onto the ground
+    line), so ds/dθ has a near-triple zero that double precision locates only to ~1e-5 rad,
+    while C_y's zero is simple."""
+    return _pin_c(p, th)[1]
+
+
 def transmission(p, th):
     _, cy, cos_mu = _pin_c(p, th)
     return {"coupler-follower": cos_mu, "connecting_rod-slider": cy / p["connecting_rod"]}
@@ -131,6 +140,7 @@ register(
         ),
         position=position,
         transmission=transmission,
+        dead_centres=dead_centres,
         fourbar=lambda p: tuple(p[n] for n in LINKS),
         facts=facts,
         inverse=inverse,
