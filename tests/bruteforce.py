@@ -96,9 +96,9 @@ def _fourbar(bx, by, o4x, o4y, r3, r4):
     k = (r3 * r3 - r4 * r4 + l2) / (2 * l2)  # along B->O4, in units of |BO4|
     # left, same units: Heron's product, not r3²/l2 − k², which cancels where the triangle
     # B, D, O4 is nearly flat (precision, not a new formula)
-    l = np.sqrt(l2)
-    heron = (r3 + r4 + l) * (r3 + r4 - l) * (r3 - r4 + l) * (r4 - r3 + l)
-    q = _sqrt(heron, (r3 + r4 + l) ** 4, "four-bar cannot be assembled") / (2 * l2)
+    bo4 = np.sqrt(l2)
+    heron = (r3 + r4 + bo4) * (r3 + r4 - bo4) * (r3 - r4 + bo4) * (r4 - r3 + bo4)
+    q = _sqrt(heron, (r3 + r4 + bo4) ** 4, "four-bar cannot be assembled") / (2 * l2)
     return bx + k * ux - q * uy, by + k * uy + q * ux
 
 
