@@ -138,3 +138,12 @@ def test_drag_link_kite_near_its_change_point(links, k):
     found = {k: math.radians(e.crank_angle_deg) for k, e in a.extremes.items()}
     assert found["max"] == pytest.approx(float(t2a), abs=1e-12)
     assert found["min"] == pytest.approx(float(pi + t2b), abs=1e-9)
+
+
+def test_offset_slider_crank_past_its_limit_by_rounding():
+    """coupler = crank + offset up to 1.5e-13 too short (accepted: on the limit to rounding):
+    the linkage cannot assemble for ±3e-7 rad around its dead centre, so the time ratio is
+    defined to ~sqrt(rounding) = 1e-6 there, not 1e-7 (the stress suite's rule)."""
+    p = {"crank": 3.1622776601683795, "coupler": 1781.441687699091, "offset": 1778.2794100389228}
+    a = assert_exact("offset_slider_crank", p, rel=1e-6)
+    assert "near_validity_limit" in a.conditioning.flags

@@ -56,13 +56,15 @@ def tolerance(mtype, a) -> float:
     10⁴ moves by 5e7 × a relative change of the crank), 100 ulp of backward error, 1e-14 × the
     condition number; for a stroke far from O2, a few ulp of the positions, 1e-15 |s| / stroke;
     and on a validity limit (margin < 1e-9 of the design's size) the design sits on a
-    square-root kink of its own definition, where its numbers are defined to ~sqrt(eps): 1e-7.
+    square-root kink of its own definition: synth accepts a design past a limit by rounding
+    (1e-12 of its lengths), and the kink turns that into an ambiguity of sqrt(1e-12) = 1e-6
+    (where the linkage cannot assemble for a few 1e-7 rad around the dead centre).
     Only asked for when 1e-9 was missed (it costs simulations).
     """
     # the stroke is the difference of two positions in the contract's frame (from O2)
     frame = 1e-15 * max(abs(e.position) for e in a.extremes.values()) / a.stroke
     tol = max(1e-9, 1e-14 * condition(mtype, a.params), flat_dead_centres(mtype, a), frame)
-    return max(tol, 1e-7) if on_limit(a) else tol
+    return max(tol, 1e-6) if on_limit(a) else tol
 
 
 def flat_dead_centres(mtype, a) -> float:
