@@ -10,7 +10,7 @@ from typing import Any
 
 import casadi as ca
 
-from ..geometry import cos_law, sqrt
+from ..geometry import cos_law, sqrt, where
 from ._registry import Condition
 
 
@@ -24,15 +24,40 @@ def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, A
     change point's follower stalls, no digit cancels.
     """
     ax, ay = r2 * ca.cos(th), r2 * ca.sin(th)
+    d2, across = _triangle(r1, r2, r3, r4, th)
+    along = (d2 + (r3 - r4) * (r3 + r4)) / (2 * d2)
+    ux, uy = r1 - ax, -ay  # A→O4; D lies to its left
+    dx, dy = ax + along * ux - across * uy, ay + along * uy + across * ux
+    return dx, dy, cos_law(r3, r4, sqrt(d2))
+
+
+def output_pin_height(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> Any:
+    """D_y of ``output_pin``, precise to its own size where D passes near the crank pivot O2.
+
+    There (a drag-link kite, ground ≈ follower and crank ≈ coupler, near its change point)
+    D = A + (D − A) cancels to a few ulp of |A|. Measured from O2 instead, D − O2 = a u + t n
+    with u = A→O4, n = u turned left, a = ((r1² − r4²) + (r3² − r2²)) / 2d² (the radical line,
+    both differences exact for a kite) and t the root of d² t² − 2 r1 A_y t + K = 0 on D's side,
+    taken as K / (d² t') from the other root t' where the sum would cancel.
+    """
+    ay = r2 * ca.sin(th)
+    d2, across = _triangle(r1, r2, r3, r4, th)
+    ux = (r1 - r2) + 2 * r2 * ca.sin(th / 2) ** 2
+    a = ((r1 - r4) * (r1 + r4) + (r3 - r2) * (r3 + r2)) / (2 * d2)
+    k = a * a * d2 - 2 * r1 * a * ux + (r1 - r4) * (r1 + r4)
+    beta = r1 * ay / d2  # the foot of D on the line A→O4, along n
+    t = where(beta >= 0, beta + across, k / (d2 * (beta - across)))
+    return -a * ay + t * ux
+
+
+def _triangle(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any]:
+    """|AO4|² and the distance of D from the line A→O4 in units of |AO4| (Heron, see
+    ``output_pin``)."""
     s2, c2 = ca.sin(th / 2) ** 2, ca.cos(th / 2) ** 2
     d2 = (r2 - r1) ** 2 + 4 * r1 * r2 * s2
     outer = (r3 + r4 - r1 - r2) * (r3 + r4 + r1 + r2) + 4 * r1 * r2 * c2
     inner = (r2 - r1 - r3 + r4) * (r2 - r1 + r3 - r4) + 4 * r1 * r2 * s2
-    along = (d2 + (r3 - r4) * (r3 + r4)) / (2 * d2)
-    across = sqrt(outer * inner) / (2 * d2)
-    ux, uy = r1 - ax, -ay  # A→O4; D lies to its left
-    dx, dy = ax + along * ux - across * uy, ay + along * uy + across * ux
-    return dx, dy, cos_law(r3, r4, sqrt(d2))
+    return d2, sqrt(outer * inner) / (2 * d2)
 
 
 def grashof_conditions(

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 
 from ..geometry import ahead, cos_law, leg, triangle_angle
-from ._fourbar import grashof_conditions, output_pin
+from ._fourbar import grashof_conditions, output_pin, output_pin_height
 from ._registry import Condition, Mechanism, Parameter, Unreachable, register
 
 LINKS = ("ground", "crank", "coupler", "follower")
@@ -49,12 +49,13 @@ def position(p, th):
 
 
 def dead_centres(p, th):
-    """C_y: the piston is at a dead centre exactly when the follower lies on the ground line,
+    """B_y: the piston is at a dead centre exactly when the follower lies on the ground line,
     as ds/dθ = −r5 φ' sin φ (1 + r5 cos φ/root), the last factor > 0 (r6 > r5). Near a change
     point the follower nearly stalls right there (the four-bar folds flat onto the ground
     line), so ds/dθ has a near-triple zero that double precision locates only to ~1e-5 rad,
-    while C_y's zero is simple."""
-    return _pin_c(p, th)[1]
+    while B_y's zero is simple; near a kite's, B passes the crank pivot, where B_y is taken
+    from O2 to keep its own digits."""
+    return output_pin_height(*(p[n] for n in LINKS), th)
 
 
 def transmission(p, th):
