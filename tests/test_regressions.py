@@ -148,3 +148,18 @@ def test_offset_slider_crank_past_its_limit_by_rounding():
     p = {"crank": 3.1622776601683795, "coupler": 1781.441687699091, "offset": 1778.2794100389228}
     a = assert_exact("offset_slider_crank", p, rel=1e-6)
     assert "near_validity_limit" in a.conditioning.flags
+
+
+def test_four_bar_rocker_much_shorter_than_its_crank_keeps_its_digits():
+    """ground 1, crank 958, follower 2: the follower pin was built as A + (B − A), keeping a
+    few ulp of |A| = 958 of a 2-long follower, and the rod's transmission near its dead point
+    (rod 1e-8 longer than the arm: μ = 0.0081°) moved by 4e-10 rad under scaling. The
+    follower vector is now measured from O4; the referee is acos(r5/r6) in 50 digits."""
+    from mpmath import acos, degrees, mpf
+
+    p = {"ground": 1.0, "crank": 958.3021617097721, "coupler": 958.4740367097721,
+         "follower": 2.0, "follower_arm": 100.0, "connecting_rod": 100.000001}  # fmt: skip
+    mu = float(degrees(acos(mpf(p["follower_arm"]) / mpf(p["connecting_rod"]))))
+    for k in (1.0, 10.0, 1e-3):
+        a = synth.analyze("drag_link_slider", {n: v * k for n, v in p.items()})
+        assert a.transmission.min_deg == pytest.approx(mu, abs=1e-10)

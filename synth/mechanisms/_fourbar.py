@@ -15,20 +15,24 @@ from ._registry import Condition
 
 
 def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, Any]:
-    """(D_x, D_y, cos μ): the rocker/follower pin and the signed coupler–rocker transmission.
+    """(v_x, v_y, cos μ): the rocker/follower vector v = D − O4 to its pin D, and the signed
+    coupler–rocker transmission.
 
     D is the intersection of circle(A, r3) and circle(O4, r4) left of A→O4, its Heron product
     written for a four-bar: with d² = |AO4|² = (r2 − r1)² + 4 r1 r2 sin²(θ/2) = (r1 + r2)² − 4 r1 r2
     cos²(θ/2), the factors (r3 + r4)² − d² and d² − (r3 − r4)² are sums of terms that a valid
     (Grashof) linkage keeps ≥ 0, so near its folded and extended positions, where a near
-    change point's follower stalls, no digit cancels.
+    change point's follower stalls, no digit cancels. v is measured from O4, not built as
+    A + (D − A), which would keep only a few ulp of |A| of a rocker much shorter than the crank.
     """
-    ax, ay = r2 * ca.cos(th), r2 * ca.sin(th)
+    ay = r2 * ca.sin(th)
     d2, across = _triangle(r1, r2, r3, r4, th)
-    along = (d2 + (r3 - r4) * (r3 + r4)) / (2 * d2)
-    ux, uy = r1 - ax, -ay  # A→O4; D lies to its left
-    dx, dy = ax + along * ux - across * uy, ay + along * uy + across * ux
-    return dx, dy, cos_law(r3, r4, sqrt(d2))
+    ux = (r1 - r2) + 2 * r2 * ca.sin(th / 2) ** 2  # u = A→O4 = (r1 − A_x, −A_y)
+    # D = O4 − back·u + across·n, n = u turned left; back = (d² − r3² + r4²) / 2d²
+    back = ((r2 - r1 - r3) * (r2 - r1 + r3) + 4 * r1 * r2 * ca.sin(th / 2) ** 2 + r4 * r4) / (
+        2 * d2
+    )
+    return -back * ux + across * ay, back * ay + across * ux, cos_law(r3, r4, sqrt(d2))
 
 
 def output_pin_height(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> Any:

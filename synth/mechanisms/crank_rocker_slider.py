@@ -49,8 +49,8 @@ def _swing(p):
 def _delta(p, th):
     """cos δ, sin δ of the rocker relative to its mid-swing line, and cos μ at the coupler."""
     r1, r2, r3, r4 = (p[n] for n in LINKS)
-    dx, dy, cos_mu = output_pin(r1, r2, r3, r4, th)
-    ux, uy = (dx - r1) / r4, dy / r4
+    vx, vy, cos_mu = output_pin(r1, r2, r3, r4, th)
+    ux, uy = vx / r4, vy / r4
     ge, gf = _swing(p)
     mx, my = -ca.cos((ge + gf) / 2), ca.sin((ge + gf) / 2)  # ψmid = π − (γe + γf)/2
     return mx * ux + my * uy, mx * uy - my * ux, cos_mu

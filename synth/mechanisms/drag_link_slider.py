@@ -37,9 +37,9 @@ LINKS = ("ground", "crank", "coupler", "follower")
 
 def _pin_c(p, th):
     r1, r2, r3, r4 = (p[n] for n in LINKS)
-    bx, by, cos_mu = output_pin(r1, r2, r3, r4, th)
+    vx, vy, cos_mu = output_pin(r1, r2, r3, r4, th)
     k = p["follower_arm"] / r4
-    return r1 + k * (bx - r1), k * by, cos_mu
+    return r1 + k * vx, k * vy, cos_mu
 
 
 def position(p, th):
