@@ -114,6 +114,7 @@ def _rank(objective: str):
 
 def _one_type(m: Mechanism, spec: Spec, t: Targets) -> tuple[list[Candidate], Infeasible | None]:
     found: list[Candidate] = []
+    seen: list[dict[str, float]] = []  # every design verified (or refused) once
     reasons: list[Infeasible] = []
     open_variants = []
     for variant in _variants(m, spec):
@@ -143,13 +144,16 @@ def _one_type(m: Mechanism, spec: Spec, t: Targets) -> tuple[list[Candidate], In
             limits.update({k: b for k, b in spec.bounds.items() if k in determined})
             for x in designs:
                 params = {**spec.fixed, **determined, **x, **{k: 0.0 for k in variant}}
+                if any(_same(params, o, t.stroke) for o in seen):
+                    continue  # a local optimum found again from another start
+                seen.append(params)
                 c = _candidate(m, params, method, t, limits)
-                if c is not None and not any(_same(c, o, t.stroke) for o in found):
+                if c is not None:
                     found.append(c)
     if found:
         return found, None
     if open_variants and time.monotonic() < t.deadline:
-        return [], _diagnose(m, spec, t, open_variants[-1])
+        return [], _diagnose(m, spec, t, open_variants)
     if reasons:
         return [], reasons[0]
     return [], Infeasible(m.type, "BUDGET_EXHAUSTED", _budget_reason(m, t))
@@ -238,22 +242,28 @@ def _active(params: dict[str, float], mu: float, t: Targets, bounds: dict) -> tu
     return tuple(out)
 
 
-def _diagnose(m: Mechanism, spec: Spec, t: Targets, open_variant) -> Infeasible:
-    """Why no design: the best transmission at these targets, else the reachable TR range."""
-    variant, names, fixed = open_variant
-    free = tuple(k for k in names if k not in fixed)
-    if not free:
+def _diagnose(m: Mechanism, spec: Spec, t: Targets, open_variants) -> Infeasible:
+    """Why no design, over every variant the request allows: the best transmission at these
+    targets, else the reachable TR range."""
+    searchable = [(v, f, tuple(k for k in names if k not in f)) for v, names, f in open_variants]
+    searchable = [(v, f, free) for v, f, free in searchable if free]
+    if not searchable:
         return Infeasible(
             m.type, "FIXED_PARTS_CONTRADICT_TARGETS", _fixed_design_reason(m, spec, t)
         )
+
+    def optima(objective: str, cos_bound: float | None = None):
+        """(TR, min transmission°) of each verified local optimum of ``objective``."""
+        for variant, fixed, free in searchable:
+            n = STARTS_LEFTOVER
+            for x in _ipopt(m, variant, free, fixed, spec, t, n, objective, cos_bound):
+                r = _analysed(m, {**spec.fixed, **x, **dict.fromkeys(variant, 0.0)}, t)
+                if r is not None:
+                    yield r
+
     best = None
     if t.bound_deg > 0:
-        for x in _ipopt(
-            m, variant, free, fixed, spec, t, STARTS_LEFTOVER, "max_transmission_angle", 1.0
-        ):
-            mu = _analysed(m, {**spec.fixed, **x, **dict.fromkeys(variant, 0.0)}, t)
-            if mu is not None and (best is None or mu[1] > best):
-                best = mu[1]
+        best = max((mu for _, mu in optima("max_transmission_angle", 1.0)), default=None)
     if best is not None and best < t.bound_deg:
         return Infeasible(
             m.type,
@@ -262,12 +272,12 @@ def _diagnose(m: Mechanism, spec: Spec, t: Targets, open_variant) -> Infeasible:
             f"ratio {t.time_ratio:g} and stroke {t.stroke:g}{_with(spec)}, below the bound "
             f"{t.bound_deg:g}°",
         )
-    trs = []
-    for objective in ("max_time_ratio", "min_time_ratio"):
-        for x in _ipopt(m, variant, free, fixed, spec, t, STARTS_LEFTOVER, objective):
-            r = _analysed(m, {**spec.fixed, **x, **dict.fromkeys(variant, 0.0)}, t)
-            if r is not None and r[1] >= t.bound_deg - 1e-9:
-                trs.append(r[0])
+    trs = [
+        tr
+        for objective in ("max_time_ratio", "min_time_ratio")
+        for tr, mu in optima(objective)
+        if mu >= t.bound_deg - 1e-9
+    ]
     if time.monotonic() >= t.deadline:
         return Infeasible(m.type, "BUDGET_EXHAUSTED", _budget_reason(m, t))
     if trs:
@@ -363,10 +373,8 @@ def _within(values: dict[str, float], bounds: Mapping[str, tuple[float, float]])
     )
 
 
-def _same(a: Candidate, b: Candidate, stroke: float) -> bool:
-    return a.type == b.type and all(
-        abs(a.params[k] - b.params[k]) <= SAME * stroke for k in a.params
-    )
+def _same(a: dict[str, float], b: dict[str, float], stroke: float) -> bool:
+    return a.keys() == b.keys() and all(abs(a[k] - b[k]) <= SAME * stroke for k in a)
 
 
 def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:

@@ -113,6 +113,16 @@ def test_transmission_bound_above_any_design():
     assert "27.008" in why.reason and "below the bound 50°" in why.reason
 
 
+def test_the_best_angle_in_a_refusal_is_over_every_variant():
+    """The reason's best angle is the best of the slot drive and the rod variant (it was the
+    rod variant's alone: 0.95° where a 12.9° slot drive exists); found by the benchmarks."""
+    spec = [{"type": "crank_rocker_slider"}]
+    (why,) = synth.synthesize(2.5581, 0.5785, 89.9, mechanisms=spec).infeasible
+    best = synth.synthesize(2.5581, 0.5785, 0.0, mechanisms=spec).candidates[0]
+    assert why.code == "TRANSMISSION_UNREACHABLE"
+    assert f"{best.min_transmission_angle_deg:.4f}°" in why.reason
+
+
 def test_fixed_parts_that_contradict_the_targets():
     spec = {"type": "crank_shaper", "fixed": {"pivot_distance": 240.0, "lever": 400.0}}
     (why,) = synth.synthesize(2.0, 450.0, mechanisms=[spec]).infeasible
