@@ -9,7 +9,7 @@ BIN    := $(VENV)/bin
 export OMP_NUM_THREADS ?= 1
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: serve test stress lint lock clean
+.PHONY: serve test stress bench lint lock clean
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,10 @@ test: $(VENV)/.dev
 # the numerical-stability suite at full length (≥ 10 000 hypothesis cases per type and property)
 stress: $(VENV)/.dev
 	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q tests/test_stress.py
+
+# run time against error, analysis cost, service latency: tables, benchmarks/results/*.json, plots
+bench: $(VENV)/.dev
+	$(BIN)/python -m benchmarks
 
 lint: $(VENV)/.dev
 	$(BIN)/ruff check .

@@ -1,0 +1,14 @@
+"""`make bench`: every benchmark in one run; tables on stdout, results/*.json and plots.
+
+python -m benchmarks [--quick]
+"""
+
+import sys
+
+from . import analysis, service, synthesis
+
+if __name__ == "__main__":
+    quick = ["--quick"] if "--quick" in sys.argv[1:] else []
+    for bench in (analysis, synthesis, service):
+        print(f"\n## {bench.__name__}\n", flush=True)
+        bench.main(quick)

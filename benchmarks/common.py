@@ -1,0 +1,51 @@
+"""What every benchmark shares: the machine and versions it ran on, JSON results, tables."""
+
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import platform
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+
+RESULTS = Path(__file__).parent / "results"
+PACKAGES = ("casadi", "numpy", "scipy", "fastapi", "uvicorn", "pydantic", "pylinkage", "matplotlib")
+
+
+def machine() -> dict:
+    def ver(name: str) -> str | None:
+        try:
+            return version(name)
+        except PackageNotFoundError:
+            return None
+
+    return {
+        "date_utc": datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpus": len(os.sched_getaffinity(0)),
+        "load_average_at_start": os.getloadavg(),
+        "python": platform.python_version(),
+        "versions": {p: v for p in PACKAGES if (v := ver(p))},
+    }
+
+
+def report(name: str, results: dict, quick: bool = False) -> dict:
+    """The results with the machine; written to results/<name>.json unless a quick run."""
+    out = {"machine": machine(), "quick": quick, **results}
+    if not quick:
+        RESULTS.mkdir(exist_ok=True)
+        (RESULTS / f"{name}.json").write_text(json.dumps(out, indent=1) + "\n")
+    return out
+
+
+def table(rows: list[dict], columns: tuple[str, ...]) -> str:
+    """A markdown table; floats to 4 significant digits, missing cells empty."""
+
+    def cell(v) -> str:
+        return "" if v is None else f"{v:.4g}" if isinstance(v, float) else str(v)
+
+    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+    lines += ["| " + " | ".join(cell(r.get(c)) for c in columns) + " |" for r in rows]
+    return "\n".join(lines) + "\n"
