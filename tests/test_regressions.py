@@ -163,3 +163,19 @@ def test_four_bar_rocker_much_shorter_than_its_crank_keeps_its_digits():
     for k in (1.0, 10.0, 1e-3):
         a = synth.analyze("drag_link_slider", {n: v * k for n, v in p.items()})
         assert a.transmission.min_deg == pytest.approx(mu, abs=1e-10)
+
+
+def test_four_bar_kite_factors_summed_in_pairs():
+    """crank = coupler = 1000 × ground, follower 1% longer than the ground: the Heron factors
+    summed left to right, (r2 − r1 − r3 + r4), were rounded at the crank's size (1e-11 of a
+    factor of 0.3), and the rod's transmission near its dead point moved by 2.6e-10 rad under
+    scaling (found by make stress). Summed as (r2 − r3) + (r4 − r1) they are exact."""
+    from mpmath import acos, degrees, mpf
+
+    p = {"ground": 31.622776601683793, "crank": 31654.399378285478,
+         "coupler": 31654.399378285478, "follower": 31.93900436770063,
+         "follower_arm": 3162.277660168379, "connecting_rod": 3162.2779763961453}  # fmt: skip
+    mu = float(degrees(acos(mpf(p["follower_arm"]) / mpf(p["connecting_rod"]))))
+    for k in (1.0, 100.0, 1e-3):
+        a = synth.analyze("drag_link_slider", {n: v * k for n, v in p.items()})
+        assert a.transmission.min_deg == pytest.approx(mu, abs=1e-10)  # an ulp of cos μ

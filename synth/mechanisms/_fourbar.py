@@ -25,13 +25,11 @@ def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, A
     change point's follower stalls, no digit cancels. v is measured from O4, not built as
     A + (D − A), which would keep only a few ulp of |A| of a rocker much shorter than the crank.
     """
-    ay = r2 * ca.sin(th)
+    ay, s2 = r2 * ca.sin(th), ca.sin(th / 2) ** 2
     d2, across = _triangle(r1, r2, r3, r4, th)
-    ux = (r1 - r2) + 2 * r2 * ca.sin(th / 2) ** 2  # u = A→O4 = (r1 − A_x, −A_y)
+    ux = (r1 - r2) + 2 * r2 * s2  # u = A→O4 = (r1 − A_x, −A_y)
     # D = O4 − back·u + across·n, n = u turned left; back = (d² − r3² + r4²) / 2d²
-    back = ((r2 - r1 - r3) * (r2 - r1 + r3) + 4 * r1 * r2 * ca.sin(th / 2) ** 2 + r4 * r4) / (
-        2 * d2
-    )
+    back = (((r2 - r3) - r1) * ((r2 + r3) - r1) + 4 * r1 * r2 * s2 + r4 * r4) / (2 * d2)
     return -back * ux + across * ay, back * ay + across * ux, cos_law(r3, r4, sqrt(d2))
 
 
@@ -59,8 +57,11 @@ def _triangle(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any]:
     ``output_pin``)."""
     s2, c2 = ca.sin(th / 2) ** 2, ca.cos(th / 2) ** 2
     d2 = (r2 - r1) ** 2 + 4 * r1 * r2 * s2
-    outer = (r3 + r4 - r1 - r2) * (r3 + r4 + r1 + r2) + 4 * r1 * r2 * c2
-    inner = (r2 - r1 - r3 + r4) * (r2 - r1 + r3 - r4) + 4 * r1 * r2 * s2
+    # the factors that vanish on a Grashof limit are summed as differences of pairs, each
+    # exact or rounded at its own size (a kite's r3 − r2 and r4 − r1 are exact), not left to
+    # right at the size of the longest link
+    outer = ((r3 - r2) + (r4 - r1)) * ((r3 + r4) + (r1 + r2)) + 4 * r1 * r2 * c2
+    inner = ((r2 - r3) + (r4 - r1)) * ((r2 - r1) + (r3 - r4)) + 4 * r1 * r2 * s2
     return d2, sqrt(outer * inner) / (2 * d2)
 
 
