@@ -28,8 +28,17 @@ def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, A
     ay, s2 = r2 * ca.sin(th), ca.sin(th / 2) ** 2
     d2, across = _triangle(r1, r2, r3, r4, th)
     ux = (r1 - r2) + 2 * r2 * s2  # u = A→O4 = (r1 − A_x, −A_y)
-    # D = O4 − back·u + across·n, n = u turned left; back = (d² − r3² + r4²) / 2d²
-    back = (((r2 - r3) - r1) * ((r2 + r3) - r1) + 4 * r1 * r2 * s2 + r4 * r4) / (2 * d2)
+    # D = O4 − back·u + across·n, n = u turned left; back = (d² − r3² + r4²) / 2d², whose
+    # constant part (r2 − r1)² − r3² + r4² is summed in the grouping with the smaller terms (a
+    # kite's (r2 − r3 − r1)(r2 + r3 − r1) + r4²; a crank ≈ ground's (r2 − r1)² + r4² − r3²)
+    kite = ((r2 - r3) - r1) * ((r2 + r3) - r1)
+    near = (r4 - r3) * (r4 + r3)
+    fixed = where(
+        ca.fmax(ca.fabs(kite), r4 * r4) <= ca.fmax((r2 - r1) ** 2, ca.fabs(near)),
+        kite + r4 * r4,
+        (r2 - r1) ** 2 + near,
+    )
+    back = (fixed + 4 * r1 * r2 * s2) / (2 * d2)
     return -back * ux + across * ay, back * ay + across * ux, cos_law(r3, r4, sqrt(d2))
 
 
