@@ -5,8 +5,7 @@ FROM python:3.11-slim
 ENV PYTHONDONTWRITEBYTECODE=1 \
     PYTHONUNBUFFERED=1 \
     OMP_NUM_THREADS=1 \
-    OPENBLAS_NUM_THREADS=1 \
-    WEB_CONCURRENCY=1
+    OPENBLAS_NUM_THREADS=1
 
 WORKDIR /app
 COPY requirements.lock .
@@ -19,4 +18,5 @@ USER app
 EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=3s --start-period=10s \
     CMD python -c "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8000/health', timeout=2)"
-CMD ["sh", "-c", "exec uvicorn api.main:app --host 0.0.0.0 --port 8000 --workers ${WEB_CONCURRENCY}"]
+# one server process per core unless WEB_CONCURRENCY says otherwise (api/serve.py)
+CMD ["python", "-m", "api.serve", "--host", "0.0.0.0", "--port", "8000"]

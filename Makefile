@@ -26,7 +26,7 @@ $(VENV)/.dev: requirements-dev.lock | $(BIN)/python
 	touch $@ $(VENV)/.runtime
 
 serve: $(VENV)/.runtime
-	$(BIN)/python -m uvicorn api.main:app --host $(HOST) --port $(PORT)
+	$(BIN)/python -m api.serve --host $(HOST) --port $(PORT)
 
 test: $(VENV)/.dev
 	$(BIN)/python -m pytest -q

@@ -59,7 +59,12 @@ class Engine:
             app.state.engine = cls(get_settings())
         return app.state.engine
 
-    async def run(self, op: str, **kwargs: Any) -> Any:
+    async def run(self, op: str, inline: bool = False, **kwargs: Any) -> Any:
+        """``op`` in the pool, or here in the event loop's thread when ``inline``: for work
+        that costs less than handing it to a worker (an analysis without long curves, ~1 ms;
+        the loop thread has its own compiled models, as every thread does)."""
+        if inline:
+            return _call(op, kwargs)
         loop = asyncio.get_running_loop()
         try:
             return await loop.run_in_executor(self.executor, partial(_call, op, kwargs))
@@ -74,4 +79,4 @@ class Engine:
             self.executor.submit(_warm)
 
     def close(self) -> None:
-        self.executor.shutdown(wait=False, cancel_futures=True)
+        self.executor.shutdown(wait=True, cancel_futures=True)

@@ -1,13 +1,13 @@
 """The service on loopback: latency p50/p95/p99 and throughput at 1, 4 and 16 clients.
 
-    python -m benchmarks.service [--quick]
+    python -m benchmarks.service [--quick] [--servers shipped,...]
 
-Starts `uvicorn api.main:app` (the command `make serve` runs) on a free port for each engine
-setting, waits for /health and a warm-up, then drives /v1/analyze and /v1/synthesize with the
-bounded load generator (benchmarks/load.py). A share of the requests is infeasible or invalid,
-as in real use: an analysis of a design that cannot be assembled (422), a synthesis whose time
-ratio the linkage cannot reach (200 with a reason). The load generator runs on the same cores
-as the service: the numbers are a floor for a separate client machine.
+Starts each server configuration on a free port (``shipped`` is the command `make serve` and
+the image run), waits for /health and a warm-up, then drives /v1/analyze and /v1/synthesize
+with the bounded load generator (benchmarks/load.py). A share of the requests is infeasible or
+invalid, as in real use: an analysis of a design that cannot be assembled (422), a synthesis
+whose time ratio the linkage cannot reach (200 with a reason). The load generator runs on the
+same cores as the service: the numbers are a floor for a separate client machine.
 """
 
 from __future__ import annotations
@@ -52,10 +52,23 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def serve(port: int, env: dict[str, str]) -> subprocess.Popen:
-    cmd = [sys.executable, "-m", "uvicorn", "api.main:app", "--host", "127.0.0.1",
-           "--port", str(port), "--log-level", "warning", "--no-access-log"]  # fmt: skip
-    proc = subprocess.Popen(cmd, cwd=ROOT, env={**os.environ, **env})
+# the configurations compared: a command (after the port is known) and its environment
+_UVICORN = [sys.executable, "-m", "uvicorn", "api.main:app", "--no-access-log", "--port"]
+SERVERS = {
+    # what ships: a server process per core, analyses in the event loop, solver threads
+    "shipped": ([sys.executable, "-m", "api.serve", "--port"], {}),
+    # one server process with a pool of solver processes (what shipped before this benchmark)
+    "one_process_pool": (_UVICORN, {"WEB_CONCURRENCY": "1"}),
+    # the shipped split, but uvicorn's own --workers: Nagle stays on (api/serve.py)
+    "uvicorn_workers": ([*_UVICORN[:-1], "--workers", "2", "--port"], {"WEB_CONCURRENCY": "2"}),
+}
+
+
+def serve(port: int, server: str) -> subprocess.Popen:
+    cmd, env = SERVERS[server]
+    env = {k: v for k, v in os.environ.items() if k != "WEB_CONCURRENCY" and "SYNTH_" not in k}
+    proc = subprocess.Popen([*cmd, str(port)], cwd=ROOT, env={**env, **SERVERS[server][1]},
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:
         try:
@@ -67,31 +80,34 @@ def serve(port: int, env: dict[str, str]) -> subprocess.Popen:
     raise RuntimeError("the service did not answer /health within 60 s")
 
 
-def measure(engine: str, requests: int, seconds: float) -> list[dict]:
+def measure(server: str, requests: dict[str, int], seconds: float) -> list[dict]:
     port = free_port()
-    proc = serve(port, {"SYNTH_EXECUTOR": engine})
+    proc = serve(port, server)
     rows = []
     try:
         for path in ("/v1/analyze", "/v1/synthesize"):
             mix = bodies(path)
             load.run(port, path, 2, 4 * len(mix), 60, mix)  # warm-up: workers, solvers
             for clients in CLIENTS:
-                r = load.run(port, path, clients, requests, seconds, mix)
-                rows.append({"engine": engine, **r})
+                r = load.run(port, path, clients, requests[path], seconds, mix)
+                rows.append({"server": server, **r})
     finally:
         proc.terminate()
-        proc.wait(10)
+        proc.wait(120)
     return rows
 
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="a smoke run: few requests")
-    ap.add_argument("--engines", default="process,thread")
+    ap.add_argument("--servers", default=",".join(SERVERS))
     a = ap.parse_args(argv)
-    requests, seconds = (40, 60.0) if a.quick else (2000, 30.0)
-    rows = [r for e in a.engines.split(",") for r in measure(e, requests, seconds)]
-    cols = ("engine", "path", "clients", "requests", "throughput_rps", "p50_ms", "p95_ms",
+    if a.quick:
+        requests, seconds = {"/v1/analyze": 40, "/v1/synthesize": 40}, 60.0
+    else:  # each cell stops at whichever comes first
+        requests, seconds = {"/v1/analyze": 3000, "/v1/synthesize": 400}, 20.0
+    rows = [r for s in a.servers.split(",") for r in measure(s, requests, seconds)]
+    cols = ("server", "path", "clients", "requests", "throughput_rps", "p50_ms", "p95_ms",
             "p99_ms", "statuses")  # fmt: skip
     print(table(rows, cols))
     return report("service", {"invalid_share": INVALID_SHARE, "rows": rows}, quick=a.quick)

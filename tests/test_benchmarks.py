@@ -21,7 +21,7 @@ def test_analysis_benchmark_quick():
 
 
 def test_service_benchmark_quick():
-    out = service.main(["--quick", "--engines", "process"])
+    out = service.main(["--quick", "--servers", "shipped"])
     for r in out["rows"]:
         assert r["requests"] == 40, r
         bad = {c: n for c, n in r["statuses"].items() if c >= 500}

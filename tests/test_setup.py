@@ -5,12 +5,14 @@ answers analyze and synthesize, and ≥ 16 parallel mixed requests each get exac
 answer while the service stays up.
 """
 
+import asyncio
 import json
 import os
 import shutil
 import signal
 import socket
 import subprocess
+import sys
 import time
 import urllib.request
 from concurrent.futures import ThreadPoolExecutor
@@ -136,3 +138,75 @@ def test_parallel_mixed_requests_match_the_serial_answers(server):
         assert status == 200
         assert stable(body) == serial[k % len(MIXED)]
     assert call(server, "/health")[1]["status"] == "ok"
+
+
+def test_the_listener_gives_connections_tcp_nodelay():
+    """uvicorn --workers leaves Nagle on (uvicorn #3149): ~40 ms per keep-alive request."""
+    from api.serve import listener
+
+    async def accepted() -> int:
+        got = asyncio.get_running_loop().create_future()
+
+        def made(transport):
+            sock = transport.get_extra_info("socket")
+            got.set_result(sock.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY))
+            transport.close()
+
+        sock = listener("127.0.0.1", 0)
+        proto = type("P", (asyncio.Protocol,), {"connection_made": lambda self, t: made(t)})
+        server = await asyncio.get_running_loop().create_server(proto, sock=sock)
+        _, writer = await asyncio.open_connection(*sock.getsockname())
+        try:
+            return await asyncio.wait_for(got, 10)
+        finally:
+            writer.close()
+            server.close()
+
+    assert asyncio.run(accepted()) == 1
+
+
+def descendants(pid: int) -> set[int]:
+    """Every process below ``pid`` (from /proc)."""
+    children = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        children.setdefault(int(fields[1]), set()).add(int(stat.parent.name))
+    found, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), ()):
+            found.add(child)
+            todo.append(child)
+    return found
+
+
+def alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def test_sigterm_to_the_server_stops_every_process_it_started():
+    """Only the parent gets the signal (as from an orchestrator): its server processes and
+    their solver processes must not be left running."""
+    port = free_port()
+    env = {**os.environ, "WEB_CONCURRENCY": "2", "SYNTH_EXECUTOR": "process"}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "api.serve", "--port", str(port)], cwd=ROOT, env=env,
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )  # fmt: skip
+    try:
+        wait_for_health(port, proc, timeout=120)
+        assert call(port, "/v1/synthesize", PROJECT)[0] == 200  # the pools have started
+        started = descendants(proc.pid)
+        assert len(started) >= 4  # two server processes, each with its solver processes
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=120)
+    deadline = time.monotonic() + 30
+    while any(map(alive, started)) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not [p for p in started if alive(p)]

@@ -9,6 +9,9 @@ from ..schemas import AnalyzeRequest, AnalyzeResponse
 from .common import run_design
 
 router = APIRouter(tags=["analysis"])
+# an analysis with at most this many curve points runs in the request's own thread: it costs
+# ~1 ms, less than a round trip to a worker process (benchmarks/results/service.json)
+INLINE_CURVE_POINTS = 1000
 
 
 @router.post("/v1/analyze", response_model=AnalyzeResponse, response_model_exclude_unset=True)
@@ -17,10 +20,12 @@ async def analyze(
 ) -> AnalyzeResponse:
     """Time ratio, stroke, dead centres, strokes and transmission angles of a design; curves at
     exactly ``crank_angles_deg`` or at ``samples`` evenly spaced angles, and only then."""
+    points = len(body.crank_angles_deg or ()) + (body.samples or 0)
     a = await run_design(
         request,
         "analyze",
         body.mechanism,
+        inline=points <= INLINE_CURVE_POINTS,
         crank_speed=body.crank_speed,
         crank_acceleration=body.crank_acceleration,
         crank_angles_deg=body.crank_angles_deg,

@@ -9,11 +9,13 @@ from synth.errors import InvalidDesign, SynthError
 from ..engine import Engine
 
 
-async def run(request: Request, params_loc: tuple[str, ...], op: str, **kwargs: Any) -> Any:
-    """Run ``op`` on the engine; an error about the design's parameters is placed at
-    ``params_loc`` in the request body."""
+async def run(
+    request: Request, params_loc: tuple[str, ...], op: str, inline: bool = False, **kwargs: Any
+) -> Any:
+    """Run ``op`` on the engine (see ``Engine.run`` for ``inline``); an error about the
+    design's parameters is placed at ``params_loc`` in the request body."""
     try:
-        return await Engine.of(request.app).run(op, **kwargs)
+        return await Engine.of(request.app).run(op, inline, **kwargs)
     except SynthError as e:
         params = kwargs.get("params", ())
         if isinstance(e, InvalidDesign) or (e.loc and e.loc[0] in params):
@@ -21,8 +23,10 @@ async def run(request: Request, params_loc: tuple[str, ...], op: str, **kwargs: 
         raise
 
 
-async def run_design(request: Request, op: str, design: Any, **kwargs: Any) -> Any:
+async def run_design(
+    request: Request, op: str, design: Any, inline: bool = False, **kwargs: Any
+) -> Any:
     """``run`` for an operation on one design of the request (``body.mechanism``)."""
     params = design.params.model_dump(exclude_none=True)
     loc = ("mechanism", "params")
-    return await run(request, loc, op, mechanism=design.type, params=params, **kwargs)
+    return await run(request, loc, op, inline, mechanism=design.type, params=params, **kwargs)
