@@ -27,6 +27,7 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")  # as the Makefile: one thread per
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse
+import gzip
 import itertools
 import json
 import math
@@ -251,12 +252,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
 
 
 def write(out: Path, result: dict, records: list[dict], cases: list[dict], text: str) -> None:
-    """synthesis.json (machine, settings, summary), synthesis_records.jsonl (a line per case
-    and method, errors to 3 digits), synthesis.md (the tables), the plot and the targets."""
+    """synthesis.json (machine, settings, summary), synthesis_records.jsonl.gz (a line per
+    case and method, errors to 3 digits), synthesis.md (the tables), the plot and the targets."""
     out.mkdir(parents=True, exist_ok=True)
     (out / "synthesis.json").write_text(json.dumps(_finite(result), indent=1) + "\n")
     lines = (json.dumps(_finite(_rounded(r)), ensure_ascii=False) for r in records)
-    (out / "synthesis_records.jsonl").write_text("\n".join(lines) + "\n")
+    with gzip.GzipFile(out / "synthesis_records.jsonl.gz", "wb", mtime=0) as f:
+        f.write(("\n".join(lines) + "\n").encode())
     (out / "synthesis.md").write_text(text + "\n")
     plot(result["summary"], out / "synthesis_time_vs_error.png")
     targets.write(out / "targets.json", cases)

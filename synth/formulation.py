@@ -16,6 +16,10 @@ Constraints (all smooth):
 - −cos μ_bound ≤ c_k ≤ cos μ_bound for every transmission cosine term;
 - every validity margin term ≥ 0 (≥ ``STRICT`` for strict conditions).
 
+A row that does not depend on the variables (fixed parts that set the stroke, the scotch yoke's
+β ≡ 0) is left out of the NLP: a zero Jacobian row makes the equality system rank-deficient.
+It is a condition on the NLP parameters instead (``Formulation.holds``), checked before solving.
+
 Objectives: ``max_transmission_angle`` minimises t ≥ |c_k| (an epigraph variable) plus
 ``TIE`` × size, so that a family of designs with the same best angle (a slot drive: 90° for
 every design) resolves to its smallest mechanism; ``min_size`` minimises the sum of link
@@ -67,6 +71,14 @@ class Formulation:
     ubg: np.ndarray
     n_extra: int  # variables after the free parameters (the epigraph t)
     equalities: ca.Function  # (x, p) -> (residuals, Jacobian): for polishing
+    constant: ca.Function  # p -> the rows that do not depend on x
+    constant_lb: np.ndarray
+    constant_ub: np.ndarray
+
+    def holds(self, p: np.ndarray, tol: float = 1e-9) -> bool:
+        """Whether the rows left out of the NLP hold for parameters ``p``."""
+        v = np.asarray(self.constant(p)).ravel()
+        return bool(np.all((v >= self.constant_lb - tol) & (v <= self.constant_ub + tol)))
 
 
 def formulate(
@@ -116,17 +128,26 @@ def formulate(
     else:
         f = (-1 if objective == "max_time_ratio" else 1) * beta**2
 
-    eqs = ca.vertcat(*g[:n_eq])
+    xs = ca.vertcat(x, *extra)
     params = ca.vertcat(fx, tr_t, cos_b)
+    keep = np.array([ca.depends_on(ca.SX(gi), xs) for gi in g], dtype=bool)
+    varying = [gi for gi, k in zip(g, keep, strict=True) if k]
+    eqs = ca.vertcat(*(gi for gi, k in zip(g[:n_eq], keep, strict=False) if k))
+    lb, ub = np.array(lb, dtype=float), np.array(ub, dtype=float)
     return Formulation(
         mtype=m.type,
         variant=variant,
         free=free,
         fixed=fixed,
         objective=objective,
-        nlp={"x": ca.vertcat(x, *extra), "p": params, "f": f, "g": ca.vertcat(*g)},
-        lbg=np.array(lb, dtype=float),
-        ubg=np.array(ub, dtype=float),
+        nlp={"x": xs, "p": params, "f": f, "g": ca.vertcat(*varying)},
+        lbg=lb[keep],
+        ubg=ub[keep],
         n_extra=len(extra),
         equalities=ca.Function("eq", [x, params], [eqs, ca.jacobian(eqs, x)]),
+        constant=ca.Function(
+            "constant", [params], [ca.vertcat(*(g[i] for i in np.flatnonzero(~keep)))]
+        ),
+        constant_lb=lb[~keep],
+        constant_ub=ub[~keep],
     )

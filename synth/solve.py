@@ -74,6 +74,8 @@ def multistart(
     free parameters, in stroke units)."""
     form = b.form
     pv = np.concatenate([fixed, [tr, cos_bound]])
+    if not form.holds(pv):
+        return  # the fixed parts alone break a constraint: no start can help
     n_free = len(form.free)
     lbx = np.concatenate([lo, [-np.inf] * form.n_extra])
     ubx = np.concatenate([hi, [np.inf] * form.n_extra])
