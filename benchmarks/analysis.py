@@ -79,6 +79,32 @@ def synthesis_costs(repeats: int) -> list[dict]:
     return rows
 
 
+DEFAULT_TIME_RATIOS = (1.3, 1.6, 2.0)
+
+
+def default_requests(repeats: int) -> list[dict]:
+    """The default request (everything free, bound 20°) for each type and for all six at once,
+    the median over DEFAULT_TIME_RATIOS; the baseline is a summary analysis of each type asked."""
+    rows = []
+    for mtype in (*DESIGNS, "all six"):
+        kinds = None if mtype == "all six" else [{"type": mtype}]
+        asked = DESIGNS if kinds is None else {mtype: DESIGNS[mtype]}
+
+        def base(asked=asked):
+            for t, p in asked.items():
+                synth.analyze(t, p)
+
+        times, refs = [], []
+        for tr in DEFAULT_TIME_RATIOS:
+            fn = partial(synth.synthesize, tr, 1.0, 20.0, mechanisms=kinds)
+            fn()  # builds the solvers
+            ms, ref = median_ms(fn, base, repeats)
+            times.append(ms), refs.append(ref)
+        ms = statistics.median(times)
+        rows.append({"type": mtype, "ms": ms, "analyses": ms / statistics.median(refs)})
+    return rows
+
+
 def with_starts(n: int, fn: Callable[[], synth.SynthesisResult]):
     """fn with synthesis.STARTS = n (the family multistart size) for the call."""
 
@@ -97,9 +123,11 @@ def main(argv: list[str] | None = None) -> dict:
     results = {
         "analysis": analysis_costs(repeats, SAMPLES[:3] if a.quick else SAMPLES),
         "synthesis": synthesis_costs(2 if a.quick else 7),
+        "default_requests": default_requests(1 if a.quick else 5),
     }
     print(table(results["analysis"], ("type", "case", "ms", "ratio")))
     print(table(results["synthesis"], ("case", "ms", "ratio", "candidates")))
+    print(table(results["default_requests"], ("type", "ms", "analyses")))
     if not a.quick:
         plot(results["analysis"], RESULTS / "analysis_cost_vs_samples.png")
     return report("analysis", results, quick=a.quick)

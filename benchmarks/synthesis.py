@@ -261,7 +261,7 @@ def write(out: Path, result: dict, records: list[dict], cases: list[dict], text:
         f.write(("\n".join(lines) + "\n").encode())
     (out / "synthesis.md").write_text(text + "\n")
     plot(result["summary"], out / "synthesis_time_vs_error.png")
-    targets.write(out / "targets.json", cases)
+    targets.write(out / "targets.json.gz", cases)
 
 
 def _rounded(x: Any) -> Any:

@@ -10,11 +10,12 @@ with its reason (``INFEASIBLE``): a time ratio the type cannot have, a transmiss
 what the default bounds allow, or fixed parts that contradict the targets or the type.
 
 Each case is a plain dict: ``case["target"]`` is ``synth.synthesize(**case["target"])``'s
-arguments. ``python -m benchmarks.targets`` writes them to ``benchmarks/results/targets.json``.
+arguments. ``python -m benchmarks.targets`` writes them to ``benchmarks/results/targets.json.gz``.
 """
 
 from __future__ import annotations
 
+import gzip
 import json
 import math
 import sys
@@ -260,9 +261,11 @@ def cases(n_feasible: int = N_FEASIBLE, n_infeasible: int = N_INFEASIBLE) -> lis
     return out
 
 
-def write(path: Path = RESULTS / "targets.json", items: list[dict] | None = None) -> Path:
+def write(path: Path = RESULTS / "targets.json.gz", items: list[dict] | None = None) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(items if items is not None else cases(), indent=1) + "\n")
+    text = json.dumps(items if items is not None else cases(), indent=1) + "\n"
+    with gzip.GzipFile(path, "wb", mtime=0) as f:  # 0.4 MB of JSON otherwise
+        f.write(text.encode())
     return path
 
 
