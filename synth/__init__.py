@@ -10,7 +10,7 @@ from importlib.metadata import PackageNotFoundError, version
 
 from . import mechanisms
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
-from .kinematics import analyze
+from .kinematics import analyze, joints
 from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult
 from .sweep import sweep
 from .synthesis import Spec, synthesize
@@ -32,6 +32,7 @@ __all__ = [
     "SynthesisResult",
     "UnknownMechanism",
     "analyze",
+    "joints",
     "mechanisms",
     "sweep",
     "synthesize",

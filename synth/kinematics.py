@@ -242,6 +242,25 @@ def analyze(
     return Analysis(**summary, curves=curves)
 
 
+def joints(
+    mechanism: str, params: Mapping[str, float], crank_angles_deg: Sequence[float]
+) -> dict[str, np.ndarray]:
+    """The pin positions at each crank angle, {pin: array of (x, y)}, for drawings; the pins
+    and the frame are named in the type's docstring (``synth.mechanisms.get(t).description``).
+
+    >>> j = joints("drag_link_slider", {"ground": 0.1, "crank": 0.225, "coupler": 0.2504,
+    ...            "follower": 0.275, "follower_arm": 0.15, "connecting_rod": 0.3}, [90.0])
+    >>> sorted(j), j["A"].round(9).tolist()
+    (['A', 'B', 'C', 'D', 'O2', 'O4'], [[0.0, 0.225]])
+    """
+    m = get(mechanism)
+    if m.joints is None:
+        raise InvalidParameters(f"{mechanism} has no drawing yet", ("mechanism",))
+    p = m.complete(params)
+    at = [m.joints(p, math.radians(a)) for a in crank_angles_deg]
+    return {k: np.array([pins[k] for pins in at], dtype=float) for k in at[0]} if at else {}
+
+
 def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -> dict:
     on_s = rows == 0
     if np.count_nonzero(on_s) < 2:

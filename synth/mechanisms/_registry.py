@@ -97,6 +97,9 @@ class Mechanism:
     # parameters the targets determine (caller's units), None when the free set is a family,
     # or raises Unreachable
     inverse: Callable[[dict[str, float], float, float], list[dict[str, float]] | None] | None = None
+    # the pin positions {name: (x, y)} at crank angle θ, in the module docstring's frame (for
+    # drawings: evaluated on floats only, never differentiated)
+    joints: Callable[[Params, float], dict[str, tuple[float, float]]] | None = None
 
     @property
     def names(self) -> tuple[str, ...]:

@@ -63,6 +63,20 @@ def transmission(p, th):
     return {"coupler-follower": cos_mu, "connecting_rod-slider": cy / p["connecting_rod"]}
 
 
+def joints(p, th):
+    r1, r2 = p["ground"], p["crank"]
+    vx, vy, _ = output_pin(*(p[n] for n in LINKS), th)
+    cx, cy, _ = _pin_c(p, th)
+    return {
+        "O2": (0.0, 0.0),
+        "A": (r2 * math.cos(th), r2 * math.sin(th)),
+        "B": (r1 + float(vx), float(vy)),
+        "O4": (r1, 0.0),
+        "C": (float(cx), float(cy)),
+        "D": (float(position(p, th)), 0.0),
+    }
+
+
 def facts(p):
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     r5, r6 = p["follower_arm"], p["connecting_rod"]
@@ -145,5 +159,6 @@ register(
         fourbar=lambda p: tuple(p[n] for n in LINKS),
         facts=facts,
         inverse=inverse,
+        joints=joints,
     )
 )
