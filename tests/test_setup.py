@@ -6,8 +6,10 @@ answer while the service stays up.
 """
 
 import asyncio
+import doctest
 import json
 import os
+import shlex
 import shutil
 import signal
 import socket
@@ -75,7 +77,8 @@ def test_readme_starts_with_the_two_commands():
 
 
 @pytest.fixture(scope="module")
-def server(tmp_path_factory):
+def served(tmp_path_factory):
+    """`make serve` on a fresh checkout: (its port, the checkout with the .venv it built)."""
     if shutil.which("make") is None:
         pytest.skip("needs make")
     work = fresh_checkout(tmp_path_factory.mktemp("fresh") / "checkout")
@@ -88,10 +91,15 @@ def server(tmp_path_factory):
     )  # fmt: skip
     try:
         assert wait_for_health(port, proc, timeout=600)["status"] == "ok"
-        yield port
+        yield port, work
     finally:
         os.killpg(proc.pid, signal.SIGTERM)
-        proc.wait(timeout=30)
+        proc.wait(timeout=120)
+
+
+@pytest.fixture(scope="module")
+def server(served):
+    return served[0]
 
 
 ANALYZE = {"mechanism": {"type": "drag_link_slider",
@@ -210,3 +218,122 @@ def test_sigterm_to_the_server_stops_every_process_it_started():
     while any(map(alive, started)) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert not [p for p in started if alive(p)]
+
+
+# --- the README: every command in it works as written ---------------------------------------
+
+
+def readme_console_commands() -> list[tuple[str, str]]:
+    """(command, shown output) for each ``$ `` line of the README's console blocks."""
+    out, block = [], None
+    for line in (ROOT / "README.md").read_text().splitlines():
+        if line.startswith("```"):
+            block = [] if line == "```console" and block is None else None
+            continue
+        if block is None:
+            continue
+        if line.startswith("$ "):
+            out.append([line[2:], []])
+        elif out:
+            out[-1][1].append(line)
+    return [(cmd, "\n".join(shown)) for cmd, shown in out]
+
+
+def same(shown, got, path="") -> None:
+    """JSON equal to 1e-9 relative on floats; elapsed_ms (wall time) is not compared."""
+    if isinstance(shown, dict):
+        keys = set(shown) - {"elapsed_ms"}
+        assert keys == set(got) - {"elapsed_ms"}, path
+        for k in keys:
+            same(shown[k], got[k], f"{path}.{k}")
+    elif isinstance(shown, list):
+        assert len(shown) == len(got), path
+        for i, (a, b) in enumerate(zip(shown, got, strict=True)):
+            same(a, b, f"{path}[{i}]")
+    elif isinstance(shown, float) and isinstance(got, float):
+        assert got == pytest.approx(shown, rel=1e-9, abs=1e-12), path
+    else:
+        assert shown == got, path
+
+
+def test_the_readme_shows_a_curl_for_every_endpoint():
+    commands = " ".join(cmd for cmd, _ in readme_console_commands())
+    for path in ("/health", "/v1/mechanisms", "/v1/mechanisms/", "/v1/analyze",
+                 "/v1/synthesize", "/v1/sweep"):  # fmt: skip
+        assert f"localhost:8000{path}" in commands, path
+
+
+def test_every_readme_command_gives_the_output_shown(server):
+    """Run as written, against `make serve` on a fresh checkout (its port for 8000)."""
+    assert shutil.which("curl"), "the README's commands use curl"
+    for cmd, shown in readme_console_commands():
+        got = subprocess.run(
+            ["bash", "-c", cmd.replace("localhost:8000", f"localhost:{server}")],
+            capture_output=True, text=True, timeout=120, check=True,
+        ).stdout.strip()  # fmt: skip
+        try:
+            expected = json.loads(shown)
+        except json.JSONDecodeError:
+            assert got == shown, cmd
+        else:
+            same(expected, json.loads(got))
+
+
+def test_the_readme_python_examples_run():
+    failed, tried = doctest.testfile(
+        str(ROOT / "README.md"), module_relative=False,
+        optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE,
+    )  # fmt: skip
+    assert tried >= 5 and failed == 0
+
+
+# --- the Dockerfile, without a Docker engine ------------------------------------------------
+
+
+def dockerfile() -> dict[str, list[str]]:
+    """Instruction -> its arguments, in order (continuation lines joined)."""
+    text = (ROOT / "Dockerfile").read_text().replace("\\\n", " ")
+    out: dict[str, list[str]] = {}
+    for line in text.splitlines():
+        if line.strip() and not line.lstrip().startswith("#"):
+            word, _, rest = line.strip().partition(" ")
+            out.setdefault(word.upper(), []).append(rest.strip())
+    return out
+
+
+def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
+    work = served[1]
+    d = dockerfile()
+    assert d["FROM"] == ["python:3.11-slim"]
+    # the install step is the lock make serve installed into the fresh checkout's .venv
+    (install,) = [r for r in d["RUN"] if "pip install" in r]
+    assert "--require-hashes -r requirements.lock" in install
+    assert d["USER"] and d["USER"][-1] not in ("root", "0")
+    assert d["EXPOSE"] == ["8000"]
+    # the image's /app: only what the Dockerfile copies
+    app = tmp_path / "app"
+    for args in d["COPY"]:
+        src, dest = args.split()
+        target = app / dest if dest not in (".", "./") else app / src
+        if (work / src).is_dir():
+            shutil.copytree(work / src, target)
+        else:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(work / src, target)
+    env = dict(pair.split("=", 1) for pair in shlex.split(" ".join(d["ENV"])))
+    env |= {"PATH": f"{work / '.venv/bin'}:{os.environ['PATH']}", "HOME": str(tmp_path)}
+    cmd = json.loads(d["CMD"][0])
+    assert cmd[:3] == ["python", "-m", "api.serve"]
+    image_port = free_port()
+    cmd = [c.replace("8000", str(image_port)) for c in cmd]
+    proc = subprocess.Popen(cmd, cwd=app, env=env, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)  # fmt: skip
+    try:
+        wait_for_health(image_port, proc, timeout=120)
+        health = d["HEALTHCHECK"][0].split(" CMD ", 1)[1].replace("8000", str(image_port))
+        assert subprocess.run(["sh", "-c", health], cwd=app, env=env, timeout=30).returncode == 0
+        status, out = call(image_port, "/v1/synthesize", PROJECT)
+        assert status == 200 and len(out["candidates"]) == 2
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=120)
