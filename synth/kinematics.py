@@ -257,7 +257,9 @@ def joints(
     if m.joints is None:
         raise InvalidParameters(f"{mechanism} has no drawing yet", ("mechanism",))
     p = m.complete(params)
-    at = [m.joints(p, math.radians(a)) for a in crank_angles_deg]
+    # θ as a CasADi number: a branch not taken (a division by zero on a pivot line) is inf
+    # there, as in the compiled analysis, instead of raising as on a Python float
+    at = [m.joints(p, ca.DM(math.radians(a))) for a in crank_angles_deg]
     return {k: np.array([pins[k] for pins in at], dtype=float) for k in at[0]} if at else {}
 
 

@@ -97,8 +97,8 @@ class Mechanism:
     # parameters the targets determine (caller's units), None when the free set is a family,
     # or raises Unreachable
     inverse: Callable[[dict[str, float], float, float], list[dict[str, float]] | None] | None = None
-    # the pin positions {name: (x, y)} at crank angle θ, in the module docstring's frame (for
-    # drawings: evaluated on floats only, never differentiated)
+    # the pin positions {name: (x, y)} at crank angle θ, named as in the module docstring, the
+    # slider's pin last (for drawings: θ a CasADi number, never symbolic or differentiated)
     joints: Callable[[Params, float], dict[str, tuple[float, float]]] | None = None
 
     @property

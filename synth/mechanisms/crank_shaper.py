@@ -81,6 +81,13 @@ def defaults(p):
     return {"ram_height": p["lever"] * _cos_psi_max(p)}
 
 
+def joints(p, th):
+    r2, d, L, h = p["crank"], p["pivot_distance"], p["lever"], p["ram_height"]
+    c, s = (float(v) for v in _lever(p, th))
+    return {"O2": (0.0, 0.0), "B": (r2 * math.cos(th), r2 * math.sin(th)), "O4": (-d, 0.0),
+            "P": (-d + L * c, L * s), "R": (-d + h, float(position(p, th)))}  # fmt: skip
+
+
 def facts(p):
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["ram_link"]
     half = ca.atan2(r2, leg(d, r2))  # ψmax = asin(r2/d)
@@ -176,5 +183,6 @@ register(
         defaults=defaults,
         facts=facts,
         inverse=inverse,
+        joints=joints,
     )
 )

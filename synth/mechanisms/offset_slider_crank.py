@@ -48,6 +48,12 @@ def transmission(p, th):
     return {"coupler-slider": (e - r2 * ca.sin(th)) / r3}
 
 
+def joints(p, th):
+    r2 = p["crank"]
+    return {"O2": (0.0, 0.0), "B": (r2 * math.cos(th), r2 * math.sin(th)),
+            "C": (float(position(p, th)), p["offset"])}  # fmt: skip
+
+
 def facts(p):
     r2, r3, e = p["crank"], p["coupler"], p["offset"]
     # β = asin(e/(r3−r2)) − asin(e/(r3+r2)) with atan2; odd in e: TR < 1 is the mirror's 1/TR
@@ -126,5 +132,6 @@ register(
         transmission=transmission,
         facts=facts,
         inverse=inverse,
+        joints=joints,
     )
 )

@@ -16,6 +16,8 @@ drives along the slot's normal, so the transmission angle is 90° throughout.
 
 from __future__ import annotations
 
+import math
+
 import casadi as ca
 
 from ._registry import Mechanism, Parameter, Unreachable, register
@@ -27,6 +29,12 @@ def position(p, th):
 
 def transmission(p, th):
     return {}
+
+
+def joints(p, th):
+    r = p["crank"]
+    return {"O2": (0.0, 0.0), "B": (r * math.cos(th), r * math.sin(th)),
+            "yoke": (float(position(p, th)), 0.0)}  # fmt: skip
 
 
 def facts(p):
@@ -61,5 +69,6 @@ register(
         transmission=transmission,
         facts=facts,
         inverse=inverse,
+        joints=joints,
     )
 )

@@ -56,6 +56,13 @@ def transmission(p, th):
     return {"connecting_rod-ram": p["lever"] * c / p["connecting_rod"]}
 
 
+def joints(p, th):
+    r2, d, L = p["crank"], p["pivot_distance"], p["lever"]
+    c, s = (float(v) for v in _lever(p, th))
+    return {"O2": (0.0, 0.0), "B": (r2 * math.cos(th), r2 * math.sin(th)), "O4": (-d, 0.0),
+            "P": (-d - L * c, -L * s), "R": (-d, float(position(p, th)))}  # fmt: skip
+
+
 def facts(p):
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["connecting_rod"]
     q = ca.atan2(leg(r2, d), d)  # acos(d/r2)
@@ -121,5 +128,6 @@ register(
         transmission=transmission,
         facts=facts,
         inverse=inverse,
+        joints=joints,
     )
 )
