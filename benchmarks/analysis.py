@@ -17,8 +17,12 @@ from collections.abc import Callable
 from functools import partial
 from pathlib import Path
 
+import numpy as np
+
 import synth
 from synth import synthesis
+from synth.formulation import relevant
+from synth.solve import starts as synthesis_starts
 
 from .common import RESULTS, report, table
 from .methods import patched
@@ -105,6 +109,53 @@ def default_requests(repeats: int) -> list[dict]:
     return rows
 
 
+SESSION = tuple(1.50 + 0.01 * k for k in range(11))  # a designer nudging the time ratio
+
+
+def warm_starts(repeats: int) -> list[dict]:
+    """A session of requests whose time ratio moves 1.50 → 1.60 (crank-rocker, all free, bound
+    20°): cold, the shipped 8 starts per request; warm, one start, the previous request's best
+    design (the rest of the Halton sequence only where that design does not fit the variant)."""
+    m = synth.mechanisms.get("crank_rocker_slider")
+    frees = [relevant(m, v) for v in (frozenset(), frozenset({"connecting_rod"}))]
+
+    def session(warm: bool) -> list[synth.SynthesisResult]:
+        out, prev = [], None
+        for tr in SESSION:
+            request = {**SYNTH_REQUEST, "time_ratio": tr}
+            if not warm or prev is None:
+                out.append(synth.synthesize(**request))
+            else:
+                with patched(synthesis, STARTS=1, starts=partial(_from, prev, frees)):
+                    out.append(synth.synthesize(**request))
+            prev = out[-1].candidates[0].params if out[-1].candidates else None
+        return out
+
+    cold_ms, warm_ms = median_ms(partial(session, False), partial(session, True), repeats)
+    cold, warm = session(False), session(True)
+    n = len(SESSION)
+    return [
+        {"case": case, "ms_per_request": ms / n, "ratio": ms / cold_ms,
+         "solved": sum(bool(r.candidates) for r in rs) / n,
+         "candidates": statistics.mean(len(r.candidates) for r in rs),
+         "best_angle_lost_deg": max(c.candidates[0].min_transmission_angle_deg
+                                    - w.candidates[0].min_transmission_angle_deg
+                                    if w.candidates else float("inf")
+                                    for c, w in zip(cold, rs, strict=True))}
+        for case, ms, rs in (("cold, 8 starts", cold_ms, cold), ("warm, 1 start", warm_ms, warm))
+    ]  # fmt: skip
+
+
+def _from(prev: dict[str, float], frees, lo, hi, log, n):
+    """The previous design first (where it has the variant's parameters), then Halton."""
+    rest = synthesis_starts(lo, hi, log, n)
+    for free in frees:
+        if len(free) == lo.size and all(k in prev for k in free):
+            first = np.clip([prev[k] for k in free], lo, hi)
+            return np.vstack([first, rest])
+    return rest
+
+
 def with_starts(n: int, fn: Callable[[], synth.SynthesisResult]):
     """fn with synthesis.STARTS = n (the family multistart size) for the call."""
 
@@ -124,10 +175,13 @@ def main(argv: list[str] | None = None) -> dict:
         "analysis": analysis_costs(repeats, SAMPLES[:3] if a.quick else SAMPLES),
         "synthesis": synthesis_costs(2 if a.quick else 7),
         "default_requests": default_requests(1 if a.quick else 5),
+        "warm_starts": warm_starts(1 if a.quick else 3),
     }
     print(table(results["analysis"], ("type", "case", "ms", "ratio")))
     print(table(results["synthesis"], ("case", "ms", "ratio", "candidates")))
     print(table(results["default_requests"], ("type", "ms", "analyses")))
+    print(table(results["warm_starts"], ("case", "ms_per_request", "ratio", "solved",
+                                         "candidates", "best_angle_lost_deg")))  # fmt: skip
     if not a.quick:
         plot(results["analysis"], RESULTS / "analysis_cost_vs_samples.png")
     return report("analysis", results, quick=a.quick)
