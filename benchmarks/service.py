@@ -65,9 +65,9 @@ SERVERS = {
 
 
 def serve(port: int, server: str) -> subprocess.Popen:
-    cmd, env = SERVERS[server]
+    cmd, settings = SERVERS[server]
     env = {k: v for k, v in os.environ.items() if k != "WEB_CONCURRENCY" and "SYNTH_" not in k}
-    proc = subprocess.Popen([*cmd, str(port)], cwd=ROOT, env={**env, **SERVERS[server][1]},
+    proc = subprocess.Popen([*cmd, str(port)], cwd=ROOT, env={**env, **settings},
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:

@@ -2,7 +2,9 @@
 
 `make serve` must build .venv from the lock file and answer /health; the running service then
 answers analyze and synthesize, and ≥ 16 parallel mixed requests each get exactly the serial
-answer while the service stays up.
+answer while the service stays up. Every command the README shows works as written, the
+Dockerfile's command serves from what the Dockerfile copies, and stopping the server leaves no
+process behind.
 """
 
 import asyncio
