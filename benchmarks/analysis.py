@@ -14,6 +14,7 @@ import argparse
 import statistics
 import time
 from collections.abc import Callable
+from contextlib import AbstractContextManager
 from functools import partial
 from pathlib import Path
 
@@ -25,7 +26,7 @@ from synth.formulation import relevant
 from synth.solve import starts as synthesis_starts
 
 from .common import RESULTS, report, table
-from .methods import patched
+from .methods import patched, starts
 
 DESIGNS = {
     "scotch_yoke": {"crank": 1.0},
@@ -77,9 +78,10 @@ def synthesis_costs(repeats: int) -> list[dict]:
         ms, ref = median_ms(partial(base, max_candidates=k), base, repeats)
         rows.append({"case": f"max_candidates {k}", "ms": ms, "ratio": ms / ref})
     for n in (1, 2, 4, 8, 16, 32):
-        ms, ref = median_ms(with_starts(n, base), base, repeats)
+        fn = under(starts(n), base)  # the benchmark's "ours_starts_n"
+        ms, ref = median_ms(fn, base, repeats)
         rows.append({"case": f"starts {n}", "ms": ms, "ratio": ms / ref,
-                     "candidates": len(with_starts(n, base)().candidates)})  # fmt: skip
+                     "candidates": len(fn().candidates)})  # fmt: skip
     return rows
 
 
@@ -156,11 +158,11 @@ def _from(prev: dict[str, float], frees, lo, hi, log, n):
     return rest
 
 
-def with_starts(n: int, fn: Callable[[], synth.SynthesisResult]):
-    """fn with synthesis.STARTS = n (the family multistart size) for the call."""
+def under(patch: Callable[[], AbstractContextManager[None]], fn: Callable[[], object]):
+    """fn, called inside ``patch()``."""
 
     def call():
-        with patched(synthesis, STARTS=n):
+        with patch():
             return fn()
 
     return call

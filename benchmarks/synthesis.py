@@ -182,10 +182,9 @@ def ratios(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def plot(rows: list[dict[str, Any]], path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
+def figure(rows: list[dict[str, Any]]):
+    """The run-time-against-error plot, one point per method and type (the summary rows, also
+    as read back from synthesis.json, where an infinite error is the string "inf")."""
     import matplotlib.pyplot as plt
 
     names = list(dict.fromkeys(r["method"] for r in rows))
@@ -195,7 +194,7 @@ def plot(rows: list[dict[str, Any]], path: Path) -> None:
     for r in rows:
         if r["worst_error_median"] is None or not r["ms_median"]:
             continue
-        y = min(max(r["worst_error_median"], FLOOR), CAP)
+        y = min(max(float(r["worst_error_median"]), FLOOR), CAP)
         ax.scatter(r["ms_median"], y, marker=markers[r["method"]], color=colours[r["type"]])
     ax.axhline(TOL, color="grey", lw=0.8, ls="--")
     ax.set(xscale="log", yscale="log", xlabel="median wall time per target (ms)",
@@ -205,6 +204,16 @@ def plot(rows: list[dict[str, Any]], path: Path) -> None:
     handles += [plt.Line2D([], [], ls="", marker="s", color=c, label=t) for t, c in colours.items()]
     ax.legend(handles=handles, fontsize=7, loc="center left", bbox_to_anchor=(1, 0.5))
     fig.tight_layout()
+    return fig
+
+
+def plot(rows: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig = figure(rows)
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
