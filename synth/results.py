@@ -112,11 +112,19 @@ class Candidate:
 
 @dataclass(frozen=True)
 class Infeasible:
-    """Why a type gave no candidate: a code and a reason with numbers."""
+    """Why a type gave no candidate: a code and a reason with numbers.
+
+    The reason's numbers are also given as fields: ``best_transmission_angle_deg`` (code
+    TRANSMISSION_UNREACHABLE: the best minimum transmission angle any design reaches at the
+    requested time ratio and stroke) and ``time_ratio_range`` (TIME_RATIO_UNREACHABLE: the
+    smallest and largest time ratio reachable with the transmission bound).
+    """
 
     type: str
     code: str
     reason: str
+    best_transmission_angle_deg: float | None = None
+    time_ratio_range: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)

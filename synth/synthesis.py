@@ -271,6 +271,7 @@ def _diagnose(m: Mechanism, spec: Spec, t: Targets, open_variants) -> Infeasible
             f"{m.type} reaches at most a minimum transmission angle of {best:.4f}° at time "
             f"ratio {t.time_ratio:g} and stroke {t.stroke:g}{_with(spec)}, below the bound "
             f"{t.bound_deg:g}°",
+            best_transmission_angle_deg=best,
         )
     trs = [
         tr
@@ -287,6 +288,7 @@ def _diagnose(m: Mechanism, spec: Spec, t: Targets, open_variants) -> Infeasible
             f"{m.type} reaches time ratios {min(trs):.6g} … {max(trs):.6g} with a transmission "
             f"angle ≥ {t.bound_deg:g}° and stroke {t.stroke:g}{_with(spec)}, not "
             f"{t.time_ratio:g}",
+            time_ratio_range=(min(trs), max(trs)),
         )
     return Infeasible(
         m.type,
