@@ -69,9 +69,9 @@ def multistart(
     hi: np.ndarray,
     start_points: np.ndarray,
     deadline: float,
-) -> Iterator[dict[str, float]]:
+) -> Iterator[tuple[int, dict[str, float]]]:
     """Solve from each start until the deadline; yield the converged, polished solutions (the
-    free parameters, in stroke units)."""
+    free parameters, in stroke units) with the index of their start."""
     form = b.form
     pv = np.concatenate([fixed, [tr, cos_bound]])
     if not form.holds(pv):
@@ -79,7 +79,7 @@ def multistart(
     n_free = len(form.free)
     lbx = np.concatenate([lo, [-np.inf] * form.n_extra])
     ubx = np.concatenate([hi, [np.inf] * form.n_extra])
-    for x0 in start_points:
+    for i, x0 in enumerate(start_points):
         if time.monotonic() >= deadline:
             return
         x0 = np.concatenate([x0, [1.0] * form.n_extra])
@@ -89,7 +89,7 @@ def multistart(
             continue
         x = polish(form.equalities, np.asarray(sol["x"]).ravel()[:n_free], pv, lo, hi)
         if x is not None:
-            yield dict(zip(form.free, x, strict=True))
+            yield i, dict(zip(form.free, x, strict=True))
 
 
 def polish(

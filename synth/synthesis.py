@@ -1,15 +1,16 @@
 """synthesize(): time ratio, stroke and transmission bound → every good design, verified.
 
-Per type and variant (a slot drive or a link where a part may be zero):
+Per type and structural variant (a slot drive or a link where a part may be zero):
 
 1. the fixed parts alone are checked against the validity conditions;
-2. the fast path: where the targets determine the free parameters up to a finite set (the
-   type's ``inverse``: closed forms and their roots), every member is taken; parameters left
-   free after it go to IPOPT with the determined ones fixed;
-3. otherwise IPOPT from deterministic multistart over the bounds;
-4. every design is re-analysed (``verify``) and kept only if it meets the targets to 1e-9;
-5. a type with no design gets a reason with numbers, found by optimisation: the best
-   transmission angle at these targets, or the time-ratio range under the bound.
+2. the type's exact reduced solver (``synth.reduced``; closed forms, bracketed roots and
+   Newton's method in at most two variables) gives its local optima, no search involved;
+3. where it cannot take the problem, or cannot certify its answer, IPOPT solves the
+   formulation, warm-started from the reduced designs and a few deterministic cold starts
+   (eight cold starts for a type without a reduced solver);
+4. every design is predicted by the type's closed forms (``facts``), ranked, and re-analysed
+   (``verify``) best first until ``max_candidates`` meet the targets to 1e-9;
+5. a type with no design gets a reason with numbers (``synth.diagnose``).
 """
 
 from __future__ import annotations
@@ -24,15 +25,15 @@ import numpy as np
 
 from .errors import InvalidParameters, SynthError
 from .formulation import OBJECTIVES, relevant
-from .kinematics import analyze
 from .mechanisms import Mechanism, all_types, get
-from .mechanisms._registry import Unreachable
+from .mechanisms._registry import TOL, Unreachable
+from .reduced import Problem, Reduced, agree, differ
 from .results import Candidate, Infeasible, SynthesisResult
 from .solve import built, multistart, starts
 from .verify import verify
 
-STARTS = 8  # multistart size for a whole family
-STARTS_LEFTOVER = 4  # for what a closed form leaves free, and for diagnosing a refusal
+STARTS = 8  # cold multistart for a type without a reduced solver
+STARTS_WARM = 3  # cold starts beside the warm ones where a reduced solver could not finish
 MAX_CANDIDATES = 50
 SAME = 1e-4  # two designs within this (× stroke) in every parameter are one local optimum
 
@@ -58,6 +59,47 @@ class Targets:
     def cos_bound(self) -> float:
         return math.cos(math.radians(self.bound_deg))
 
+    @property
+    def beta(self) -> float:
+        """The crank angle by which the slow stroke exceeds π."""
+        return math.pi * (self.time_ratio - 1) / (self.time_ratio + 1)
+
+
+@dataclass(frozen=True)
+class Variant:
+    """A structural variant the request leaves open, as the solvers saw it."""
+
+    parts: frozenset[str]  # the optional parts left out
+    names: tuple[str, ...]  # the parameters its kinematics use
+    fixed: dict[str, float]
+    problem: Problem
+    exact: bool  # the reduced solver answered it exactly
+
+    @property
+    def free(self) -> tuple[str, ...]:
+        return tuple(k for k in self.names if k not in self.fixed)
+
+
+@dataclass(frozen=True)
+class Proposal:
+    """An unverified design and what the closed forms predict for it."""
+
+    spec: int  # its place in the request's mechanisms
+    type: str
+    params: dict[str, float]
+    method: str
+    angle_deg: float
+    size: float
+
+
+@dataclass
+class Searched:
+    """One type of the request: its proposals, the variants left open, reasons for the rest."""
+
+    proposals: list[Proposal] = field(default_factory=list)
+    variants: list[Variant] = field(default_factory=list)
+    reasons: list[Infeasible] = field(default_factory=list)
+
 
 def synthesize(
     time_ratio: float,
@@ -75,6 +117,8 @@ def synthesize(
     >>> [round(r.candidates[0].params[k], 9) for k in ("crank", "lever")]
     [120.0, 450.0]
     """
+    from .diagnose import diagnose  # the refusals use this module's searches
+
     t0 = time.monotonic()
     _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
     if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
@@ -88,21 +132,53 @@ def synthesize(
     targets = Targets(
         time_ratio, stroke, min_transmission_angle_deg, objective, t0 + time_budget_ms / 1000
     )
-    found: list[Candidate] = []
-    infeasible: list[Infeasible] = []
-    for spec in specs:
-        cands, why = _one_type(get(spec.type), spec, targets)
-        found += cands
-        if not cands and why is not None:
-            infeasible.append(why)
+    searched = [search(get(spec.type), spec, i, targets) for i, spec in enumerate(specs)]
+    found, left = _verified(searched, targets, max_candidates)
+    infeasible = [
+        diagnose(get(spec.type), spec, targets, s)
+        for i, (spec, s) in enumerate(zip(specs, searched, strict=True))
+        if not any(c.spec == i for c in found) and not left[i]
+    ]
     complete = time.monotonic() < targets.deadline
-    found.sort(key=_rank(objective))
+    cands = sorted((c.candidate for c in found), key=_rank(objective))
     return SynthesisResult(
-        candidates=tuple(found[:max_candidates]),
-        infeasible=tuple(infeasible),
+        candidates=tuple(cands[:max_candidates]),
+        infeasible=tuple(i for i in infeasible if i is not None),
         complete=complete,
         elapsed_ms=(time.monotonic() - t0) * 1000,
     )
+
+
+@dataclass(frozen=True)
+class _Found:
+    spec: int
+    candidate: Candidate
+
+
+def _verified(
+    searched: list[Searched], t: Targets, max_candidates: int
+) -> tuple[list[_Found], list[bool]]:
+    """Verify the proposals best first (predicted) until ``max_candidates`` pass: a design
+    that cannot be among the answer is never analysed. Also, per spec, whether proposals were
+    left unverified (its type has designs, just not among the best)."""
+    pool = sorted((p for s in searched for p in s.proposals), key=_predicted_rank(t.objective))
+    found: list[_Found] = []
+    left = [False] * len(searched)
+    for k, p in enumerate(pool):
+        if len(found) >= max_candidates or time.monotonic() >= t.deadline:
+            for q in pool[k:]:
+                left[q.spec] = True
+            break
+        c = _candidate(get(p.type), p, t, searched[p.spec].variants)
+        if c is not None:
+            found.append(_Found(p.spec, c))
+    return found, left
+
+
+def _predicted_rank(objective: str):
+    if objective == "min_size":
+        return lambda p: (p.size, -p.angle_deg, p.type)
+    return lambda p: (-round(p.angle_deg, 9), p.size, p.type)
 
 
 def _rank(objective: str):
@@ -112,80 +188,125 @@ def _rank(objective: str):
     return lambda c: (-round(c.min_transmission_angle_deg, 9), c.size, c.type)
 
 
-def _one_type(m: Mechanism, spec: Spec, t: Targets) -> tuple[list[Candidate], Infeasible | None]:
-    found: list[Candidate] = []
-    seen: list[dict[str, float]] = []  # every design verified (or refused) once
-    reasons: list[Infeasible] = []
-    open_variants = []
-    for variant in _variants(m, spec):
-        names = relevant(m, variant)
+def search(m: Mechanism, spec: Spec, index: int, t: Targets) -> Searched:
+    """Every variant's local optima (unverified, predicted), and what closed the others."""
+    out = Searched()
+    seen: list[dict[str, float]] = []
+    for parts in _variants(m, spec):
+        names = relevant(m, parts)
         fixed = {k: v for k, v in spec.fixed.items() if k in names}
-        violation = _fixed_violation(m, variant, spec.fixed)
+        violation = _fixed_violation(m, parts, spec.fixed)
         if violation:
-            reasons.append(Infeasible(m.type, "FIXED_PARTS_INVALID", violation))
+            out.reasons.append(Infeasible(m.type, "FIXED_PARTS_INVALID", violation))
             continue
+        problem = _problem(m, parts, names, fixed, spec, t)
         try:
-            sets = m.inverse(fixed, t.time_ratio, t.stroke) if m.inverse else None
+            answer = m.reduced(problem) if m.reduced else None
         except Unreachable as u:
-            reasons.append(Infeasible(m.type, u.code, u.reason))
+            out.reasons.append(Infeasible(m.type, u.code, u.reason))
             continue
-        open_variants.append((variant, names, fixed))
-        tasks = [({}, "ipopt")] if sets is None else [(s, "closed_form") for s in sets]
-        for determined, method in tasks:
-            if not _within(determined, spec.bounds):
-                continue
-            left = tuple(k for k in names if k not in fixed and k not in determined)
-            designs: Iterable[dict[str, float]] = [{}]
-            if left:
-                method = "ipopt" if method == "ipopt" else "closed_form+ipopt"
-                n = STARTS if sets is None else STARTS_LEFTOVER
-                designs = _ipopt(m, variant, left, {**fixed, **determined}, spec, t, n, t.objective)
-            limits = {k: _bounds(m, k, spec, t.stroke) for k in left}
-            limits.update({k: b for k, b in spec.bounds.items() if k in determined})
-            for x in designs:
-                params = {**spec.fixed, **determined, **x, **{k: 0.0 for k in variant}}
-                if any(_same(params, o, t.stroke) for o in seen):
-                    continue  # a local optimum found again from another start
-                seen.append(params)
-                c = _candidate(m, params, method, t, limits)
-                if c is not None:
-                    found.append(c)
-    if found:
-        return found, None
-    if open_variants and time.monotonic() < t.deadline:
-        return [], _diagnose(m, spec, t, open_variants)
-    if reasons:
-        return [], reasons[0]
-    return [], Infeasible(m.type, "BUDGET_EXHAUSTED", _budget_reason(m, t))
+        exact = answer is not None and answer.exact
+        variant = Variant(parts, names, fixed, problem, exact)
+        designs = [(_scaled(d, t.stroke), "closed_form") for d in (answer or Reduced()).designs]
+        if not exact:
+            warm = [d for d, _ in designs]
+            designs += _ipopt(m, variant, spec, t, t.objective, warm)
+        proposals, missed = [], []
+        for d, method in designs:
+            params = {**d, **spec.fixed, **dict.fromkeys(parts, 0.0)}
+            if any(_same(params, o, t.stroke) for o in seen):
+                continue  # a local optimum found again
+            seen.append(params)
+            p = _proposal(m, index, params, method, t)
+            if isinstance(p, Proposal):
+                proposals.append(p)
+            elif p:
+                missed.append(p)
+        if exact and fixed and missed and not proposals:  # the fixed parts contradict
+            out.reasons.append(Infeasible(m.type, "FIXED_PARTS_CONTRADICT_TARGETS", missed[0]))
+            continue
+        out.proposals += proposals
+        out.variants.append(variant)
+    return out
 
 
-def _budget_reason(m: Mechanism, t: Targets) -> str:
-    return (
-        f"the time budget ran out before a {m.type} design or a proof that none exists was "
-        f"found; ask again with a larger time_budget_ms"
+def _problem(m, parts, names, fixed, spec: Spec, t: Targets, **changes) -> Problem:
+    s = t.stroke
+    return Problem(
+        variant=parts,
+        fixed={k: v / s for k, v in fixed.items()},
+        bounds={k: tuple(b / s for b in _bounds(m, k, spec, s)) for k in names if k not in fixed},
+        beta=t.beta,
+        cos_bound=t.cos_bound,
+        objective=t.objective,
+        stroke=s,
+        explicit=frozenset(spec.bounds) & set(names),
+        **changes,
     )
+
+
+def _scaled(d: dict[str, float], s: float) -> dict[str, float]:
+    return {k: v * s for k, v in d.items()}
+
+
+def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float, float] | None:
+    """(time ratio, stroke, min transmission°, size) by the type's closed forms; None for a
+    design that does not run."""
+    try:
+        p = m.complete(params)
+    except SynthError:
+        return None
+    f = m.facts(p)
+    beta = abs(float(f["beta"]))
+    cos = [abs(float(c)) for c in f["transmission_cos"]]
+    angle = math.degrees(math.acos(min(1.0, max(cos)))) if cos else 90.0
+    size = sum(p[q.name] for q in m.parameters if q.link)
+    return (math.pi + beta) / (math.pi - beta), float(f["stroke"]), angle, size
+
+
+def _proposal(m: Mechanism, index: int, params, method: str, t: Targets) -> Proposal | str:
+    """The design with its predicted angle and size, if the closed forms say it meets the
+    targets; else why not ("" for a design that does not run or misses the bound)."""
+    got = predict(m, params)
+    if got is None:
+        return ""
+    tr, stroke, angle, size = got
+    missed = [
+        "{} {}, not {}".format(what, *differ(got, want))
+        for what, got, want in (("time ratio", tr, t.time_ratio), ("stroke", stroke, t.stroke))
+        if not agree(got, want)
+    ]
+    if missed:
+        return f"the fixed parts give {' and '.join(missed)} (to a relative {TOL:g})"
+    if angle < t.bound_deg - TOL * max(t.bound_deg, 1.0):
+        return ""
+    return Proposal(index, m.type, params, method, angle, size)
 
 
 def _ipopt(
     m: Mechanism,
-    variant: frozenset[str],
-    free: tuple[str, ...],
-    fixed: dict[str, float],
+    v: Variant,
     spec: Spec,
     t: Targets,
-    n: int,
     objective: str,
+    warm: list[dict[str, float]] = (),  # type: ignore[assignment]
     cos_bound: float | None = None,
-) -> Iterable[dict[str, float]]:
-    """Local optima of the formulation from n valid starts, in the caller's units."""
-    b = built(m, variant, free, objective)
+) -> Iterable[tuple[dict[str, float], str]]:
+    """Local optima of the formulation (caller's units) from the warm starts and valid cold
+    ones, each with how it was found."""
+    free, fixed = v.free, v.fixed
+    if not free:
+        return []
+    b = built(m, v.parts, free, objective)
     s = t.stroke
-    lo, hi = (np.array(v) / s for v in zip(*(_bounds(m, k, spec, s) for k in free), strict=True))
+    lo, hi = (np.array(x) / s for x in zip(*(_bounds(m, k, spec, s) for k in free), strict=True))
+    first = [np.clip([d[k] / s for k in free], lo, hi) for d in warm if all(k in d for k in free)]
+    n = STARTS_WARM if warm else STARTS
     pts = []
     for x0 in starts(lo, hi, lo > 0, 40 * n):
         try:
             m.complete(
-                {**fixed, **dict(zip(free, x0 * s, strict=True)), **dict.fromkeys(variant, 0.0)}
+                {**fixed, **dict(zip(free, x0 * s, strict=True)), **dict.fromkeys(v.parts, 0.0)}
             )
         except SynthError:
             continue
@@ -194,15 +315,16 @@ def _ipopt(
             break
     fx = np.array([fixed[k] / s for k in b.form.fixed])
     cb = t.cos_bound if cos_bound is None else cos_bound
-    for sol in multistart(b, fx, t.time_ratio, cb, lo, hi, np.array(pts), t.deadline):
-        yield {k: v * s for k, v in sol.items()}
+    out = []
+    for i, sol in multistart(b, fx, t.time_ratio, cb, lo, hi, np.array(first + pts), t.deadline):
+        method = "closed_form+ipopt" if i < len(first) else "ipopt"
+        out.append(({k: x * s for k, x in sol.items()}, method))
+    return out
 
 
-def _candidate(
-    m: Mechanism, params: dict[str, float], method: str, t: Targets, limits: dict
-) -> Candidate | None:
+def _candidate(m: Mechanism, p: Proposal, t: Targets, variants: list[Variant]) -> Candidate | None:
     try:
-        params = m.complete(params)
+        params = m.complete(p.params)
     except SynthError:
         return None
     checked = verify(m.type, params, t.time_ratio, t.stroke, t.bound_deg)
@@ -211,6 +333,10 @@ def _candidate(
     a, residuals = checked
     size = sum(params[q.name] for q in m.parameters if q.link)
     mu = a.transmission.min_deg
+    limits = {}
+    for v in variants:
+        if v.parts == m.variant(params):
+            limits = {k: tuple(x * t.stroke for x in v.problem.bounds[k]) for k in v.free}
     return Candidate(
         type=m.type,
         params=params,
@@ -218,7 +344,7 @@ def _candidate(
         stroke=a.stroke,
         min_transmission_angle_deg=mu,
         objective_value=size if t.objective == "min_size" else mu,
-        method=method,
+        method=p.method,
         residuals=residuals,
         verified=True,
         grashof=a.grashof,
@@ -240,91 +366,6 @@ def _active(params: dict[str, float], mu: float, t: Targets, bounds: dict) -> tu
         elif abs(v - hi) <= 1e-6 * max(abs(hi), t.stroke):
             out.append(f"{name} ≤ {hi:g}")
     return tuple(out)
-
-
-def _diagnose(m: Mechanism, spec: Spec, t: Targets, open_variants) -> Infeasible:
-    """Why no design, over every variant the request allows: the best transmission at these
-    targets, else the reachable TR range."""
-    searchable = [(v, f, tuple(k for k in names if k not in f)) for v, names, f in open_variants]
-    searchable = [(v, f, free) for v, f, free in searchable if free]
-    if not searchable:
-        return Infeasible(
-            m.type, "FIXED_PARTS_CONTRADICT_TARGETS", _fixed_design_reason(m, spec, t)
-        )
-
-    def optima(objective: str, cos_bound: float | None = None):
-        """(TR, min transmission°) of each verified local optimum of ``objective``."""
-        for variant, fixed, free in searchable:
-            n = STARTS_LEFTOVER
-            for x in _ipopt(m, variant, free, fixed, spec, t, n, objective, cos_bound):
-                r = _analysed(m, {**spec.fixed, **x, **dict.fromkeys(variant, 0.0)}, t)
-                if r is not None:
-                    yield r
-
-    best = None
-    if t.bound_deg > 0:
-        best = max((mu for _, mu in optima("max_transmission_angle", 1.0)), default=None)
-    if best is not None and best < t.bound_deg:
-        return Infeasible(
-            m.type,
-            "TRANSMISSION_UNREACHABLE",
-            f"{m.type} reaches at most a minimum transmission angle of {best:.4f}° at time "
-            f"ratio {t.time_ratio:g} and stroke {t.stroke:g}{_with(spec)}, below the bound "
-            f"{t.bound_deg:g}°",
-            best_transmission_angle_deg=best,
-        )
-    trs = [
-        tr
-        for objective in ("max_time_ratio", "min_time_ratio")
-        for tr, mu in optima(objective)
-        if mu >= t.bound_deg - 1e-9
-    ]
-    if time.monotonic() >= t.deadline:
-        return Infeasible(m.type, "BUDGET_EXHAUSTED", _budget_reason(m, t))
-    if trs:
-        return Infeasible(
-            m.type,
-            "TIME_RATIO_UNREACHABLE",
-            f"{m.type} reaches time ratios {min(trs):.6g} … {max(trs):.6g} with a transmission "
-            f"angle ≥ {t.bound_deg:g}° and stroke {t.stroke:g}{_with(spec)}, not "
-            f"{t.time_ratio:g}",
-            time_ratio_range=(min(trs), max(trs)),
-        )
-    return Infeasible(
-        m.type,
-        "NO_VALID_DESIGN",
-        f"no valid {m.type} has stroke {t.stroke:g} with a transmission angle ≥ "
-        f"{t.bound_deg:g}°{_with(spec)} within the bounds",
-    )
-
-
-def _analysed(m: Mechanism, params: dict[str, float], t: Targets) -> tuple[float, float] | None:
-    """(TR, min transmission°) of a valid design with the target stroke, else None."""
-    try:
-        a = analyze(m.type, params)
-    except SynthError:
-        return None
-    if a.reversals != 2 or abs(a.stroke - t.stroke) > 1e-9 * t.stroke:
-        return None
-    return a.time_ratio, a.transmission.min_deg
-
-
-def _fixed_design_reason(m: Mechanism, spec: Spec, t: Targets) -> str:
-    try:
-        a = analyze(m.type, dict(spec.fixed))
-    except SynthError as e:
-        return f"the fixed parts do not run: {e.msg}"
-    return (
-        f"the fixed parts make time ratio {a.time_ratio:.9g}, stroke {a.stroke:.9g} and a "
-        f"minimum transmission angle of {a.transmission.min_deg:.4f}°; the targets are "
-        f"{t.time_ratio:g}, {t.stroke:g} and ≥ {t.bound_deg:g}°"
-    )
-
-
-def _with(spec: Spec) -> str:
-    if not spec.fixed:
-        return ""
-    return " with " + ", ".join(f"{k} {v:g}" for k, v in spec.fixed.items()) + " fixed"
 
 
 def _variants(m: Mechanism, spec: Spec) -> list[frozenset[str]]:
@@ -366,13 +407,6 @@ def _bounds(m: Mechanism, name: str, spec: Spec, stroke: float) -> tuple[float, 
     lo, hi = m.parameter(name).bounds
     scale = max([stroke] + [abs(v) for v in spec.fixed.values()])
     return lo * stroke, hi * scale
-
-
-def _within(values: dict[str, float], bounds: Mapping[str, tuple[float, float]]) -> bool:
-    """Closed-form values must be positive and inside the caller's explicit bounds."""
-    return all(
-        v > 0 and (k not in bounds or bounds[k][0] <= v <= bounds[k][1]) for k, v in values.items()
-    )
 
 
 def _same(a: dict[str, float], b: dict[str, float], stroke: float) -> bool:

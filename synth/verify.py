@@ -8,9 +8,8 @@ from __future__ import annotations
 
 from .errors import SynthError
 from .kinematics import analyze
+from .mechanisms._registry import TOL
 from .results import Analysis
-
-TOL = 1e-9  # relative, on every target and constraint
 
 
 def verify(

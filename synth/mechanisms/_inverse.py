@@ -1,44 +1,54 @@
-"""Shared fast-path pieces for the slotted-lever types (crank_shaper, whitworth).
+"""Shared by the slotted-lever types (crank_shaper, whitworth): the crank as a free scale.
 
-In both, the time ratio fixes crank/pivot_distance and the stroke fixes the lever, so with one
-of crank and pivot_distance known the targets determine the rest: a finite set of one.
+In both, the time ratio fixes the ratio of pivot_distance to crank and the stroke fixes the
+lever, so crank and pivot_distance are one family with a free scale.
 """
 
 from __future__ import annotations
 
 import math
 
-from ._registry import Unreachable
-
-REL = 1e-12  # how exactly a fixed part must already meet a target
+from ..reduced import Problem, agree, differ, intersect, unreachable
 
 
-def crank_pivot_lever(
-    fixed: dict[str, float], ratio: float, lever: float, tr_of_ratio, stroke_of_lever
-) -> list[dict[str, float]] | None:
-    """Determine crank, pivot_distance and lever from crank/pivot_distance = ``ratio`` and the
-    required ``lever``; None when neither crank nor pivot_distance is fixed (a family)."""
-    r2, d, L = fixed.get("crank"), fixed.get("pivot_distance"), fixed.get("lever")
-    if r2 is None and d is None:
-        return None
-    out: dict[str, float] = {}
-    if r2 is not None and d is not None:
-        if not math.isclose(r2 / d, ratio, rel_tol=REL):
-            raise Unreachable(
-                "FIXED_PARTS_CONTRADICT_TARGETS",
-                f"crank {r2:g} and pivot_distance {d:g} give time ratio {tr_of_ratio(r2 / d):.9g}"
-                f", not {tr_of_ratio(ratio):.9g}",
+def check(p: Problem, time_ratio, stroke) -> None:
+    """Fixed parts that alone set the time ratio (crank and pivot_distance) or the stroke (the
+    lever) must meet it: ``time_ratio(crank/pivot_distance)``, ``stroke(lever)``."""
+    f = p.fixed
+    if "crank" in f and "pivot_distance" in f:
+        got = time_ratio(f["crank"] / f["pivot_distance"])
+        if not agree(got, p.ratio):
+            raise unreachable(
+                "crank {} and pivot_distance {} give time ratio {}, not {}".format(
+                    p.shown(f["crank"]), p.shown(f["pivot_distance"]), *differ(got, p.ratio)
+                )
             )
-    elif r2 is None:
-        out["crank"] = ratio * d
-    else:
-        out["pivot_distance"] = r2 / ratio
-    if L is None:
-        out["lever"] = lever
-    elif not math.isclose(L, lever, rel_tol=REL):
-        raise Unreachable(
-            "FIXED_PARTS_CONTRADICT_TARGETS",
-            f"lever {L:g} gives stroke {stroke_of_lever(L):.9g}, not {stroke_of_lever(lever):.9g}"
-            " (the stroke is set by the lever and the time ratio alone)",
+    if "lever" in f and not agree(stroke(f["lever"]), 1.0):
+        raise unreachable(
+            "lever {} gives stroke {}, not {} (the stroke is set by the lever and the time "
+            "ratio alone)".format(
+                p.shown(f["lever"]), *differ(stroke(f["lever"]) * p.stroke, p.stroke)
+            )
         )
-    return [out]
+
+
+def scale(p: Problem, pivot_per_crank: float, reach: float = math.inf) -> float | None:
+    """The crank of the smallest design with pivot_distance = ``pivot_per_crank`` × crank and
+    crank ≤ ``reach``; a fixed crank or pivot_distance sets it (both fixed: the crank, the pair
+    checked by ``check``), else it is the smallest the bounds allow. None if there is none."""
+    if "crank" in p.fixed:
+        crank = p.fixed["crank"]
+    elif "pivot_distance" in p.fixed:
+        crank = p.fixed["pivot_distance"] / pivot_per_crank
+    else:
+        lo, hi = p.bounds["pivot_distance"]
+        span = intersect(p.bounds["crank"], (lo / pivot_per_crank, hi / pivot_per_crank))
+        if span is None:
+            return None
+        crank = span[0]
+    ok = crank <= reach * (1 + 1e-12)
+    if "crank" in p.bounds:
+        ok = ok and p.allows("crank", crank)
+    if "pivot_distance" in p.bounds:
+        ok = ok and p.allows("pivot_distance", crank * pivot_per_crank)
+    return crank if ok else None

@@ -15,6 +15,7 @@ from ..errors import InvalidDesign, InvalidParameters, UnknownMechanism
 
 Params = Mapping[str, Any]  # parameter name -> float, DM, SX or MX
 ROUNDING = 1e-12  # relative slack of the non-strict validity conditions
+TOL = 1e-9  # relative: how exactly a design must meet the targets (verification, fixed parts)
 
 
 @dataclass(frozen=True)
@@ -37,7 +38,7 @@ class Parameter:
 
 
 class Unreachable(Exception):
-    """Raised by a type's ``inverse`` when the targets and fixed parts admit no design."""
+    """Raised by a type's ``reduced`` solver when the targets and fixed parts admit no design."""
 
     def __init__(self, code: str, reason: str) -> None:
         super().__init__(reason)
@@ -93,10 +94,10 @@ class Mechanism:
     # follows the circuit's orientation), "stroke" and "transmission_cos" (the signed cos μ
     # terms whose largest |·| is the worst transmission; empty for slot drives)
     facts: Callable[[Params], dict[str, Any]] | None = None
-    # the targets' fast path: inverse(fixed, time_ratio, stroke) -> the finite set of the
-    # parameters the targets determine (caller's units), None when the free set is a family,
-    # or raises Unreachable
-    inverse: Callable[[dict[str, float], float, float], list[dict[str, float]] | None] | None = None
+    # the exact reduced solver (an accelerator, synth.reduced): Problem -> Reduced, None where
+    # it cannot take the problem (IPOPT on the formulation then solves it); raises Unreachable
+    # for fixed parts that contradict the targets
+    reduced: Callable[[Any], Any] | None = None
     # the pin positions {name: (x, y)} at crank angle θ, named as in the module docstring, the
     # slider's pin last (for drawings: θ a CasADi number, never symbolic or differentiated)
     joints: Callable[[Params, float], dict[str, tuple[float, float]]] | None = None

@@ -37,6 +37,7 @@ import casadi as ca
 
 from ..geometry import cos_law, leg, triangle_angle
 from ._fourbar import grashof_conditions, output_pin
+from ._fourbar_synthesis import FourBar, Roles
 from ._registry import Mechanism, Parameter, absent, reach_condition, register
 
 LINKS = ("ground", "crank", "coupler", "rocker")
@@ -113,6 +114,9 @@ def facts(p):
     }
 
 
+# the crank-rocker's ground, crank, coupler and rocker (a drag-link is its inversion)
+ROLES = Roles(LINKS, "rocker_arm", "connecting_rod", "slider_height", swings=True)
+
 register(
     Mechanism(
         type="crank_rocker_slider",
@@ -159,6 +163,7 @@ register(
         defaults=defaults,
         fourbar=lambda p: tuple(p[n] for n in LINKS),
         facts=facts,
+        reduced=lambda p: FourBar(p, ROLES).solve(),
         joints=joints,
     )
 )

@@ -29,9 +29,12 @@ from __future__ import annotations
 import math
 
 import casadi as ca
+import numpy as np
 
 from ..geometry import leg, lever
-from ._inverse import crank_pivot_lever
+from ..reduced import Problem, Reduced, rod
+from ._inverse import check
+from ._inverse import scale as _scale
 from ._registry import (
     Condition,
     Mechanism,
@@ -98,17 +101,33 @@ def facts(p):
     }
 
 
-def inverse(fixed, tr, stroke):
-    """sin ψmax = crank/pivot_distance = sin(π(TR − 1)/(2(TR + 1))); lever = stroke/(2 sin ψmax)."""
-    if tr <= 1:
+def reduced(p: Problem) -> Reduced:
+    """The time ratio fixes crank/pivot_distance = sin ψmax = sin(β/2), the stroke fixes the
+    lever, 1/(2 sin ψmax); the crank is a free scale (the smallest allowed: ties, and the
+    size), up to the block's reach, pivot_distance + crank ≤ lever. A ram link and its path
+    follow ``reduced.rod`` (the lever tip swings ±ψmax); the slot drive transmits at 90°."""
+    if p.beta <= 0:
         raise Unreachable("TIME_RATIO_UNREACHABLE", "crank_shaper has time ratio > 1 always")
-    k = math.sin(math.pi * (tr - 1) / (2 * (tr + 1)))
+    f = p.fixed
+    k = f["crank"] / f["pivot_distance"] if {"crank", "pivot_distance"} <= f.keys() else None
+    k = k or math.sin(p.beta / 2)  # sin ψmax: the fixed pair's (checked against the target)
 
-    def tr_of(ratio):
-        a = math.asin(min(ratio, 1.0))
-        return (math.pi + 2 * a) / (math.pi - 2 * a)
+    def time_ratio(ratio: float) -> float:
+        half = math.asin(ratio)
+        return (math.pi + 2 * half) / (math.pi - 2 * half)
 
-    return crank_pivot_lever(fixed, k, stroke / (2 * k), tr_of, lambda L: 2 * L * k)
+    check(p, time_ratio, lambda lever: 2 * lever * k)
+    lever = f.get("lever", 0.5 / k)
+    crank = _scale(p, 1 / k, reach=lever * k / (1 + k))
+    if crank is None or ("lever" in p.bounds and not p.allows("lever", lever)):
+        return Reduced([])
+    design = {"crank": crank, "pivot_distance": crank / k, "lever": lever}
+    if "ram_link" not in p.variant:
+        l, h, _ = rod(p, "ram_link", "ram_height", np.array(lever), p.beta / 2, 0.0)
+        if not np.isfinite(l):
+            return Reduced([])
+        design.update(ram_link=float(l), ram_height=float(h))
+    return Reduced([{**design, **p.fixed}])
 
 
 register(
@@ -182,7 +201,7 @@ register(
         transmission=transmission,
         defaults=defaults,
         facts=facts,
-        inverse=inverse,
+        reduced=reduced,
         joints=joints,
     )
 )

@@ -28,9 +28,13 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..geometry import ahead, cos_law, leg, triangle_angle
+from ..reduced import Problem, Reduced, rod
 from ._fourbar import grashof_conditions, output_pin, output_pin_height
-from ._registry import Condition, Mechanism, Parameter, Unreachable, register
+from ._fourbar_synthesis import FourBar, Roles, worst_cos
+from ._registry import Condition, Mechanism, Parameter, register
 
 LINKS = ("ground", "crank", "coupler", "follower")
 
@@ -86,35 +90,45 @@ def facts(p):
     }
 
 
-def inverse(fixed, tr, stroke):
-    """Seed 002 eqs. (7)–(13): with ground, crank and follower fixed, zero, one or two couplers
-    give the time ratio; follower_arm = stroke/2."""
-    if not {"ground", "crank", "follower"} <= fixed.keys() or "coupler" in fixed:
-        return None
-    r1, r2, r4 = fixed["ground"], fixed["crank"], fixed["follower"]
-    arm = fixed.get("follower_arm", stroke / 2)
-    if not math.isclose(arm, stroke / 2, rel_tol=1e-12):
-        raise Unreachable(
-            "FIXED_PARTS_CONTRADICT_TARGETS",
-            f"follower_arm {arm:g} gives stroke {2 * arm:g}, not {stroke:g}",
-        )
-    f = (tr - 1) * math.pi / (tr + 1)  # eq. (7): θ2b = θ2a + f
+def reduced(p: Problem) -> Reduced | None:
+    """Seed 002 eqs. (7)–(13) where ground, crank and follower are fixed: zero, one or two
+    couplers give the time ratio (follower_arm = stroke/2, the rod by ``reduced.rod``); any
+    other problem goes to the four-bar solver (``_fourbar_synthesis``)."""
+    if not {"ground", "crank", "follower"} <= p.fixed.keys() or "coupler" in p.fixed:
+        return FourBar(p, ROLES).solve()
+    r1, r2, r4 = p.fixed["ground"], p.fixed["crank"], p.fixed["follower"]
+    f = p.beta  # eq. (7): θ2b = θ2a + f
     a = (r4 + r1) - (r4 - r1) * math.cos(f)  # eqs. (10)–(11): A cos θ2a + B sin θ2a = C
     b = (r4 - r1) * math.sin(f)
     c = 2 * r4 * r1 / r2
     rr = math.hypot(a, b)
     if rr < c * (1 - 1e-12):
-        return []
-    # eq. (12) in the double-root-safe form atan2(sqrt((R − C)(R + C)), C) (numerics.md); at
-    # the time ratio's extreme over the coupler the roots merge (R = C, up to rounding)
+        return Reduced([])
+    # eq. (12) in the double-root-safe form atan2(sqrt((R − C)(R + C)), C); at the time
+    # ratio's extreme over the coupler the roots merge (R = C, up to rounding)
     half = math.atan2(math.sqrt(max(rr - c, 0.0) * (rr + c)), c)
-    out = []
-    for t2a in {math.atan2(b, a) - half, math.atan2(b, a) + half}:
+    arm = p.fixed.get("follower_arm", 0.5)
+    if "follower_arm" in p.bounds and not p.allows("follower_arm", arm):
+        return Reduced([])
+    designs = []
+    for t2a in sorted({math.atan2(b, a) - half, math.atan2(b, a) + half}):
         r3_sq = r2**2 + (r4 + r1) ** 2 - 2 * r2 * (r4 + r1) * math.cos(t2a)  # eq. (13)
-        coupler = {"coupler": math.sqrt(r3_sq)}
-        out.append(coupler if "follower_arm" in fixed else {**coupler, "follower_arm": arm})
-    return out
+        coupler = math.sqrt(r3_sq)
+        if not p.allows("coupler", coupler):
+            continue
+        # the crank-rocker it inverts, ground 1: crank r1/r2, coupler r4/r2, rocker r3/r2
+        cos_mu = float(worst_cos(r1 / r2, r4 / r2, coupler / r2))
+        rod_length = float(rod(p, "connecting_rod", None, np.array(arm), 0.0, cos_mu)[0])
+        if math.isfinite(rod_length):
+            design = {"coupler": coupler, "follower_arm": arm, "connecting_rod": rod_length}
+            designs.append({**design, **p.fixed})
+    return Reduced(designs)
 
+
+# the crank-rocker's ground, crank, coupler and rocker (a drag-link is its inversion)
+ROLES = Roles(
+    ("crank", "ground", "follower", "coupler"), "follower_arm", "connecting_rod", None, swings=False
+)
 
 register(
     Mechanism(
@@ -152,7 +166,7 @@ register(
         dead_centres=dead_centres,
         fourbar=lambda p: tuple(p[n] for n in LINKS),
         facts=facts,
-        inverse=inverse,
+        reduced=reduced,
         joints=joints,
     )
 )

@@ -23,9 +23,18 @@ from __future__ import annotations
 import math
 
 import casadi as ca
+from scipy.optimize import brentq
 
 from ..geometry import leg, sqrt, where
-from ._registry import Condition, Mechanism, Parameter, Unreachable, register
+from ..reduced import (
+    MAX_TRANSMISSION,
+    Problem,
+    Reduced,
+    clip,
+    intersect,
+    unreachable,
+)
+from ._registry import TOL, Condition, Mechanism, Parameter, register
 
 
 def position(p, th):
@@ -65,31 +74,119 @@ def facts(p):
     }
 
 
-def inverse(fixed, tr, stroke):
-    """With the offset fixed: the folded dead centre's x1 solves
-    x1² + S x1 + e² − e S / tan β = 0 (tan β from the two dead centres' directions); then
-    crank = (v − u)/2, coupler = (u + v)/2 with u = |O2C1|, v = |O2C2|."""
-    if "offset" not in fixed or {"crank", "coupler"} & fixed.keys():
+def reduced(p: Problem) -> Reduced:
+    """The dead-centre construction: the crank pivot sees the chord between the slider's dead
+    centres, the stroke, under the angle β, so it lies on a circle through them. With s, c =
+    sin, cos(β/2) and y = cos of the chord's angle at the crank pivot's ... one parameter:
+
+        crank = y/(2c),  coupler = sqrt(1 − y²)/(2s),  |offset| = (c² − y²)/sin β,  0 < y < c
+
+    (stroke units), the worst transmission cos μ = (crank + |offset|)/coupler =
+    (c² + s y − y²)/(c sqrt(1 − y²)). It is 1 at y = s (a dead point: two branches). On the
+    branch y > s it has one minimum, at y* = (sqrt(s² + 4) − s)/2 (the stationary points are
+    the roots of (y − s)(y² + s y − 1)); on y < s (a crank shorter than ...) it increases with
+    y. The size, crank + coupler, is greatest at y = s and falls away from it on both sides.
+    So each branch's optimum is y*, an end of the box, or a root of cos μ = cos(bound)."""
+    s, c = p.half
+    if p.beta <= math.pi / 2 * TOL:  # a centred slider, time ratio 1: crank half the stroke
+        lo, hi = p.box("coupler")
+        coupler = hi if p.objective == MAX_TRANSMISSION else max(lo, 0.5 / p.cos_bound)
+        design = {"crank": 0.5, "coupler": p.fixed.get("coupler", coupler), "offset": 0.0}
+        return Reduced([{**design, **p.fixed}] if coupler <= hi and _allowed(p, design) else [])
+    ys = _fixed_y(p, s, c)
+    if ys is not None:
+        design = _design(p, ys[0], ys[1], s, c)
+        return Reduced([design] if _allowed(p, design) else [])
+    designs, seen = [], []
+    for sign in (1, -1):
+        box = _y_box(p, s, c, sign)
+        if box is None:
+            continue
+        lo, hi = max(box[0], s), min(box[1], c)
+        y = _optimum(p, s, c, lo, hi) if lo < hi else None
+        if y is not None and not any(abs(y - o) <= 1e-12 for o in seen):
+            seen.append(y)
+            designs.append(_design(p, y, sign, s, c))
+    return Reduced(designs)
+
+
+def _design(p: Problem, y: float, sign: int, s: float, c: float) -> dict[str, float]:
+    design = {
+        "crank": y / (2 * c),
+        "coupler": math.sqrt((1 - y) * (1 + y)) / (2 * s),
+        "offset": sign * (c - y) * (c + y) / math.sin(p.beta),
+    }
+    return {**design, **p.fixed}
+
+
+def _allowed(p: Problem, design: dict[str, float]) -> bool:
+    """The parameters the targets and fixed parts set, within any bounds the caller gave."""
+    return all(p.allows(k, v) for k, v in design.items() if k in p.bounds)
+
+
+def _cos_mu(y: float, s: float, c: float) -> float:
+    return (c * c + s * y - y * y) / (c * math.sqrt((1 - y) * (1 + y)))
+
+
+def _optimum(p: Problem, s: float, c: float, lo: float, hi: float) -> float | None:
+    """The best y in [lo, hi] ⊂ (s, c): max transmission, or min size within the bound."""
+    if p.objective == MAX_TRANSMISSION:
+        return clip((math.sqrt(s * s + 4) - s) / 2, lo, hi)
+    cb = p.cos_bound
+    star = clip((math.sqrt(s * s + 4) - s) / 2, lo, hi)
+    if _cos_mu(star, s, c) > cb:
         return None
-    e, s = abs(fixed["offset"]), stroke
-    beta = math.pi * (tr - 1) / (tr + 1)
-    if (beta == 0) != (e == 0):  # TR 1 if and only if the slider path is centred
-        raise Unreachable(
-            "FIXED_PARTS_CONTRADICT_TARGETS",
-            f"offset {fixed['offset']:g} gives time ratio {'1' if e == 0 else '> 1'}, not {tr:g}",
-        )
-    if e == 0:
-        return None  # centred: crank = stroke/2 and any longer coupler, a family
-    disc = s * s - 4 * e * e + 4 * e * s / math.tan(beta)
-    x1 = (-s + math.sqrt(disc)) / 2 if disc > 0 else -1.0
-    if x1 <= 0:
-        raise Unreachable(
-            "FIXED_PARTS_CONTRADICT_TARGETS",
-            f"offset {fixed['offset']:g} is too large for time ratio {tr:g} and stroke {s:g}: "
-            f"needs |offset| < stroke/tan β = {s / math.tan(beta):.9g}",
-        )
-    u, v = math.hypot(x1, e), math.hypot(x1 + s, e)
-    return [{"crank": (v - u) / 2, "coupler": (u + v) / 2}]
+    if _cos_mu(hi, s, c) <= cb:  # the size falls with y: as far as the bound lets it
+        return hi
+    return brentq(lambda y: _cos_mu(y, s, c) - cb, star, hi, xtol=1e-16)
+
+
+def _y_box(p: Problem, s: float, c: float, sign: int) -> tuple[float, float] | None:
+    """The y the bounds allow, with the offset's sign."""
+    lo_e, hi_e = p.box("offset")
+    e_box = (max(lo_e, 0.0), hi_e) if sign > 0 else (max(-hi_e, 0.0), -lo_e)
+    if e_box[0] > e_box[1]:
+        return None
+    root = lambda v: math.sqrt(max(v, 0.0))  # noqa: E731
+    sb = math.sin(p.beta)
+    lo2, hi2 = p.box("crank")
+    lo3, hi3 = p.box("coupler")
+    return intersect(
+        (2 * c * lo2, 2 * c * hi2),
+        (root(1 - (2 * s * hi3) ** 2), root(1 - (2 * s * lo3) ** 2)),
+        (root(c * c - e_box[1] * sb), root(c * c - e_box[0] * sb)),
+        (0.0, c),
+    )
+
+
+def _fixed_y(p: Problem, s: float, c: float) -> tuple[float, int] | None:
+    """(y, sign of the offset) set by the first fixed part, or None when nothing is fixed."""
+    f, sb = p.fixed, math.sin(p.beta)
+    sign = -1 if f.get("offset", 1.0) < 0 else 1
+    if "crank" in f:
+        if f["crank"] >= 0.5:
+            raise unreachable(
+                f"crank {p.shown(f['crank'])} is at least half the stroke: an offset "
+                "slider-crank's stroke is more than twice its crank"
+            )
+        return 2 * c * f["crank"], sign
+    if "coupler" in f:
+        r3 = f["coupler"]
+        if not 0.5 < r3 < 0.5 / s:
+            raise unreachable(
+                f"coupler {p.shown(r3)} must be longer than half the stroke and shorter than "
+                f"stroke/(2 sin(β/2)) = {p.shown(0.5 / s)} at time ratio {p.ratio:.9g}"
+            )
+        return math.sqrt((1 - 2 * s * r3) * (1 + 2 * s * r3)), sign
+    if "offset" in f:
+        e = abs(f["offset"])
+        if not 0 < e < c * c / sb:
+            raise unreachable(
+                f"|offset| {p.shown(e)} must be > 0 and < stroke/(2 tan(β/2)) = "
+                f"{p.shown(c * c / sb)} at time ratio {p.ratio:.9g}"
+            )
+        return math.sqrt((c - math.sqrt(e * sb)) * (c + math.sqrt(e * sb))), sign
+    return None
 
 
 register(
@@ -131,7 +228,7 @@ register(
         position=position,
         transmission=transmission,
         facts=facts,
-        inverse=inverse,
+        reduced=reduced,
         joints=joints,
     )
 )

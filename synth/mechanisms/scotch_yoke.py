@@ -20,7 +20,8 @@ import math
 
 import casadi as ca
 
-from ._registry import Mechanism, Parameter, Unreachable, register
+from ..reduced import Problem, Reduced
+from ._registry import TOL, Mechanism, Parameter, Unreachable, register
 
 
 def position(p, th):
@@ -41,18 +42,13 @@ def facts(p):
     return {"beta": 0.0, "stroke": 2 * p["crank"], "transmission_cos": ()}
 
 
-def inverse(fixed, tr, stroke):
+def reduced(p: Problem) -> Reduced:
     """crank = stroke/2; the time ratio is 1 for every design."""
-    if tr != 1:
-        raise Unreachable(
-            "TIME_RATIO_UNREACHABLE", f"scotch_yoke has time ratio 1 for every design, not {tr:g}"
-        )
-    if "crank" in fixed and fixed["crank"] != stroke / 2:
-        raise Unreachable(
-            "FIXED_PARTS_CONTRADICT_TARGETS",
-            f"crank {fixed['crank']:g} gives stroke {2 * fixed['crank']:g}, not {stroke:g}",
-        )
-    return [{} if "crank" in fixed else {"crank": stroke / 2}]
+    if p.beta > math.pi / 2 * TOL:  # time ratio 1 to the verification's tolerance
+        raise Unreachable("TIME_RATIO_UNREACHABLE", "scotch_yoke has time ratio 1 for every design")
+    if "crank" in p.bounds and not p.allows("crank", 0.5):
+        return Reduced([])
+    return Reduced([{"crank": p.fixed.get("crank", 0.5)}])
 
 
 register(
@@ -68,7 +64,7 @@ register(
         position=position,
         transmission=transmission,
         facts=facts,
-        inverse=inverse,
+        reduced=reduced,
         joints=joints,
     )
 )

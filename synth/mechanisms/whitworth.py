@@ -28,7 +28,9 @@ import math
 import casadi as ca
 
 from ..geometry import ahead, leg, lever, sqrt, where
-from ._inverse import crank_pivot_lever
+from ..reduced import MIN_SIZE, STRICT, Problem, Reduced
+from ._inverse import check
+from ._inverse import scale as _scale
 from ._registry import Condition, Mechanism, Parameter, Unreachable, register
 
 
@@ -73,17 +75,42 @@ def facts(p):
     }
 
 
-def inverse(fixed, tr, stroke):
-    """pivot_distance/crank = cos(π/(1 + TR)) (the quick stroke's half angle); lever = stroke/2."""
-    if tr <= 1:
+def reduced(p: Problem) -> Reduced:
+    """The time ratio fixes pivot_distance/crank = cos(π/(1 + TR)) = sin(β/2) (the quick
+    stroke's half angle), the stroke fixes the lever at half of it; the crank is a free scale
+    (the smallest allowed, to break ties) and the rod takes the longest (max transmission,
+    cos μ = lever/rod) or the shortest length the bound allows (min size)."""
+    if p.beta <= 0:
         raise Unreachable("TIME_RATIO_UNREACHABLE", "whitworth has time ratio > 1 always")
-    c = math.cos(math.pi / (1 + tr))
+    f = p.fixed
+    ratio = f["pivot_distance"] / f["crank"] if {"crank", "pivot_distance"} <= f.keys() else None
+    ratio = ratio or math.sin(p.beta / 2)  # the fixed pair's (checked against the target)
 
-    def tr_of(ratio):
-        q = math.acos(min(1 / ratio, 1.0))
+    def time_ratio(crank_per_pivot: float) -> float:
+        q = math.acos(min(1 / crank_per_pivot, 1.0))  # half the quick stroke
         return (math.pi - q) / q
 
-    return crank_pivot_lever(fixed, 1 / c, stroke / 2, tr_of, lambda L: 2 * L)
+    check(p, time_ratio, lambda lever: 2 * lever)
+    crank = _scale(p, ratio)
+    if crank is None:
+        return Reduced([])
+    lever = p.fixed.get("lever", 0.5)
+    lo, hi = p.box("connecting_rod")
+    if "connecting_rod" in p.fixed:
+        rod = p.fixed["connecting_rod"]
+    elif p.objective == MIN_SIZE:
+        rod = max(lo, lever / p.cos_bound, lever + STRICT)
+    else:
+        rod = hi
+    if rod > hi or ("lever" in p.bounds and not p.allows("lever", lever)):
+        return Reduced([])
+    design = {
+        "crank": crank,
+        "pivot_distance": crank * ratio,
+        "lever": lever,
+        "connecting_rod": rod,
+    }
+    return Reduced([{**design, **p.fixed}])
 
 
 register(
@@ -127,7 +154,7 @@ register(
         position=position,
         transmission=transmission,
         facts=facts,
-        inverse=inverse,
+        reduced=reduced,
         joints=joints,
     )
 )

@@ -1,0 +1,168 @@
+"""Why a type gave no design, with numbers: the best minimum transmission angle any design
+reaches at the targets, else the time ratios the type reaches with the bound.
+
+Where a variant's reduced solver answered exactly, the numbers come from the same exact
+reduced problem (certified: the best angle is its global optimum; the time-ratio range is the
+hull of the ratios at which it has a design, its ends bisected to 1e-12). Elsewhere they come
+from IPOPT's local optima of the diagnostic objectives (formulation.DIAGNOSTICS).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+
+from .errors import SynthError
+from .kinematics import analyze
+from .mechanisms import Mechanism
+from .mechanisms._registry import TOL, Unreachable
+from .reduced import MAX_TRANSMISSION
+from .results import Infeasible
+from .synthesis import Searched, Spec, Targets, Variant, _ipopt, predict
+
+GRID = 33  # time ratios scanned for the reachable range
+TOP = math.pi * (1 - 1e-6)  # β of the largest time ratio tried, about 2e6
+
+
+def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible | None:
+    if not s.variants:
+        return s.reasons[0] if s.reasons else _budget(m)
+    searchable = [v for v in s.variants if v.free or v.exact]
+    if not searchable:
+        return Infeasible(m.type, "FIXED_PARTS_CONTRADICT_TARGETS", _fixed_design(m, spec, t))
+    best = None
+    if t.bound_deg > 0:
+        angles = [a for v in searchable for a in _angles(m, v, spec, t)]
+        best = max(angles, default=None)
+    if best is not None and best < t.bound_deg:
+        return Infeasible(
+            m.type,
+            "TRANSMISSION_UNREACHABLE",
+            f"{m.type} reaches at most a minimum transmission angle of {best:.4f}° at time "
+            f"ratio {t.time_ratio:g} and stroke {t.stroke:g}{_with(spec)}, below the bound "
+            f"{t.bound_deg:g}°",
+            best_transmission_angle_deg=best,
+        )
+    trs = [tr for v in searchable for tr in _reach(m, v, spec, t)]
+    if time.monotonic() >= t.deadline:
+        return _budget(m)
+    if trs:
+        return Infeasible(
+            m.type,
+            "TIME_RATIO_UNREACHABLE",
+            f"{m.type} reaches time ratios {min(trs):.6g} … {max(trs):.6g} with a transmission "
+            f"angle ≥ {t.bound_deg:g}° and stroke {t.stroke:g}{_with(spec)}, not "
+            f"{t.time_ratio:g}",
+            time_ratio_range=(min(trs), max(trs)),
+        )
+    return Infeasible(
+        m.type,
+        "NO_VALID_DESIGN",
+        f"no valid {m.type} has stroke {t.stroke:g} with a transmission angle ≥ "
+        f"{t.bound_deg:g}°{_with(spec)} within the bounds",
+    )
+
+
+def _angles(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
+    """The minimum transmission angle of the variant's best designs at the targets (any
+    angle): exact where the reduced solver is, else IPOPT's local optima, verified."""
+    if v.exact:
+        found = _reduced(m, v, t, v.problem.beta, 1.0)
+        if found is not None:
+            return found
+    return [mu for _, mu in _optima(m, v, spec, t, "max_transmission_angle", 1.0)]
+
+
+def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, cos_bound: float):
+    """The predicted angles of the exact reduced optima at β (max transmission, designs with
+    cos μ ≤ ``cos_bound``), or None where the reduced solver is not exact there."""
+    problem = replace(v.problem, beta=beta, cos_bound=cos_bound, objective=MAX_TRANSMISSION)
+    try:
+        answer = m.reduced(problem)
+    except Unreachable:
+        return []
+    if answer is None or not answer.exact:
+        return None
+    tr = (math.pi + beta) / (math.pi - beta)
+    out = []
+    for d in answer.designs:
+        got = predict(m, {**{k: x * t.stroke for k, x in d.items()}, **dict.fromkeys(v.parts, 0.0)})
+        if got and abs(got[0] - tr) <= TOL * tr and abs(got[1] - t.stroke) <= TOL * t.stroke:
+            out.append(got[2])
+    return out
+
+
+def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
+    """The smallest and largest time ratio with a design meeting the bound."""
+    if not v.exact:
+        return [
+            tr
+            for objective in ("max_time_ratio", "min_time_ratio")
+            for tr, mu in _optima(m, v, spec, t, objective)
+            if mu >= t.bound_deg - 1e-9
+        ]
+    bound = t.bound_deg - TOL * max(t.bound_deg, 1.0)
+
+    def ok(beta: float) -> bool:
+        angles = _reduced(m, v, t, beta, 1.0)
+        return bool(angles) and max(angles) >= bound
+
+    betas = [TOP * k / (GRID - 1) for k in range(GRID)]
+    flags = [ok(b) for b in betas]
+    if not any(flags):
+        return []
+    i = flags.index(True)
+    j = len(flags) - 1 - flags[::-1].index(True)
+    lo = betas[0] if i == 0 else _edge(ok, betas[i - 1], betas[i])
+    hi = betas[-1] if j == GRID - 1 else _edge(ok, betas[j + 1], betas[j])
+    return [(math.pi + b) / (math.pi - b) for b in (lo, hi)]
+
+
+def _edge(ok, out: float, inside: float) -> float:
+    """Bisect between a β without a design and one with, to 1e-12; the side with one."""
+    while abs(inside - out) > 1e-12 * max(1.0, abs(inside)):
+        mid = 0.5 * (out + inside)
+        if ok(mid):
+            inside = mid
+        else:
+            out = mid
+    return inside
+
+
+def _optima(m: Mechanism, v: Variant, spec: Spec, t: Targets, objective: str, cos_bound=None):
+    """(TR, min transmission°) of each verified local optimum of ``objective`` (IPOPT)."""
+    for x, _ in _ipopt(m, v, spec, t, objective, cos_bound=cos_bound):
+        try:
+            a = analyze(m.type, {**spec.fixed, **x, **dict.fromkeys(v.parts, 0.0)})
+        except SynthError:
+            continue
+        if a.reversals == 2 and abs(a.stroke - t.stroke) <= 1e-9 * t.stroke:
+            yield a.time_ratio, a.transmission.min_deg
+
+
+def _budget(m: Mechanism) -> Infeasible:
+    return Infeasible(
+        m.type,
+        "BUDGET_EXHAUSTED",
+        f"the time budget ran out before a {m.type} design or a proof that none exists was "
+        f"found; ask again with a larger time_budget_ms",
+    )
+
+
+def _fixed_design(m: Mechanism, spec: Spec, t: Targets) -> str:
+    try:
+        a = analyze(m.type, dict(spec.fixed))
+    except SynthError as e:
+        return f"the fixed parts do not run: {e.msg}"
+    return (
+        f"the fixed parts make time ratio {a.time_ratio:.9g}, stroke {a.stroke:.9g} and a "
+        f"minimum transmission angle of {a.transmission.min_deg:.4f}°; the targets are "
+        f"{t.time_ratio:g}, {t.stroke:g} and ≥ {t.bound_deg:g}°"
+    )
+
+
+def _with(spec: Spec) -> str:
+    if not spec.fixed:
+        return ""
+    return " with " + ", ".join(f"{k} {v:g}" for k, v in spec.fixed.items()) + " fixed"

@@ -1,0 +1,251 @@
+"""Exact reduced synthesis: the targets turn most of a design into closed forms.
+
+The time ratio and the stroke are two equalities. A type's ``reduced`` solver (an optional
+accelerator in its registry record) parametrises the designs that meet them exactly, by the
+classical dead-centre construction, and solves what is left, a problem in at most two
+variables, by closed forms, bracketed roots and Newton's method on its optimality conditions.
+It returns every local optimum it finds (one per branch or structural choice), in stroke
+units, and says whether the answer is ``exact``: the best design is the global optimum of the
+stated problem, and an empty answer proves that no design exists. Anything it cannot take
+(``None``, or not ``exact``) goes to IPOPT, warm-started from the designs it did find.
+
+This module holds what the solvers share: the problem, the answer, the box of a free
+parameter, and small numerical tools (a vectorised bracketed root finder, and Newton's method
+on a Lagrangian with central-difference derivatives, one batch of points per step).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from functools import cache
+
+import numpy as np
+
+from .mechanisms._registry import TOL, Unreachable
+
+MAX_TRANSMISSION, MIN_SIZE = "max_transmission_angle", "min_size"
+STRICT = 1e-7  # the margin kept by a strict condition, in stroke units (as the NLP keeps)
+
+
+@dataclass(frozen=True)
+class Problem:
+    """One structural variant of one type, in stroke units (the stroke is 1).
+
+    ``fixed`` holds the variant's fixed parameters, ``bounds`` the box of every free one (the
+    caller's, else the defaults); ``beta`` = π(TR − 1)/(TR + 1) is the crank angle by which
+    the slow stroke exceeds π; ``cos_bound`` is cos of the transmission bound (1: none).
+    ``stroke`` is the caller's stroke, for messages in the caller's unit.
+
+    Default bounds limit a search: a parameter that the targets and the fixed parts set on
+    their own is taken as it comes unless the caller bounded it (``allows``).
+    """
+
+    variant: frozenset[str]
+    fixed: Mapping[str, float]
+    bounds: Mapping[str, tuple[float, float]]
+    beta: float
+    cos_bound: float
+    objective: str
+    stroke: float = 1.0
+    explicit: frozenset[str] = frozenset()  # parameters whose bounds the caller gave
+
+    @property
+    def ratio(self) -> float:
+        """The time ratio."""
+        return (math.pi + self.beta) / (math.pi - self.beta)
+
+    @property
+    def half(self) -> tuple[float, float]:
+        """sin and cos of β/2."""
+        return math.sin(self.beta / 2), math.cos(self.beta / 2)
+
+    def box(self, name: str) -> tuple[float, float]:
+        """The interval a parameter may take: its fixed value, or its bounds."""
+        if name in self.fixed:
+            return self.fixed[name], self.fixed[name]
+        return self.bounds[name]
+
+    def allows(self, name: str, x: float) -> bool:
+        """Whether a parameter set by the targets and fixed parts may take the value x: any
+        value, unless the caller bounded it."""
+        return name not in self.explicit or within(x, self.bounds[name])
+
+    def shown(self, x: float) -> str:
+        """A length in stroke units, in the caller's unit, for a message."""
+        return f"{x * self.stroke:g}"
+
+
+@dataclass(frozen=True)
+class Reduced:
+    """A reduced solver's answer: local optima (stroke units, every relevant parameter of the
+    variant, fixed ones included), best first or not, and whether it is exact."""
+
+    designs: list[dict[str, float]] = field(default_factory=list)
+    exact: bool = True
+
+
+def unreachable(what: str) -> Unreachable:
+    """Fixed parts that no design with the targets can have, with the reason."""
+    return Unreachable("FIXED_PARTS_CONTRADICT_TARGETS", what)
+
+
+def within(x: float, box: tuple[float, float]) -> bool:
+    """lo ≤ x ≤ hi, to rounding (a value built on its bound)."""
+    return box[0] * (1 - 1e-12) <= x <= box[1] * (1 + 1e-12)
+
+
+def differ(a: float, b: float) -> tuple[str, str]:
+    """a and b printed with the fewest significant digits, at least 9, that tell them apart."""
+    for digits in range(9, 18):
+        x, y = f"{a:.{digits}g}", f"{b:.{digits}g}"
+        if x != y or a == b:
+            return x, y
+    return repr(a), repr(b)
+
+
+def agree(got: float, want: float) -> bool:
+    """Whether a value the fixed parts give meets its target, to the verification's tolerance."""
+    return abs(got - want) <= TOL * abs(want)
+
+
+def clip(x: float, lo: float, hi: float) -> float:
+    return min(max(x, lo), hi)
+
+
+def intersect(*intervals: tuple[float, float]) -> tuple[float, float] | None:
+    lo = max(a for a, _ in intervals)
+    hi = min(b for _, b in intervals)
+    return (lo, hi) if lo <= hi else None
+
+
+def roots(fn: Callable[[np.ndarray], np.ndarray], lo: float, hi: float, n: int = 64) -> list[float]:
+    """Every sign change of ``fn`` (vectorised, NaN where undefined) on [lo, hi], bracketed on
+    an n-point grid and bisected to machine precision (one batch of points per step)."""
+    x = np.linspace(lo, hi, n)
+    y = fn(x)
+    ok = np.isfinite(y[:-1]) & np.isfinite(y[1:])
+    k = np.flatnonzero(ok & (np.sign(y[:-1]) != np.sign(y[1:])))
+    a, b, ya = x[k], x[k + 1], y[k]
+    exact = y[k] == 0
+    for _ in range(80):
+        if a.size == 0 or np.all(np.abs(b - a) <= 4e-16 * np.maximum(1.0, np.abs(a))):
+            break
+        m = 0.5 * (a + b)
+        ym = fn(m)
+        left = np.sign(ym) == np.sign(ya)
+        a, ya = np.where(left, m, a), np.where(left, ym, ya)
+        b = np.where(left, b, m)
+    out = np.where(exact, x[k], 0.5 * (a + b))
+    return [float(v) for v in out]
+
+
+def newton(
+    fn: Callable[[np.ndarray], np.ndarray],
+    x0: np.ndarray,
+    n_eq: int,
+    scale: np.ndarray,
+    iters: int = 30,
+) -> np.ndarray | None:
+    """A stationary point of ``fn(X)[0]`` on the set where ``fn(X)[1:1 + n_eq]`` = 0, from x0.
+
+    ``fn`` maps points (m, d) to values (1 + n_eq, m), NaN where a point is not a design.
+    Newton's method on the Lagrangian's stationarity and the equalities (with n_eq = d it is
+    root finding), derivatives by central differences over ±``scale`` × 1e-5 (one batch of
+    ≤ 9 points a step, so a step costs one vectorised evaluation); a step that leaves the
+    designs (or the stencil around it) is halved. Returns None when it does not converge.
+    """
+    d = x0.size
+    h = 1e-5 * np.asarray(scale, dtype=float)
+    offsets = _stencil(d) * h
+    x = np.array(x0, dtype=float)
+    nu = None
+    v = fn(x + offsets)
+    for it in range(iters):
+        if not np.all(np.isfinite(v)):
+            return None
+        plus, minus = v[:, 1 : 1 + 2 * d : 2], v[:, 2 : 2 + 2 * d : 2]
+        grad = (plus - minus) / (2 * h)  # (rows, d)
+        g, jac = grad[0], grad[1 : 1 + n_eq]
+        try:
+            if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
+                if it > 12:
+                    return None
+                step = np.linalg.solve(jac, -v[1 : 1 + n_eq, 0])
+            else:
+                hess = np.empty((v.shape[0], d, d))
+                hess[:, range(d), range(d)] = (plus - 2 * v[:, :1] + minus) / h**2
+                if d == 2:
+                    pp, pm, mp, mm = v[:, 5:9].T
+                    hess[:, 0, 1] = hess[:, 1, 0] = (pp - pm - mp + mm) / (4 * h[0] * h[1])
+                if nu is None:
+                    nu = np.linalg.lstsq(jac.T, -g, rcond=None)[0] if n_eq else np.zeros(0)
+                kkt = np.zeros((d + n_eq, d + n_eq))
+                kkt[:d, :d] = hess[0] + np.einsum("e,eij->ij", nu, hess[1 : 1 + n_eq])
+                kkt[:d, d:], kkt[d:, :d] = jac.T, jac
+                sol = np.linalg.solve(kkt, -np.concatenate([g + jac.T @ nu, v[1 : 1 + n_eq, 0]]))
+                step, nu = sol[:d], nu + sol[d:]
+        except np.linalg.LinAlgError:
+            return None
+        for _ in range(30):  # a step that leaves the designs is halved
+            v = fn(x + step + offsets)
+            if np.all(np.isfinite(v)):
+                break
+            step = step / 2
+        else:
+            return None
+        x = x + step
+        # converged: the step is down to the differences' rounding (~1e-11 × a condition
+        # number; a stationary value is off by that squared)
+        if np.all(np.abs(step) <= 1e-8 * scale):
+            return x
+    return None
+
+
+@cache
+def _stencil(d: int) -> np.ndarray:
+    """The points of the central differences in d ≤ 2 dimensions, in units of the steps: the
+    centre, ± each axis, then (for d = 2) the four corners (+ +, + −, − +, − −)."""
+    rows = [np.zeros(d)]
+    for i in range(d):
+        rows += [np.eye(d)[i], -np.eye(d)[i]]
+    if d == 2:
+        rows += [np.array(c, dtype=float) for c in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
+    return np.array(rows)
+
+
+def rod(p: Problem, name: str, height: str | None, arm, half, cos_other):
+    """The connecting rod ``name`` (and its path's placement ``height``) from a pin at ``arm``
+    from its pivot to a straight path: (length l, placement h, the rod's worst cos μ), arrays;
+    l is NaN where the bounds allow no rod.
+
+    A pin that swings ±``half`` about the path's normal (``height`` given) transmits worst at
+    mid-swing or at the swing's ends, where its offset from the path is h − arm or
+    h − arm cos(half); h midway between them makes the worst offset w = arm (1 − cos half)/2
+    least. A pin that turns fully about a centre on the path (``height`` None) has w = arm.
+    With max transmission a rod that limits (w > ``cos_other`` × its upper bound, the other
+    joints' worst cos) sits at its upper bound; one that does not takes the shortest length
+    that transmits no worse (ties go to the smaller design). With min size it is the shortest
+    within the bound, w / cos_bound.
+    """
+    nan = np.full(np.shape(arm), np.nan)
+    if height is not None:
+        h = p.fixed.get(height)
+        if h is None:
+            h = np.clip(arm * (1 + np.cos(half)) / 2, *p.bounds[height])
+        h = h + 0 * arm
+        w = np.maximum(np.abs(h - arm), np.abs(h - arm * np.cos(half)))
+        strict = 0.0
+    else:
+        h, w = nan, np.asarray(arm, dtype=float)
+        strict = STRICT  # a fully turning pin's rod must be strictly longer than its arm
+    lo, hi = p.box(name)
+    if p.objective == MIN_SIZE:
+        length = np.maximum(lo, w / p.cos_bound)
+    else:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            length = np.where(w <= cos_other * hi, np.maximum(lo, w / cos_other), hi)
+    length = np.maximum(length, w + strict) + 0 * w
+    length = np.where(length <= hi * (1 + 1e-12), np.minimum(length, hi), np.nan)
+    return length, h, w / length
