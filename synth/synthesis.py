@@ -109,8 +109,13 @@ def synthesize(
     objective: str = "max_transmission_angle",
     max_candidates: int = 5,
     time_budget_ms: float = 2000.0,
+    *,
+    accelerators: bool = True,
 ) -> SynthesisResult:
     """Every good design for the targets, verified and ranked (POST /v1/synthesize).
+
+    ``accelerators=False`` solves every type as one without a reduced solver would be, by
+    cold multistart IPOPT on the formulation: the generic path, for cross-checks.
 
     >>> r = synthesize(2.0, 450.0, mechanisms=[{"type": "crank_shaper",
     ...                "fixed": {"pivot_distance": 240.0, "ram_link": 0.0}}])
@@ -132,7 +137,9 @@ def synthesize(
     targets = Targets(
         time_ratio, stroke, min_transmission_angle_deg, objective, t0 + time_budget_ms / 1000
     )
-    searched = [search(get(spec.type), spec, i, targets) for i, spec in enumerate(specs)]
+    searched = [
+        search(get(spec.type), spec, i, targets, accelerators) for i, spec in enumerate(specs)
+    ]
     found, left = _verified(searched, targets, max_candidates)
     infeasible = [
         diagnose(get(spec.type), spec, targets, s)
@@ -188,7 +195,9 @@ def _rank(objective: str):
     return lambda c: (-round(c.min_transmission_angle_deg, 9), c.size, c.type)
 
 
-def search(m: Mechanism, spec: Spec, index: int, t: Targets) -> Searched:
+def search(
+    m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool = True
+) -> Searched:
     """Every variant's local optima (unverified, predicted), and what closed the others."""
     out = Searched()
     seen: list[dict[str, float]] = []
@@ -201,7 +210,7 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets) -> Searched:
             continue
         problem = _problem(m, parts, names, fixed, spec, t)
         try:
-            answer = m.reduced(problem) if m.reduced else None
+            answer = m.reduced(problem) if m.reduced and accelerators else None
         except Unreachable as u:
             out.reasons.append(Infeasible(m.type, u.code, u.reason))
             continue
