@@ -197,8 +197,8 @@ def newton(
             return None
         x = x + step
         # converged: the step is down to the differences' rounding (~1e-11 × a condition
-        # number; a stationary value is off by that squared)
-        if np.all(np.abs(step) <= 1e-8 * scale):
+        # number; a stationary value is off by that squared), the equalities hold
+        if np.all(np.abs(step) <= 1e-8 * scale) and np.all(np.abs(v[1 : 1 + n_eq, 0]) <= 1e-10):
             return x
     return None
 

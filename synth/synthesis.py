@@ -33,7 +33,7 @@ from .solve import built, multistart, starts
 from .verify import verify
 
 STARTS = 8  # cold multistart for a type without a reduced solver
-STARTS_WARM = 3  # cold starts beside the warm ones where a reduced solver could not finish
+STARTS_WARM = STARTS  # cold starts beside the warm ones (the generic path's: never worse than it)
 MAX_CANDIDATES = 50
 SAME = 1e-4  # two designs within this (× stroke) in every parameter are one local optimum
 
@@ -195,9 +195,7 @@ def _rank(objective: str):
     return lambda c: (-round(c.min_transmission_angle_deg, 9), c.size, c.type)
 
 
-def search(
-    m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool = True
-) -> Searched:
+def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool = True) -> Searched:
     """Every variant's local optima (unverified, predicted), and what closed the others."""
     out = Searched()
     seen: list[dict[str, float]] = []
@@ -217,9 +215,8 @@ def search(
         exact = answer is not None and answer.exact
         variant = Variant(parts, names, fixed, problem, exact)
         designs = [(_scaled(d, t.stroke), "closed_form") for d in (answer or Reduced()).designs]
-        if not exact:
-            warm = [d for d, _ in designs]
-            designs += _ipopt(m, variant, spec, t, t.objective, warm)
+        if not exact:  # the reduced designs are starting points, not answers
+            designs = _ipopt(m, variant, spec, t, t.objective, [d for d, _ in designs])
         proposals, missed = [], []
         for d, method in designs:
             params = {**d, **spec.fixed, **dict.fromkeys(parts, 0.0)}

@@ -45,10 +45,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..reduced import MAX_TRANSMISSION, Problem, Reduced, clip, newton, rod, unreachable
+from ._registry import Unreachable
 
 U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
 GRID = 48
 STEP = (U_HI - U_LO) / (GRID - 1)  # the grid's spacing in u
+SLACK = 1e-6  # a design closer to a link's bound than this (log of the scale's range) may be
+# held by that bound, which the Newton steps do not model: IPOPT polishes it
 
 
 @dataclass(frozen=True)
@@ -92,6 +95,14 @@ class FourBar:
     def __init__(self, p: Problem, roles: Roles) -> None:
         self.p, self.r = p, roles
         self.fixed_links = [n for n in roles.links if n in p.fixed]
+        shortest = roles.links[1]  # the crank-rocker's crank (a drag-link's ground)
+        for n in self.fixed_links:
+            if shortest in p.fixed and p.fixed[n] < p.fixed[shortest]:
+                raise Unreachable(
+                    "FIXED_PARTS_INVALID",
+                    f"{shortest} {p.shown(p.fixed[shortest])} > {n} {p.shown(p.fixed[n])}: the "
+                    f"{shortest} must be the shortest link",
+                )
         self.rod = roles.rod not in p.variant
         # the scale's limits from each link's box (the fixed links after the first are held by
         # their ratios instead)
@@ -99,10 +110,10 @@ class FourBar:
         self.lo, self.hi = np.array(boxes).T
         # the link whose fixed length sets the scale; else the smallest the bounds allow
         self.set_by = roles.links.index(self.fixed_links[0]) if self.fixed_links else None
-        # the ratios the other fixed links impose: log(ρ_j/ρ_first) = log(F_j/F_first)
+        # the ratios the fixed links impose, log(ρ_i/ρ_j) = c: each after the first against it
         first = self.fixed_links[0] if self.fixed_links else None
         self.ratios = [
-            (roles.links.index(n), math.log(p.fixed[n] / p.fixed[first]))
+            (roles.links.index(n), self.set_by, math.log(p.fixed[n] / p.fixed[first]))
             for n in self.fixed_links[1:]
         ]
         lo, hi = p.box(roles.arm)
@@ -116,7 +127,7 @@ class FourBar:
             self.psi = (2 * math.asin(0.5 / max(hi, 0.5)), 2 * math.asin(0.5 / max(lo, 0.5)))
         else:  # the arm is half the stroke (a fixed one is judged by the driver)
             self.empty = roles.arm not in p.fixed and not lo <= 0.5 <= hi
-            self.psi = (1e-3, math.pi - 1e-3)
+            self.psi = (1e-9, math.pi - 1e-9)
 
     # --- the design at points (σ, ψ, λ) -----------------------------------------------------
 
@@ -133,12 +144,24 @@ class FourBar:
         kmax = np.minimum(np.minimum(hi[0], hi[1]), np.minimum(hi[2], hi[3]))
         k = kmin if self.set_by is None else lo[self.set_by]
         feasible = valid & (kmin <= kmax * (1 + 1e-12))
+        # how far the design is from a link's bound: the scale's room, log(kmax/kmin), when it
+        # is free; else the free links' distance from their boxes (in log)
+        if self.set_by is None:
+            slack = np.log(kmax / kmin)
+        else:
+            with np.errstate(divide="ignore"):
+                rest = [
+                    np.minimum(np.log(k / a), np.log(b / k))
+                    for i, (a, b) in enumerate(zip(lo, hi, strict=True))
+                    if i != self.set_by
+                ]
+            slack = np.minimum(np.minimum(rest[0], rest[1]), rest[2])
         r5 = (0.5 / np.sin(psi / 2) if self.r.swings else self.p.fixed.get(self.r.arm, 0.5)) + 0 * f
         l, h, rod_cos = self._rod(r5, psi, f)
         feasible &= np.isfinite(l)
         size = k * (1 + a2 + a3 + a4) + r5 + np.where(np.isfinite(l), l, 0.0)
         return {"valid": valid, "feasible": feasible, "f": f, "size": size, "k": k, "rho": rho,
-                "r5": r5, "l": l, "h": h, "rod_cos": rod_cos}  # fmt: skip
+                "r5": r5, "l": l, "h": h, "rod_cos": rod_cos, "slack": slack}  # fmt: skip
 
     def _rod(self, r5, psi, f):
         """The connecting rod (``reduced.rod``); none in a slot drive."""
@@ -150,8 +173,9 @@ class FourBar:
         """The design at one point, and its evaluation."""
         e = self.evaluate(sigma, np.array([psi]), np.array([lam]))
         one = {k: float(np.ravel(v)[0]) for k, v in e.items() if k != "rho"}
+        one["rho"] = [float(np.ravel(x)[0]) for x in e["rho"]]
         r = self.r
-        out = {n: one["k"] * float(np.ravel(x)[0]) for n, x in zip(r.links, e["rho"], strict=True)}
+        out = {n: one["k"] * x for n, x in zip(r.links, one["rho"], strict=True)}
         out[r.arm] = one["r5"]
         if self.rod:
             out[r.rod] = one["l"]
@@ -170,65 +194,141 @@ class FourBar:
 
     def best_transmission(self) -> Reduced:
         """σ = +1 at the allowed swing nearest β: λ in closed form there, else by Newton; with
-        two or more links fixed, the best point of the curve (or points) they leave."""
-        beta = self.p.beta
-        lo, hi = self.psi
-        psi = clip(beta, lo, hi)
-        if self.ratios:
-            found = self.optimum(1, "f")
-            if not found:
-                return Reduced([], exact=not self.fixed_links or len(self.ratios) < 2)
-            d, e = found[0]
-        else:
-            if psi == beta and beta > 0:
-                lam = math.sqrt(1 + 1 / math.sin(beta / 2))
-            else:
-                found = self.optimum(1, "f", psi_fixed=psi)
-                if not found:
-                    return Reduced([], exact=False)
-                lam = found[0][1]["lam"]
-            d, e = self.design(1, psi, lam)
-        if not e["valid"]:
-            return Reduced([], exact=False)
-        if e["rod_cos"] > e["f"] * (1 + 1e-12):  # the rod limits: ties are the smallest design
-            if self.r.swings:
+        two or more links fixed, the best point of the curve (or points) they leave. Where the
+        links' bounds cut the optimum off (too long a link for the shortest), the best design
+        holds that pair of links at their bounds' ratio. A rod that transmits worse than the
+        coupler decides the angle; then the smallest design that keeps it is best."""
+        found, exact = self.coupler_optimum()
+        if not found:
+            return Reduced([], exact=exact)
+        d, e = found
+        if e["rod_cos"] > e["f"] * (1 + 1e-12):
+            if self.r.swings:  # the rod's angle depends on the swing: not modelled here
                 return Reduced([d], exact=False)
             return self.smallest(e["rod_cos"], d)
-        return Reduced([d], exact=bool(e["feasible"]))
+        return Reduced([d], exact=exact)
+
+    def coupler_optimum(self) -> tuple[tuple[dict, dict] | None, bool]:
+        """The design whose coupler transmits best, with its evaluation, and exactness."""
+        beta = self.p.beta
+        psi = clip(beta, *self.psi)
+        if self.ratios or psi != beta or beta == 0:
+            found, exact = self.optimum(1, "f", psi_fixed=None if self.ratios else psi)
+            if not found:
+                return None, False
+            d, e = found[0]
+        else:
+            d, e = self.design(1, psi, math.sqrt(1 + 1 / math.sin(beta / 2)))
+            exact = bool(e["feasible"]) and e["slack"] > SLACK
+        if not e["feasible"] and e["valid"] and not self.ratios:
+            return self.bounded(e)
+        return (d, e), exact
+
+    def bounded(self, e: dict) -> tuple[tuple[dict, dict] | None, bool]:
+        """The best coupler transmission where the links' bounds cut the optimum off: the best
+        of the curves where one pair of links beyond them is held at their bounds' ratio,
+        ρ_i/ρ_j = hi_i/lo_j (i too long against j), and of the corner of the two worst pairs;
+        a corner counts only if no feasible point of the grid beats it."""
+        rho = np.array(e["rho"])
+        excess = np.log(rho[:, None] / self.hi[:, None]) - np.log(rho[None, :] / self.lo[None, :])
+        order = [np.unravel_index(k, excess.shape) for k in np.argsort(excess, axis=None)[::-1]]
+        pairs = [ij for ij in order if excess[ij] > 0]
+        best, exact = None, False
+        for held in [[ij] for ij in pairs] + ([pairs[:2]] if len(pairs) > 1 else []):
+            found, ok = self.holding(held).optimum(1, "f")
+            if not found:
+                continue
+            psi, u = found[0][1]["at"]
+            d, e = self.design(1, psi, 1 + math.exp(u))  # judged by every bound again
+            if e["feasible"] and (best is None or e["f"] < best[1]["f"]):
+                best = d, e
+                corner = len(held) > 1
+                exact = ok and (not corner or e["f"] <= self.grid_best("f") + 1e-12)
+        return best, exact
+
+    def holding(self, pairs) -> FourBar:
+        """This problem with each pair (i, j) held at ρ_i/ρ_j = hi_i/lo_j (the pair's own two
+        bounds then hold by the ratio; a fixed link's box still sets the scale)."""
+        held = FourBar.__new__(FourBar)
+        held.__dict__.update(self.__dict__)
+        held.ratios = [(int(i), int(j), math.log(self.hi[i] / self.lo[j])) for i, j in pairs]
+        held.lo, held.hi = self.lo.copy(), self.hi.copy()
+        for i, j in pairs:
+            if i != self.set_by:
+                held.hi[i] = math.inf
+            if j != self.set_by:
+                held.lo[j] = 0.0
+        return held
+
+    def grid_best(self, key: str, sigma: int = 1) -> float:
+        """The least ``key`` over the feasible points of the grid."""
+        psi = np.linspace(*self.psi, GRID)[:, None]
+        e = self.evaluate(sigma, psi, 1 + np.exp(np.linspace(U_LO, U_HI, GRID))[None, :])
+        return float(np.min(np.where(e["feasible"], e[key], np.inf)))
 
     def smallest(self, cos_bound: float, start: dict | None = None) -> Reduced:
         """The smallest design with the coupler's worst cos ≤ ``cos_bound``: on σ = +1, and
         on σ = −1 only where σ = +1 has none (it was never smaller in a survey of 300 random
-        targets)."""
+        targets). None at all when the best transmission misses the bound."""
         for sigma in (1, -1):
-            found = self.optimum(sigma, "size", cos_bound)
+            found, exact = self.optimum(sigma, "size", cos_bound)
             if found:
-                return Reduced([d for d, _ in found])
-        return Reduced([start] if start else [], exact=start is None)
+                return Reduced([d for d, _ in found], exact)
+        if start is not None:
+            return Reduced([start], exact=False)
+        best = self.best_transmission()  # does any design transmit well enough?
+        if best.exact and all(self.coupler_cos(d) > cos_bound for d in best.designs):
+            return Reduced([])
+        return Reduced(best.designs, exact=False)
+
+    def coupler_cos(self, d: dict[str, float]) -> float:
+        """The worst cos μ of a design's coupler."""
+        g, a2, a3, a4 = (d[n] for n in self.r.links)
+        return float(worst_cos(a2 / g, a3 / g, a4 / g))
 
     def optimum(self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None):
         """Local optima on sheet σ of the coupler's worst cos (``objective`` "f") or of the size
         with that cos ≤ ``cos_bound`` ("size"), where the fixed links' ratios hold and the
-        swing is in range (or ``psi_fixed``): a grid, then Newton from its best points. With
-        the ratios fixing the point (three links fixed), every root. [(design, evaluation)]"""
+        swing is in range (or ``psi_fixed``): a grid, then Newton from its best points; with
+        the ratios fixing the point (three links fixed), every root. Returns [(design,
+        evaluation)] and whether that is exact: not where Newton failed from a start (the
+        start is returned instead, for IPOPT) or ends at a link's bound, which it ignores."""
         lo, hi = self.psi if psi_fixed is None else (psi_fixed, psi_fixed)
         if lo == hi:
             psi_fixed = lo
         psi = np.linspace(lo, hi, 1 if psi_fixed is not None else GRID)[:, None]
         u = np.linspace(U_LO, U_HI, GRID if psi_fixed is None else 4 * GRID)[None, :]
         starts = self._starts(sigma, psi, u, objective, cos_bound)
-        found = []
+        found, exact = [], bool(starts)  # no start is no proof: a link's bound may cut it off
+        key = "f" if objective == "f" else "size"
+        points = len(self.ratios) >= (1 if psi_fixed is not None else 2)  # roots, not optima
+        roots = 0
         for x0 in starts:
             x = self._newton(sigma, x0, objective, cos_bound, psi_fixed)
-            if x is None:
+            if x is None and points:
+                continue  # a near-crossing of the two curves that is no intersection
+            roots += x is not None
+            d0, e0 = self.design(sigma, x0[0], 1 + math.exp(x0[1]))
+            d, e = (d0, e0) if x is None else self.design(sigma, x[0], 1 + math.exp(x[1]))
+            e0["at"], e["at"] = x0, (x0 if x is None else x)
+            within = objective == "f" or e["f"] <= cos_bound * (1 + 1e-12)
+            if points:
+                if e["feasible"] and within:
+                    found.append((d, e))
                 continue
-            d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
-            e["lam"] = 1 + math.exp(x[1])
-            if e["feasible"] and (objective == "f" or e["f"] <= cos_bound * (1 + 1e-12)):
+            if x is None or not (e["feasible"] and within) or e["slack"] <= SLACK:
+                exact = False
+                if e0["feasible"]:
+                    found.append((d0, e0))
+            elif not self.ratios and e[key] > e0[key] + 1e-9 * abs(e0[key]):
+                exact = False  # Newton found a worse stationary point than its start
                 found.append((d, e))
-        key = "f" if objective == "f" else "size"
+            else:
+                found.append((d, e))
         found.sort(key=lambda de: de[1][key])
-        return found if len(self.ratios) >= (1 if psi_fixed is not None else 2) else found[:1]
+        if points and starts and not roots:
+            exact = False  # crossings, but no intersection found: perhaps a tangency
+        return (found if points else found[:1]), exact
 
     def _starts(self, sigma, psi, u, objective, cos_bound) -> list[np.ndarray]:
         """Grid points to start Newton from: the best one (no ratio fixed), the best crossing
@@ -268,8 +368,8 @@ class FourBar:
         return starts
 
     def residuals(self, e) -> list[np.ndarray]:
-        """log(ρ_j/ρ_first) − log(F_j/F_first) for each fixed link after the first."""
-        return [np.log(e["rho"][j] / e["rho"][self.set_by]) - c for j, c in self.ratios]
+        """log(ρ_i/ρ_j) − c for each ratio held."""
+        return [np.log(e["rho"][i] / e["rho"][j]) - c for i, j, c in self.ratios]
 
     def _newton(self, sigma, x0, objective, cos_bound, psi_fixed):
         """Newton from x0 = (ψ, u) with the ratios (and, for the size, the bound where it
@@ -300,7 +400,8 @@ class FourBar:
             out = [e["f"] if objective == "f" else e["size"], *self.residuals(e)]
             if bound_active:
                 out.append(e["f"] - cos_bound)
-            return np.where(e["feasible"], np.array(out), np.nan)
+            # Newton may cross a bound on its way: only a design that cannot run stops it
+            return np.where(e["valid"] & np.isfinite(e["size"]), np.array(out), np.nan)
 
         return rows
 
