@@ -181,3 +181,32 @@ def test_time_budget_gives_a_partial_answer():
     assert r.complete is False
     for c in r.candidates:  # what was found is still verified
         assert_meets(c, 1.5, 0.3, 20.0)
+
+
+def test_fixed_parts_are_judged_to_the_verification_tolerance():
+    """Fixed parts that meet the targets to 1e-12 (not exactly) are accepted, as the
+    verification accepts 1e-9; both were refused when they had to meet them to 1e-12."""
+    shaper = "crank_shaper"
+    fixed = {"crank": 73.40735881448646, "pivot_distance": 156.49970186740697}
+    r = synth.synthesize(1.9019683255535618, 300.0, mechanisms=[{"type": shaper, "fixed": fixed}])
+    assert r.candidates and not r.infeasible
+    for c in r.candidates:
+        assert_meets(c, 1.9019683255535618, 300.0, 0.0)
+    fixed = {"lever": 0.0258864340902721, "pivot_distance": 0.013148507569858659}
+    tr, stroke = 1.2239479903544184, 0.008155153404085756
+    r = synth.synthesize(tr, stroke, mechanisms=[{"type": shaper, "fixed": fixed}])
+    assert r.candidates and not r.infeasible
+    for c in r.candidates:
+        assert_meets(c, tr, stroke, 0.0)
+
+
+def test_a_contradiction_beyond_the_tolerance_shows_the_difference():
+    """Just past the tolerance the two numbers agree to 9 digits: the message prints enough
+    digits to tell them apart."""
+    fixed = {"lever": 0.0258864340902721, "pivot_distance": 0.013148507569858659}
+    spec = {"type": "crank_shaper", "fixed": fixed}
+    (why,) = synth.synthesize(1.2239479903544184, 0.008155153404085756 * (1 + 2e-9),
+                              mechanisms=[spec]).infeasible  # fmt: skip
+    assert why.code == "FIXED_PARTS_CONTRADICT_TARGETS"
+    got, want = why.reason.split(" gives stroke ")[1].split(" (")[0].split(", not ")
+    assert got != want and float(got) != float(want)
