@@ -50,6 +50,7 @@ class Problem:
     objective: str
     stroke: float = 1.0
     explicit: frozenset[str] = frozenset()  # parameters whose bounds the caller gave
+    hints: tuple[Mapping[str, float], ...] = ()  # the optima of the type's other variants
 
     @property
     def ratio(self) -> float:
@@ -163,34 +164,33 @@ def newton(
     nu = None
     v = fn(x + offsets)
     for it in range(iters):
-        if not np.all(np.isfinite(v)):
+        if not np.isfinite(v).all():
             return None
         plus, minus = v[:, 1 : 1 + 2 * d : 2], v[:, 2 : 2 + 2 * d : 2]
         grad = (plus - minus) / (2 * h)  # (rows, d)
-        g, jac = grad[0], grad[1 : 1 + n_eq]
+        g, jac, eq = grad[0], grad[1 : 1 + n_eq], v[1 : 1 + n_eq, 0]
         try:
             if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
                 if it > 12:
                     return None
-                step = np.linalg.solve(jac, -v[1 : 1 + n_eq, 0])
+                step = np.linalg.solve(jac, -eq)
             else:
-                hess = np.empty((v.shape[0], d, d))
-                hess[:, range(d), range(d)] = (plus - 2 * v[:, :1] + minus) / h**2
+                curv = (plus - 2 * v[:, :1] + minus) / h**2  # (rows, d): the Hessians' diagonals
+                if nu is None:  # least-squares multipliers: jac jacᵀ ν = −jac g
+                    nu = np.linalg.solve(jac @ jac.T, -jac @ g) if n_eq else np.zeros(0)
+                weights = np.concatenate([[1.0], nu])  # the Lagrangian's Hessian, row-weighted
+                lag = np.diag(weights @ curv)
                 if d == 2:
                     pp, pm, mp, mm = v[:, 5:9].T
-                    hess[:, 0, 1] = hess[:, 1, 0] = (pp - pm - mp + mm) / (4 * h[0] * h[1])
-                if nu is None:
-                    nu = np.linalg.lstsq(jac.T, -g, rcond=None)[0] if n_eq else np.zeros(0)
-                kkt = np.zeros((d + n_eq, d + n_eq))
-                kkt[:d, :d] = hess[0] + np.einsum("e,eij->ij", nu, hess[1 : 1 + n_eq])
-                kkt[:d, d:], kkt[d:, :d] = jac.T, jac
-                sol = np.linalg.solve(kkt, -np.concatenate([g + jac.T @ nu, v[1 : 1 + n_eq, 0]]))
+                    lag[0, 1] = lag[1, 0] = weights @ (pp - pm - mp + mm) / (4 * h[0] * h[1])
+                kkt = np.block([[lag, jac.T], [jac, np.zeros((n_eq, n_eq))]]) if n_eq else lag
+                sol = np.linalg.solve(kkt, -np.concatenate([g + jac.T @ nu, eq]))
                 step, nu = sol[:d], nu + sol[d:]
         except np.linalg.LinAlgError:
             return None
         for _ in range(30):  # a step that leaves the designs is halved
             v = fn(x + step + offsets)
-            if np.all(np.isfinite(v)):
+            if np.isfinite(v).all():
                 break
             step = step / 2
         else:
@@ -198,7 +198,7 @@ def newton(
         x = x + step
         # converged: the step is down to the differences' rounding (~1e-11 × a condition
         # number; a stationary value is off by that squared), the equalities hold
-        if np.all(np.abs(step) <= 1e-8 * scale) and np.all(np.abs(v[1 : 1 + n_eq, 0]) <= 1e-10):
+        if (np.abs(step) <= 1e-8 * scale).all() and (np.abs(v[1 : 1 + n_eq, 0]) <= 1e-10).all():
             return x
     return None
 

@@ -199,6 +199,7 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool 
     """Every variant's local optima (unverified, predicted), and what closed the others."""
     out = Searched()
     seen: list[dict[str, float]] = []
+    hints: list[dict[str, float]] = []  # each variant's optima, stroke units: a start for the next
     for parts in _variants(m, spec):
         names = relevant(m, parts)
         fixed = {k: v for k, v in spec.fixed.items() if k in names}
@@ -206,13 +207,15 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool 
         if violation:
             out.reasons.append(Infeasible(m.type, "FIXED_PARTS_INVALID", violation))
             continue
-        problem = _problem(m, parts, names, fixed, spec, t)
+        problem = _problem(m, parts, names, fixed, spec, t, hints=tuple(hints))
         try:
             answer = m.reduced(problem) if m.reduced and accelerators else None
         except Unreachable as u:
             out.reasons.append(Infeasible(m.type, u.code, u.reason))
             continue
         exact = answer is not None and answer.exact
+        if exact:
+            hints += answer.designs
         variant = Variant(parts, names, fixed, problem, exact)
         designs = [(_scaled(d, t.stroke), "closed_form") for d in (answer or Reduced()).designs]
         if not exact:  # the reduced designs are starting points, not answers
@@ -440,6 +443,12 @@ def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
     for name, value, ok, what in checks:
         if not ok:
             raise InvalidParameters(f"{name} must be {what}, got {value!r}", (name,))
+    if objective == "min_size" and bound == 0:
+        raise InvalidParameters(
+            "min_transmission_angle_deg must be > 0 with the objective min_size: without a "
+            "bound the smallest designs are linkages that lock (a 0° transmission angle)",
+            ("min_transmission_angle_deg",),
+        )
 
 
 def _spec(s: Spec | Mapping[str, Any], i: int) -> Spec:

@@ -134,7 +134,11 @@ class FourBar:
     def evaluate(self, sigma: int, psi, lam):
         """The designs at (ψ, λ), arrays: valid, feasible (within the bounds), f (the coupler's
         worst cos), size, k (the four-bar's scale), ρ (its links at scale 1, the crank-rocker's
-        order), r5, l, h and the rod's worst cos."""
+        order), r5, l, h and the rod's worst cos; a point that is no design is NaN or False."""
+        with np.errstate(all="ignore"):
+            return self._evaluate(sigma, psi, lam)
+
+    def _evaluate(self, sigma: int, psi, lam):
         a2, a3, a4, valid = shape(sigma, self.p.beta, psi, lam)
         rho = (1.0, a2, a3, a4)
         f = worst_cos(a2, a3, a4)
@@ -149,12 +153,11 @@ class FourBar:
         if self.set_by is None:
             slack = np.log(kmax / kmin)
         else:
-            with np.errstate(divide="ignore"):
-                rest = [
-                    np.minimum(np.log(k / a), np.log(b / k))
-                    for i, (a, b) in enumerate(zip(lo, hi, strict=True))
-                    if i != self.set_by
-                ]
+            rest = [
+                np.minimum(np.log(k / a), np.log(b / k))
+                for i, (a, b) in enumerate(zip(lo, hi, strict=True))
+                if i != self.set_by
+            ]
             slack = np.minimum(np.minimum(rest[0], rest[1]), rest[2])
         r5 = (0.5 / np.sin(psi / 2) if self.r.swings else self.p.fixed.get(self.r.arm, 0.5)) + 0 * f
         l, h, rod_cos = self._rod(r5, psi, f)
@@ -298,41 +301,64 @@ class FourBar:
             psi_fixed = lo
         psi = np.linspace(lo, hi, 1 if psi_fixed is not None else GRID)[:, None]
         u = np.linspace(U_LO, U_HI, GRID if psi_fixed is None else 4 * GRID)[None, :]
+        hinted = self.hinted(sigma, objective, psi_fixed)
+        if hinted is not None:
+            return [hinted], True
         starts = self._starts(sigma, psi, u, objective, cos_bound)
         found, exact = [], bool(starts)  # no start is no proof: a link's bound may cut it off
         key = "f" if objective == "f" else "size"
         points = len(self.ratios) >= (1 if psi_fixed is not None else 2)  # roots, not optima
         roots = 0
-        for x0 in starts:
+        for x0, value in starts:
             x = self._newton(sigma, x0, objective, cos_bound, psi_fixed)
             if x is None and points:
                 continue  # a near-crossing of the two curves that is no intersection
             roots += x is not None
-            d0, e0 = self.design(sigma, x0[0], 1 + math.exp(x0[1]))
-            d, e = (d0, e0) if x is None else self.design(sigma, x[0], 1 + math.exp(x[1]))
-            e0["at"], e["at"] = x0, (x0 if x is None else x)
+            at = x0 if x is None else x
+            d, e = self.design(sigma, at[0], 1 + math.exp(at[1]))
+            e["at"] = at
             within = objective == "f" or e["f"] <= cos_bound * (1 + 1e-12)
             if points:
                 if e["feasible"] and within:
                     found.append((d, e))
                 continue
             if x is None or not (e["feasible"] and within) or e["slack"] <= SLACK:
-                exact = False
-                if e0["feasible"]:
-                    found.append((d0, e0))
-            elif not self.ratios and e[key] > e0[key] + 1e-9 * abs(e0[key]):
+                exact = False  # the start is a warm start for IPOPT, if it is a design
+                d, e = self.design(sigma, x0[0], 1 + math.exp(x0[1]))
+                e["at"] = x0
+                if e["feasible"]:
+                    found.append((d, e))
+                continue
+            if not self.ratios and e[key] > value + 1e-9 * abs(value):
                 exact = False  # Newton found a worse stationary point than its start
-                found.append((d, e))
-            else:
-                found.append((d, e))
+            found.append((d, e))
         found.sort(key=lambda de: de[1][key])
         if points and starts and not roots:
             exact = False  # crossings, but no intersection found: perhaps a tangency
         return (found if points else found[:1]), exact
 
-    def _starts(self, sigma, psi, u, objective, cos_bound) -> list[np.ndarray]:
-        """Grid points to start Newton from: the best one (no ratio fixed), the best crossing
-        of the ratio's curve (one), or the crossings of both curves (two)."""
+    def hinted(self, sigma: int, objective: str, psi_fixed) -> tuple[dict, dict] | None:
+        """The optimum from another variant's (a slot drive's, for the same crank-rocker with a
+        rod): the variants differ by the rod's smooth share of the size, so Newton from there
+        finds this one's in a few steps; None where it does not."""
+        if sigma != 1 or objective != "size" or self.ratios or not self.p.hints:
+            return None
+        h = self.p.hints[0]
+        if not self.r.swings or self.r.arm not in h:
+            return None
+        crank, coupler = (h[n] for n in self.r.links[1:3])
+        x0 = np.array([2 * math.asin(min(0.5 / h[self.r.arm], 1.0)), math.log(coupler / crank - 1)])
+        x = self._newton(sigma, x0, objective, self.p.cos_bound, psi_fixed)
+        if x is None:
+            return None
+        d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
+        ok = e["feasible"] and e["f"] <= self.p.cos_bound * (1 + 1e-12) and e["slack"] > SLACK
+        return (d, e) if ok else None
+
+    def _starts(self, sigma, psi, u, objective, cos_bound) -> list[tuple[np.ndarray, float]]:
+        """Grid points to start Newton from, with the objective there: the best one (no ratio
+        fixed), the best crossing of the ratio's curve (one), or the crossings of both curves
+        (two)."""
         e = self.evaluate(sigma, psi, 1 + np.exp(u))
         value = e["f"] if objective == "f" else e["size"]
         ok = e["feasible"] & ((objective == "f") | (e["f"] <= cos_bound))
@@ -341,7 +367,7 @@ class FourBar:
             if not np.any(ok):
                 return []
             i, j = np.unravel_index(np.argmin(np.where(ok, value, np.inf)), ok.shape)
-            return [pts[i, j]]
+            return [(pts[i, j], float(value[i, j]))]
         res = self.residuals(e)
         x = _crossings(res[0], e["valid"], pts)
         if len(x) == 0:
@@ -352,9 +378,12 @@ class FourBar:
             good = ev["feasible"] & ((objective == "f") | (ev["f"] <= cos_bound))
             if objective == "size" and not np.any(good):
                 good = ev["feasible"]  # the bound may hold only between the crossings
-            return [x[int(np.argmin(np.where(good, v, np.inf)))]] if np.any(good) else []
+            if not np.any(good):
+                return []
+            k = int(np.argmin(np.where(good, v, np.inf)))
+            return [(x[k], float(v[k]))]
         if psi.size == 1:
-            return list(x)
+            return [(y, math.nan) for y in x]
         # two ratios: the first one's crossings nearest to the second's
         second = _crossings(res[1], e["valid"], pts)
         if len(second) == 0:
@@ -365,7 +394,7 @@ class FourBar:
         for y in near:  # one start per intersection
             if all(np.linalg.norm(y - z) > 2 * STEP for z in starts):
                 starts.append(y)
-        return starts
+        return [(y, math.nan) for y in starts]
 
     def residuals(self, e) -> list[np.ndarray]:
         """log(ρ_i/ρ_j) − c for each ratio held."""
@@ -396,7 +425,7 @@ class FourBar:
     def _rows(self, sigma, objective, cos_bound, bound_active, psi_fixed):
         def rows(x):
             ps = x[:, 0] if psi_fixed is None else np.full(len(x), psi_fixed)
-            e = self.evaluate(sigma, ps, 1 + np.exp(x[:, -1]))
+            e = self.evaluate(sigma, ps, 1 + np.exp(np.minimum(x[:, -1], 50.0)))
             out = [e["f"] if objective == "f" else e["size"], *self.residuals(e)]
             if bound_active:
                 out.append(e["f"] - cos_bound)
