@@ -23,6 +23,7 @@ from .synthesis import Searched, Spec, Targets, Variant, _ipopt, predict
 
 GRID = 33  # time ratios scanned for the reachable range
 TOP = math.pi * (1 - 1e-6)  # β of the largest time ratio tried, about 2e6
+SCAN_TOL = 1e-6  # relative: a design at the scan's time ratio
 
 
 def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible | None:
@@ -68,16 +69,17 @@ def _angles(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
     """The minimum transmission angle of the variant's best designs at the targets (any
     angle): exact where the reduced solver is, else IPOPT's local optima, verified."""
     if v.exact:
-        found = _reduced(m, v, t, v.problem.beta, 1.0)
+        found = _reduced(m, v, t, v.problem.beta)
         if found is not None:
             return found
     return [mu for _, mu in _optima(m, v, spec, t, "max_transmission_angle", 1.0)]
 
 
-def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, cos_bound: float):
-    """The predicted angles of the exact reduced optima at β (max transmission, designs with
-    cos μ ≤ ``cos_bound``), or None where the reduced solver is not exact there."""
-    problem = replace(v.problem, beta=beta, cos_bound=cos_bound, objective=MAX_TRANSMISSION)
+def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL):
+    """The predicted angles of the exact reduced optima at β (max transmission, no bound)
+    that meet the time ratio and stroke to ``tol``, or None where the reduced solver is not
+    exact there."""
+    problem = replace(v.problem, beta=beta, cos_bound=1.0, objective=MAX_TRANSMISSION)
     try:
         answer = m.reduced(problem)
     except Unreachable:
@@ -88,7 +90,7 @@ def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, cos_bound: float
     out = []
     for d in answer.designs:
         got = predict(m, {**{k: x * t.stroke for k, x in d.items()}, **dict.fromkeys(v.parts, 0.0)})
-        if got and abs(got[0] - tr) <= TOL * tr and abs(got[1] - t.stroke) <= TOL * t.stroke:
+        if got and abs(got[0] - tr) <= tol * tr and abs(got[1] - t.stroke) <= tol * t.stroke:
             out.append(got[2])
     return out
 
@@ -105,7 +107,9 @@ def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
     bound = t.bound_deg - TOL * max(t.bound_deg, 1.0)
 
     def ok(beta: float) -> bool:
-        angles = _reduced(m, v, t, beta, 1.0)
+        # the closed forms lose digits where the range ends in a degenerate design (a time
+        # ratio → 3 for the slider-crank, → ∞ for the slotted levers): 1e-6 tells the ends
+        angles = _reduced(m, v, t, beta, SCAN_TOL)
         return bool(angles) and max(angles) >= bound
 
     betas = [TOP * k / (GRID - 1) for k in range(GRID)]

@@ -9,7 +9,9 @@ bracket) to machine precision. Nothing here uses a type's closed forms.
 
 from __future__ import annotations
 
+import functools
 import math
+import sys
 import threading
 from collections.abc import Mapping, Sequence
 
@@ -34,6 +36,7 @@ from .results import (
 GRID = 128  # samples per revolution that bracket the stationary points
 MAX_CURVE_POINTS = 100_000
 TWO_PI = 2 * math.pi
+EPS4 = 4 * sys.float_info.epsilon
 
 _local = threading.local()
 
@@ -50,19 +53,54 @@ class Model:
         g1 = ca.jacobian(g, th)
         g2 = ca.jacobian(g1, th)
         self.joints = tuple(joints)
-        self.fn = ca.Function(f"{m.type}_kinematics", [th, pv], [ca.vertcat(g, g1, g2)])
+        self.fn = _Batched(f"{m.type}_kinematics", th, pv, ca.vertcat(g, g1, g2))
         self.dead = None
         if m.dead_centres is not None:
             h = m.dead_centres(p, th)
-            fn = ca.Function(
-                f"{m.type}_dead_centres", [th, pv], [ca.vertcat(h, ca.jacobian(h, th))]
+            self.dead = _Batched(
+                f"{m.type}_dead_centres", th, pv, ca.vertcat(h, ca.jacobian(h, th))
             )
-            self.dead = lambda theta, pv: tuple(fn(np.atleast_1d(theta)[None, :], pv).full())
 
     def __call__(self, theta: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, ...]:
         """g, g', g'' at each θ: arrays of shape (rows, len(θ))."""
-        out = self.fn(np.atleast_1d(theta)[None, :], pv).full()
-        return tuple(np.split(out, 3))
+        out = self.fn(theta, pv)
+        return tuple(out.reshape(3, out.shape[0] // 3, -1))
+
+
+class _Batched:
+    """out(θ, p) compiled, evaluated at each θ of a vector.
+
+    Up to GRID angles go through a buffer preallocated for their number (made on first use,
+    owned like the function by one thread's Model): an ordinary call's numpy <-> DM
+    conversions cost ~40 µs, more than a few-angle Newton step's evaluation. Common
+    subexpressions are merged (the derivatives repeat g's terms): the same operations on the
+    same operands, so the same results, from half the instructions."""
+
+    def __init__(self, name: str, th: ca.SX, pv: ca.SX, out: ca.SX) -> None:
+        self.fn = ca.Function(name, [th, pv], [out], {"cse": True})
+        self.buffers: dict[int, tuple] = {}
+
+    def __call__(self, theta, pv: np.ndarray) -> np.ndarray:
+        theta = np.atleast_1d(theta)
+        n = theta.size
+        if n > GRID:  # curves: the conversions are small against the work
+            return self.fn(theta[None, :], pv).full()
+        if n not in self.buffers:
+            self.buffers[n] = self._buffer(n)
+        x, p, out, run, _ = self.buffers[n]
+        x[:], p[:] = theta, pv
+        run()
+        return out.T.copy()  # the buffer is reused by the next call
+
+    def _buffer(self, width: int) -> tuple:
+        f = self.fn.map(width, [False, True], [False])
+        x, p = np.zeros(width), np.zeros(self.fn.nnz_in(1))
+        out = np.zeros((width, self.fn.nnz_out(0)))  # column-major (rows, width)
+        buf, run = f.buffer()
+        buf.set_arg(0, memoryview(x))
+        buf.set_arg(1, memoryview(p))
+        buf.set_res(0, memoryview(out))
+        return x, p, out, run, buf  # buf holds the bindings run uses
 
 
 def model(m: Mechanism, variant: frozenset[str]) -> Model:
@@ -83,16 +121,15 @@ def stationary_points(
     motion is fast (see ``_refine``), and polished by a vectorised safeguarded Newton
     iteration on g' with g''.
     """
-    grid = np.linspace(0.0, TWO_PI, n, endpoint=False)
+    grid, widths = _grid(n)
     g, g1, g2 = f(grid, pv)
     if not np.all(np.isfinite(g)):
         bad = grid[np.nonzero(~np.all(np.isfinite(g), axis=0))[0][0]]
         msg = f"the design cannot be assembled at crank angle {math.degrees(bad):.6g}°"
         raise InvalidDesign(msg, (), "assembly")
     _refuse_dwell(grid, g1[0])
-    grid, g1 = _refine(f, pv, grid, g1, g2)
-    widths = np.diff(np.append(grid, TWO_PI))
-    nxt = np.roll(g1, -1, axis=1)
+    grid, widths, g1 = _refine(f, pv, grid, widths, g1, g2)
+    nxt = _next(g1)
     rows, k = np.nonzero((g1 < 0) & (nxt > 0) | (g1 > 0) & (nxt < 0))
     # exact stationary points on the grid, and kinks (a change point's flat configuration,
     # where the derivative of sqrt(0) is undefined)
@@ -100,18 +137,36 @@ def stationary_points(
     lo, hi = grid[k], grid[k] + widths[k]
     scale = np.max(np.abs(np.where(np.isfinite(g1), g1, 0)), axis=1)[rows]
 
-    def derivatives(x):
-        _, d1, d2 = f(x, pv)
-        idx = np.arange(x.size)
-        return d1[rows, idx], d2[rows, idx]
+    nr, idx = g1.shape[0], np.arange(rows.size)
+
+    def derivatives(x):  # g', g'' of each root's own row
+        return f.fn(x, pv).reshape(3, nr, -1)[1:, rows, idx]
 
     x = _rtsafe(derivatives, lo, hi, g1[rows, k], nxt[rows, k], scale)
     if f.dead is not None:
         x = _dead_centres(f, pv, rows, x, TWO_PI / n)
     rows = np.concatenate([rows, zr])
     x = np.concatenate([x, grid[zk]]) % TWO_PI
-    values = f(x, pv)[0][rows, np.arange(x.size)] if x.size else np.empty(0)
+    values = f.fn(x, pv)[rows, np.arange(x.size)] if x.size else np.empty(0)
     return rows, x, values
+
+
+@functools.cache
+def _grid(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """n angles over a revolution and the widths of their cells (read-only: shared)."""
+    grid = np.linspace(0.0, TWO_PI, n, endpoint=False)
+    widths = _widths(grid)
+    grid.flags.writeable = widths.flags.writeable = False
+    return grid, widths
+
+
+def _widths(grid: np.ndarray) -> np.ndarray:
+    return np.diff(np.append(grid, TWO_PI))
+
+
+def _next(a: np.ndarray) -> np.ndarray:
+    """Each column's successor around the revolution: np.roll(a, -1, axis=1), 4× cheaper."""
+    return np.concatenate((a[:, 1:], a[:, :1]), axis=1)
 
 
 def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
@@ -123,28 +178,37 @@ def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         x = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     x = np.where(np.isfinite(x), x, 0.5 * (lo + hi))
-    dx_old = hi - lo
+    if x.size == 0:
+        return x
+    # one evaluation of fd for all roots per step, the steps in Python floats: numpy's
+    # per-operation overhead on a handful of roots cost more than the evaluations
+    x, lo, hi, dx_old = x.tolist(), lo.tolist(), hi.tolist(), (hi - lo).tolist()
+    rising, tiny = (f_lo < 0).tolist(), (1e-12 * scale).tolist()
     for _ in range(100):
-        if x.size == 0:
+        done = True
+        for i, (fx, dfx) in enumerate(zip(*fd(np.array(x)).tolist(), strict=True)):
+            xi = x[i]
+            if fx < 0 if rising[i] else fx > 0:  # on lo's side (not where fx is 0 or NaN)
+                lo[i] = xi
+            else:
+                hi[i] = xi
+            a, b = lo[i], hi[i]
+            step = fx / dfx if dfx else math.nan
+            newton = math.isfinite(step) and a <= xi - step <= b
+            newton = newton and abs(step) <= 0.5 * abs(dx_old[i])
+            dx = step if newton else xi - 0.5 * (a + b)
+            if not newton:
+                dx_old[i] = dx
+            tol = EPS4 * max(1.0, xi)
+            # a tiny Newton step is convergence only where the function is ~0 too: at a kink
+            # (a change point, a rod at its reach) it jumps across 0, and bisection must finish
+            small = abs(fx) <= tiny[i]
+            done &= fx == 0 or b - a <= tol or (abs(dx) <= tol and newton and small)
+            if fx != 0:
+                x[i] = xi - dx
+        if done:
             break
-        fx, dfx = fd(x)
-        same = np.sign(fx) == np.sign(f_lo)
-        lo, hi = np.where(same, x, lo), np.where(same, hi, x)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = fx / dfx
-        newton = np.isfinite(step) & (x - step >= lo) & (x - step <= hi)
-        newton &= np.abs(step) <= 0.5 * np.abs(dx_old)
-        dx = np.where(newton, step, x - 0.5 * (lo + hi))
-        dx_old = np.where(newton, dx_old, dx)
-        tol = 4 * np.finfo(float).eps * np.maximum(1, x)
-        # a tiny Newton step is convergence only where the function is ~0 too: at a kink (a
-        # change point, a rod at its reach) it jumps across 0, and bisection must finish
-        small = np.abs(fx) <= 1e-12 * scale
-        done = (fx == 0) | (hi - lo <= tol) | ((np.abs(dx) <= tol) & newton & small)
-        x = np.where(fx == 0, x, x - dx)
-        if np.all(done):
-            break
-    return x
+    return np.array(x)
 
 
 def _dead_centres(f: Model, pv, rows, x, width: float) -> np.ndarray:
@@ -158,7 +222,7 @@ def _dead_centres(f: Model, pv, rows, x, width: float) -> np.ndarray:
     np.fill_diagonal(gap, np.inf)
     w = np.minimum(width, 0.25 * gap.min(axis=1))
     lo, hi = t - w, t + w
-    h_lo, h_hi = f.dead(lo, pv)[0], f.dead(hi, pv)[0]
+    h_lo, h_hi = f.dead(np.concatenate([lo, hi]), pv)[0].reshape(2, -1)
     ok = np.sign(h_lo) * np.sign(h_hi) < 0
     scale = np.maximum(np.abs(h_lo), np.abs(h_hi))[ok]
     x = x.copy()
@@ -166,7 +230,7 @@ def _dead_centres(f: Model, pv, rows, x, width: float) -> np.ndarray:
     return x
 
 
-def _refine(f: Model, pv, grid, g1, g2, levels: int = 3, split: int = 16):
+def _refine(f: Model, pv, grid, widths, g1, g2, levels: int = 3, split: int = 16):
     """Subdivide the cells where a pair of roots could hide between two grid points.
 
     A cell whose ends have the same sign of g' can still hold two roots if g' turns inside it
@@ -174,8 +238,7 @@ def _refine(f: Model, pv, grid, g1, g2, levels: int = 3, split: int = 16):
     stroke squeezed into a few degrees, an extreme just inside a lever's swing): such cells are
     split ``split`` ways, up to ``levels`` times."""
     for _ in range(levels):
-        widths = np.diff(np.append(grid, TWO_PI))
-        nxt1, nxt2 = np.roll(g1, -1, axis=1), np.roll(g2, -1, axis=1)
+        nxt1, nxt2 = _next(g1), _next(g2)
         with np.errstate(invalid="ignore"):
             fast = (np.abs(g1) < np.abs(g2) * widths) | (np.abs(nxt1) < np.abs(nxt2) * widths)
             suspect = np.any(fast & (g1 * nxt1 > 0) & (g2 * nxt2 <= 0), axis=0)
@@ -188,7 +251,8 @@ def _refine(f: Model, pv, grid, g1, g2, levels: int = 3, split: int = 16):
         grid = np.concatenate([grid, inner])[order]
         g1 = np.concatenate([g1, n1], axis=1)[:, order]
         g2 = np.concatenate([g2, n2], axis=1)[:, order]
-    return grid, g1
+        widths = _widths(grid)
+    return grid, widths, g1
 
 
 def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:
@@ -200,8 +264,8 @@ def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:
     but real motion (a drag-link kite 1e-9 off its change point moves its slider by ~1e-23 of
     the stroke per radian over 20° of the turn, and its strokes are well defined)."""
     still = ds == 0
-    run = still & np.roll(still, 1) & np.roll(still, -1)
-    if np.any(run):
+    ring = np.concatenate((still[-1:], still, still[:1]))  # around the revolution
+    if np.any(ring[:-2] & ring[1:-1] & ring[2:]):
         raise InvalidDesign(
             f"the slider stands still over about {360 * np.count_nonzero(still) / len(grid):.3g}°"
             " of the crank's turn: the linkage folds onto itself, so its strokes and time ratio"
@@ -265,10 +329,11 @@ def joints(
 
 def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -> dict:
     on_s = rows == 0
-    if np.count_nonzero(on_s) < 2:
+    reversals = int(np.count_nonzero(on_s))
+    if reversals < 2:
         raise InvalidDesign("the slider does not move: no dead centres found", (), "stroke")
     s_theta, s_val = theta[on_s], values[on_s]
-    i_max, i_min = np.argmax(s_val), np.argmin(s_val)
+    i_max, i_min = s_val.argmax(), s_val.argmin()
     t_max, t_min = float(s_theta[i_max]), float(s_theta[i_min])
     up = (t_max - t_min) % TWO_PI  # crank travel while the slider goes min -> max (+ direction)
     down = TWO_PI - up
@@ -284,10 +349,11 @@ def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -
     joints = []
     for j, name in enumerate(f.joints, start=1):
         c = values[rows == j]
-        lo, hi = float(np.min(c)), float(np.max(c))
+        lo, hi = float(c.min()), float(c.max())
         worst = min(1.0, max(abs(lo), abs(hi)))
         best = 0.0 if lo < 0 < hi else min(1.0, abs(lo), abs(hi))
         joints.append(Joint(name, math.degrees(math.acos(worst)), math.degrees(math.acos(best))))
+    mu_min = min((jt.min_deg for jt in joints), default=90.0)
     return {
         "type": m.type,
         "params": p,
@@ -300,25 +366,24 @@ def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -
         "working_stroke": Stroke(math.degrees(max(up, down)), 1 if slow_up else -1),
         "return_stroke": Stroke(math.degrees(min(up, down)), -1 if slow_up else 1),
         "transmission": Transmission(
-            min((jt.min_deg for jt in joints), default=90.0),
+            mu_min,
             max((jt.max_deg for jt in joints), default=90.0),
             tuple(joints),
         ),
         "grashof": grashof_class(*m.fourbar(p)) if m.fourbar else None,
-        "reversals": int(np.count_nonzero(on_s)),
-        "conditioning": conditioning(
-            m, p, min((jt.min_deg for jt in joints), default=90.0), int(np.count_nonzero(on_s))
-        ),
+        "reversals": reversals,
+        "conditioning": conditioning(m, p, mu_min, reversals),
     }
 
 
 def conditioning(m: Mechanism, p: dict[str, float], mu_deg: float, reversals: int) -> Conditioning:
     """Distance to a dead point and to the nearest validity limit, flagged when small."""
     scale = max(abs(v) for v in p.values())
+    variant = m.variant(p)
     margins = [
         (min(float(t) for t in c.margin(p)) / scale, c.name)
         for c in m.conditions
-        if c.applies(m.variant(p))
+        if c.applies(variant)
     ]
     margin, name = min(margins, default=(None, None))
     flags = []

@@ -273,16 +273,16 @@ class FourBar:
         """The smallest design with the coupler's worst cos ≤ ``cos_bound``: on σ = +1, and
         on σ = −1 only where σ = +1 has none (it was never smaller in a survey of 300 random
         targets). None at all when the best transmission misses the bound."""
+        best = Reduced([])
+        if start is None:  # does any design transmit well enough?
+            best = self.best_transmission()
+            if best.exact and all(self.coupler_cos(d) > cos_bound for d in best.designs):
+                return Reduced([])
         for sigma in (1, -1):
             found, exact = self.optimum(sigma, "size", cos_bound)
             if found:
                 return Reduced([d for d, _ in found], exact)
-        if start is not None:
-            return Reduced([start], exact=False)
-        best = self.best_transmission()  # does any design transmit well enough?
-        if best.exact and all(self.coupler_cos(d) > cos_bound for d in best.designs):
-            return Reduced([])
-        return Reduced(best.designs, exact=False)
+        return Reduced([start] if start else best.designs, exact=False)
 
     def coupler_cos(self, d: dict[str, float]) -> float:
         """The worst cos μ of a design's coupler."""
