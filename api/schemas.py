@@ -138,7 +138,12 @@ class SynthesizeRequest(BaseModel):
     mechanisms: list[TypeSpec] | None = Field(
         None, max_length=24, description="omitted: every quick-return type, nothing fixed"
     )
-    objective: Literal["max_transmission_angle", "min_size"] = "max_transmission_angle"
+    objective: Literal["max_transmission_angle", "min_size"] = Field(
+        "max_transmission_angle",
+        description="max_transmission_angle: the best minimum transmission angle, ties to the "
+        "smallest design; min_size: the smallest sum of link lengths meeting the bound (which "
+        "must then be > 0°)",
+    )
     max_candidates: int = Field(5, ge=1, le=MAX_CANDIDATES)
     time_budget_ms: float = Field(
         min(2000.0, get_settings().max_budget_ms), gt=0.0, le=get_settings().max_budget_ms

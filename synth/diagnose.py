@@ -26,7 +26,7 @@ TOP = math.pi * (1 - 1e-6)  # β of the largest time ratio tried, about 2e6
 SCAN_TOL = 1e-6  # relative: a design at the scan's time ratio
 
 
-def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible | None:
+def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
     if not s.variants:
         return s.reasons[0] if s.reasons else _budget(m)
     searchable = [v for v in s.variants if v.free or v.exact]

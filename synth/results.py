@@ -101,7 +101,9 @@ class Candidate:
     stroke: float
     min_transmission_angle_deg: float
     objective_value: float
-    method: str  # closed_form, closed_form+ipopt, ipopt
+    # closed_form (an exact reduced solver), closed_form+ipopt (IPOPT from a reduced design),
+    # ipopt (IPOPT from a cold start)
+    method: str
     residuals: dict[str, float]  # relative: time_ratio, stroke
     verified: bool
     grashof: str | None

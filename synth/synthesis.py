@@ -150,7 +150,7 @@ def synthesize(
     cands = sorted((c.candidate for c in found), key=_rank(objective))
     return SynthesisResult(
         candidates=tuple(cands[:max_candidates]),
-        infeasible=tuple(i for i in infeasible if i is not None),
+        infeasible=tuple(infeasible),
         complete=complete,
         elapsed_ms=(time.monotonic() - t0) * 1000,
     )
@@ -281,9 +281,9 @@ def _proposal(m: Mechanism, index: int, params, method: str, t: Targets) -> Prop
         return ""
     tr, stroke, angle, size = got
     missed = [
-        "{} {}, not {}".format(what, *differ(got, want))
-        for what, got, want in (("time ratio", tr, t.time_ratio), ("stroke", stroke, t.stroke))
-        if not agree(got, want)
+        "{} {}, not {}".format(what, *differ(value, want))
+        for what, value, want in (("time ratio", tr, t.time_ratio), ("stroke", stroke, t.stroke))
+        if not agree(value, want)
     ]
     if missed:
         return f"the fixed parts give {' and '.join(missed)} (to a relative {TOL:g})"
