@@ -9,9 +9,9 @@ units, and says whether the answer is ``exact``: the best design is the global o
 stated problem, and an empty answer proves that no design exists. Anything it cannot take
 (``None``, or not ``exact``) goes to IPOPT, warm-started from the designs it did find.
 
-This module holds what the solvers share: the problem, the answer, the box of a free
-parameter, and small numerical tools (a vectorised bracketed root finder, and Newton's method
-on a Lagrangian with central-difference derivatives, one batch of points per step).
+This module holds what the solvers share: the problem, the answer, the rule for a connecting
+rod, and Newton's method on a Lagrangian with central-difference derivatives (one batch of
+points per step).
 """
 
 from __future__ import annotations
@@ -119,27 +119,6 @@ def intersect(*intervals: tuple[float, float]) -> tuple[float, float] | None:
     lo = max(a for a, _ in intervals)
     hi = min(b for _, b in intervals)
     return (lo, hi) if lo <= hi else None
-
-
-def roots(fn: Callable[[np.ndarray], np.ndarray], lo: float, hi: float, n: int = 64) -> list[float]:
-    """Every sign change of ``fn`` (vectorised, NaN where undefined) on [lo, hi], bracketed on
-    an n-point grid and bisected to machine precision (one batch of points per step)."""
-    x = np.linspace(lo, hi, n)
-    y = fn(x)
-    ok = np.isfinite(y[:-1]) & np.isfinite(y[1:])
-    k = np.flatnonzero(ok & (np.sign(y[:-1]) != np.sign(y[1:])))
-    a, b, ya = x[k], x[k + 1], y[k]
-    exact = y[k] == 0
-    for _ in range(80):
-        if a.size == 0 or np.all(np.abs(b - a) <= 4e-16 * np.maximum(1.0, np.abs(a))):
-            break
-        m = 0.5 * (a + b)
-        ym = fn(m)
-        left = np.sign(ym) == np.sign(ya)
-        a, ya = np.where(left, m, a), np.where(left, ym, ya)
-        b = np.where(left, b, m)
-    out = np.where(exact, x[k], 0.5 * (a + b))
-    return [float(v) for v in out]
 
 
 def newton(
