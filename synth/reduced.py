@@ -140,7 +140,7 @@ def newton(
     h = 1e-5 * np.asarray(scale, dtype=float)
     offsets = _stencil(d) * h
     x = np.array(x0, dtype=float)
-    nu = None
+    nu, last = None, math.inf
     v = fn(x + offsets)
     for it in range(iters):
         if not np.isfinite(v).all():
@@ -175,10 +175,15 @@ def newton(
         else:
             return None
         x = x + step
-        # converged: the step is down to the differences' rounding (~1e-11 × a condition
-        # number; a stationary value is off by that squared), the equalities hold
-        if (np.abs(step) <= 1e-8 * scale).all() and (np.abs(v[1 : 1 + n_eq, 0]) <= 1e-10).all():
+        # converged where the equalities hold and the step is down to the differences'
+        # rounding (~1e-11 × a condition number), or is 1e-6 and converging quadratically (it
+        # leaves ~1e-12): a stationary value is off by that squared
+        size = np.max(np.abs(step) / scale)
+        if (np.abs(v[1 : 1 + n_eq, 0]) <= 1e-10).all() and (
+            size <= 1e-8 or (size <= 1e-6 and size <= 1e-2 * last)
+        ):
             return x
+        last = size
     return None
 
 

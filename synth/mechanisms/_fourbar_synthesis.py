@@ -273,21 +273,17 @@ class FourBar:
         """The smallest design with the coupler's worst cos ≤ ``cos_bound``: on σ = +1, and
         on σ = −1 only where σ = +1 has none (it was never smaller in a survey of 300 random
         targets). None at all when the best transmission misses the bound."""
-        best = Reduced([])
-        if start is None:  # does any design transmit well enough?
-            best = self.best_transmission()
-            if best.exact and all(self.coupler_cos(d) > cos_bound for d in best.designs):
+        best: list[dict] = []
+        if start is None:  # does any coupler transmit well enough?
+            found, exact = self.coupler_optimum()
+            if exact and found and found[1]["f"] > cos_bound * (1 + 1e-12):
                 return Reduced([])
+            best = [found[0]] if found else []
         for sigma in (1, -1):
             found, exact = self.optimum(sigma, "size", cos_bound)
             if found:
                 return Reduced([d for d, _ in found], exact)
-        return Reduced([start] if start else best.designs, exact=False)
-
-    def coupler_cos(self, d: dict[str, float]) -> float:
-        """The worst cos μ of a design's coupler."""
-        g, a2, a3, a4 = (d[n] for n in self.r.links)
-        return float(worst_cos(a2 / g, a3 / g, a4 / g))
+        return Reduced([start] if start else best, exact=False)
 
     def optimum(self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None):
         """Local optima on sheet σ of the coupler's worst cos (``objective`` "f") or of the size
