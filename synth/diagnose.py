@@ -48,6 +48,14 @@ def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
     trs = [tr for v in searchable for tr in _reach(m, v, spec, t)]
     if time.monotonic() >= t.deadline:
         return _budget(m)
+    if trs and min(trs) <= t.time_ratio <= max(trs):  # designs exist, none passed the analysis
+        return Infeasible(
+            m.type,
+            "NO_VALID_DESIGN",
+            f"the {m.type} designs found for time ratio {t.time_ratio:g}, stroke "
+            f"{t.stroke:g} and a transmission angle ≥ {t.bound_deg:g}°{_with(spec)} all failed "
+            f"the forward analysis's check (to 1e-9)",
+        )
     if trs:
         return Infeasible(
             m.type,
