@@ -50,6 +50,7 @@ from ._registry import Unreachable
 U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
 GRID = 48
 STEP = (U_HI - U_LO) / (GRID - 1)  # the grid's spacing in u
+BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
 SLACK = 1e-6  # a design closer to a link's bound than this (log of the scale's range) may be
 # held by that bound, which the Newton steps do not model: IPOPT polishes it
 
@@ -147,7 +148,7 @@ class FourBar:
         kmin = np.maximum(np.maximum(lo[0], lo[1]), np.maximum(lo[2], lo[3]))
         kmax = np.minimum(np.minimum(hi[0], hi[1]), np.minimum(hi[2], hi[3]))
         k = kmin if self.set_by is None else lo[self.set_by]
-        feasible = valid & (kmin <= kmax * (1 + 1e-12))
+        feasible = valid & (kmin <= kmax * (1 + BOUND_TOL))
         # how far the design is from a link's bound: the scale's room, log(kmax/kmin), when it
         # is free; else the free links' distance from their boxes (in log)
         if self.set_by is None:
@@ -216,10 +217,12 @@ class FourBar:
         beta = self.p.beta
         psi = clip(beta, *self.psi)
         if self.ratios or psi != beta or beta == 0:
-            found, exact = self.optimum(1, "f", psi_fixed=None if self.ratios else psi)
+            ratios = bool(self.ratios)  # without them, the best coupler by its validity alone
+            found, exact = self.optimum(1, "f", psi_fixed=None if ratios else psi, limits=ratios)
             if not found:
                 return None, False
             d, e = found[0]
+            exact = exact and bool(e["feasible"]) and e["slack"] > SLACK
         else:
             d, e = self.design(1, psi, math.sqrt(1 + 1 / math.sin(beta / 2)))
             exact = bool(e["feasible"]) and e["slack"] > SLACK
@@ -285,13 +288,16 @@ class FourBar:
                 return Reduced([d for d, _ in found], exact)
         return Reduced([start] if start else best, exact=False)
 
-    def optimum(self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None):
+    def optimum(
+        self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None, limits=True
+    ):
         """Local optima on sheet σ of the coupler's worst cos (``objective`` "f") or of the size
         with that cos ≤ ``cos_bound`` ("size"), where the fixed links' ratios hold and the
         swing is in range (or ``psi_fixed``): a grid, then Newton from its best points; with
         the ratios fixing the point (three links fixed), every root. Returns [(design,
         evaluation)] and whether that is exact: not where Newton failed from a start (the
-        start is returned instead, for IPOPT) or ends at a link's bound, which it ignores."""
+        start is returned instead, for IPOPT) or ends at a link's bound, which it ignores. With
+        ``limits`` False the links' bounds are ignored (only a design's validity counts)."""
         lo, hi = self.psi if psi_fixed is None else (psi_fixed, psi_fixed)
         if lo == hi:
             psi_fixed = lo
@@ -300,7 +306,8 @@ class FourBar:
         hinted = self.hinted(sigma, objective, psi_fixed)
         if hinted is not None:
             return [hinted], True
-        starts = self._starts(sigma, psi, u, objective, cos_bound)
+        starts = self._starts(sigma, psi, u, objective, cos_bound, limits)
+        ok = "feasible" if limits else "valid"
         found, exact = [], bool(starts)  # no start is no proof: a link's bound may cut it off
         key = "f" if objective == "f" else "size"
         points = len(self.ratios) >= (1 if psi_fixed is not None else 2)  # roots, not optima
@@ -315,14 +322,14 @@ class FourBar:
             e["at"] = at
             within = objective == "f" or e["f"] <= cos_bound * (1 + 1e-12)
             if points:
-                if e["feasible"] and within:
+                if e[ok] and within:
                     found.append((d, e))
                 continue
-            if x is None or not (e["feasible"] and within) or e["slack"] <= SLACK:
+            if x is None or not (e[ok] and within) or (limits and e["slack"] <= SLACK):
                 exact = False  # the start is a warm start for IPOPT, if it is a design
                 d, e = self.design(sigma, x0[0], 1 + math.exp(x0[1]))
                 e["at"] = x0
-                if e["feasible"]:
+                if e[ok]:
                     found.append((d, e))
                 continue
             if not self.ratios and e[key] > value + 1e-9 * abs(value):
@@ -351,13 +358,15 @@ class FourBar:
         ok = e["feasible"] and e["f"] <= self.p.cos_bound * (1 + 1e-12) and e["slack"] > SLACK
         return (d, e) if ok else None
 
-    def _starts(self, sigma, psi, u, objective, cos_bound) -> list[tuple[np.ndarray, float]]:
+    def _starts(
+        self, sigma, psi, u, objective, cos_bound, limits=True
+    ) -> list[tuple[np.ndarray, float]]:
         """Grid points to start Newton from, with the objective there: the best one (no ratio
         fixed), the best crossing of the ratio's curve (one), or the crossings of both curves
         (two)."""
         e = self.evaluate(sigma, psi, 1 + np.exp(u))
         value = e["f"] if objective == "f" else e["size"]
-        ok = e["feasible"] & ((objective == "f") | (e["f"] <= cos_bound))
+        ok = e["feasible" if limits else "valid"] & ((objective == "f") | (e["f"] <= cos_bound))
         pts = np.stack(np.broadcast_arrays(psi, u), axis=-1)  # (rows, cols, 2)
         if not self.ratios:
             if not np.any(ok):
