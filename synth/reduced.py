@@ -167,7 +167,7 @@ def newton(
                 step, nu = sol[:d], nu + sol[d:]
         except np.linalg.LinAlgError:
             return None
-        for _ in range(30):  # a step that leaves the designs is halved
+        for _ in range(30 if n_eq < d else 8):  # a step that leaves the designs is halved
             v = fn(x + step + offsets)
             if np.isfinite(v).all():
                 break

@@ -233,14 +233,16 @@ class FourBar:
     def bounded(self, e: dict) -> tuple[tuple[dict, dict] | None, bool]:
         """The best coupler transmission where the links' bounds cut the optimum off: the best
         of the curves where one pair of links beyond them is held at their bounds' ratio,
-        ρ_i/ρ_j = hi_i/lo_j (i too long against j), and of the corner of the two worst pairs;
-        a corner counts only if no feasible point of the grid beats it."""
+        ρ_i/ρ_j = hi_i/lo_j (i too long against j), else the corner of the two worst pairs,
+        which counts only if no feasible point of the grid beats it."""
         rho = np.array(e["rho"])
         excess = np.log(rho[:, None] / self.hi[:, None]) - np.log(rho[None, :] / self.lo[None, :])
         order = [np.unravel_index(k, excess.shape) for k in np.argsort(excess, axis=None)[::-1]]
         pairs = [ij for ij in order if excess[ij] > 0]
         best, exact = None, False
         for held in [[ij] for ij in pairs] + ([pairs[:2]] if len(pairs) > 1 else []):
+            if len(held) > 1 and best is not None:
+                break  # one pair's optimum within every bound: no corner is needed
             found, ok = self.holding(held).optimum(1, "f")
             if not found:
                 continue
