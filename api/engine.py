@@ -1,4 +1,4 @@
-"""Runs synth's solves off the event loop, bounded to the cores.
+"""Runs synth's solves off the event loop, bounded to the cores (short work stays on it).
 
 Two executors, chosen by settings: a process pool (each worker process has its own CasADi
 solvers; the GIL is not shared) or a thread pool (each thread builds its own solvers: one
@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import multiprocessing
 import os
+import time
 from concurrent.futures import BrokenExecutor, Executor, ProcessPoolExecutor, ThreadPoolExecutor
 from functools import partial
 from typing import Any
@@ -62,9 +63,20 @@ class Engine:
     async def run(self, op: str, inline: bool = False, **kwargs: Any) -> Any:
         """``op`` in the pool, or here in the event loop's thread when ``inline``: for work
         that costs less than handing it to a worker (an analysis without long curves, ~1 ms;
-        the loop thread has its own compiled models, as every thread does)."""
+        the loop thread has its own compiled models, as every thread does).
+
+        A synthesis runs here too as far as the reduced solvers take it (a few milliseconds at
+        most, no IPOPT); where it needs IPOPT it goes to the pool with what is left of its
+        budget."""
         if inline:
             return _call(op, kwargs)
+        if op == "synthesize":
+            t0 = time.monotonic()
+            try:
+                return _call(op, {**kwargs, "ipopt": False})
+            except synth.SolverNeeded:
+                spent = (time.monotonic() - t0) * 1000
+                kwargs["time_budget_ms"] = max(kwargs["time_budget_ms"] - spent, 1e-3)
         loop = asyncio.get_running_loop()
         try:
             return await loop.run_in_executor(self.executor, partial(_call, op, kwargs))

@@ -47,6 +47,11 @@ class Spec:
     bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
+class SolverNeeded(Exception):
+    """Raised by ``synthesize(..., ipopt=False)`` where the request needs IPOPT: the reduced
+    solvers could not answer it exactly (a caller that must not block runs it elsewhere)."""
+
+
 @dataclass(frozen=True)
 class Targets:
     time_ratio: float
@@ -54,6 +59,7 @@ class Targets:
     bound_deg: float
     objective: str
     deadline: float
+    ipopt: bool = True  # False: raise SolverNeeded rather than run IPOPT
 
     @property
     def cos_bound(self) -> float:
@@ -111,11 +117,14 @@ def synthesize(
     time_budget_ms: float = 2000.0,
     *,
     accelerators: bool = True,
+    ipopt: bool = True,
 ) -> SynthesisResult:
     """Every good design for the targets, verified and ranked (POST /v1/synthesize).
 
     ``accelerators=False`` solves every type as one without a reduced solver would be, by
     cold multistart IPOPT on the formulation: the generic path, for cross-checks.
+    ``ipopt=False`` answers only what the reduced solvers answer exactly (in a millisecond
+    or so) and raises ``SolverNeeded`` for the rest.
 
     >>> r = synthesize(2.0, 450.0, mechanisms=[{"type": "crank_shaper",
     ...                "fixed": {"pivot_distance": 240.0, "ram_link": 0.0}}])
@@ -134,9 +143,8 @@ def synthesize(
         specs = [Spec(t) for t in all_types() if get(t).quick_return]
     else:
         specs = [_spec(s, i) for i, s in enumerate(mechanisms)]
-    targets = Targets(
-        time_ratio, stroke, min_transmission_angle_deg, objective, t0 + time_budget_ms / 1000
-    )
+    deadline = t0 + time_budget_ms / 1000
+    targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline, ipopt)
     searched = [
         search(get(spec.type), spec, i, targets, accelerators) for i, spec in enumerate(specs)
     ]
@@ -303,6 +311,8 @@ def _ipopt(
 ) -> Iterable[tuple[dict[str, float], str]]:
     """Local optima of the formulation (caller's units) from the warm starts and valid cold
     ones, each with how it was found."""
+    if not t.ipopt:
+        raise SolverNeeded(m.type)
     free, fixed = v.free, v.fixed
     if not free:
         return []
