@@ -51,6 +51,7 @@ U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
 GRID = 48
 STEP = (U_HI - U_LO) / (GRID - 1)  # the grid's spacing in u
 BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
+NEAR = 0.1  # log: the links this near their bounds may be the ones that bind
 SLACK = 1e-6  # a design closer to a link's bound than this (log of the scale's range) may be
 # held by that bound, which the Newton steps do not model: IPOPT polishes it
 
@@ -105,6 +106,7 @@ class FourBar:
                     f"{shortest} must be the shortest link",
                 )
         self.rod = roles.rod not in p.variant
+        self.missed: dict | None = None  # where Newton last crossed a link's bound
         # the scale's limits from each link's box (the fixed links after the first are held by
         # their ratios instead)
         boxes = [p.box(n) if n not in self.fixed_links[1:] else (0, math.inf) for n in roles.links]
@@ -230,28 +232,33 @@ class FourBar:
             return self.bounded(e)
         return (d, e), exact
 
-    def bounded(self, e: dict) -> tuple[tuple[dict, dict] | None, bool]:
-        """The best coupler transmission where the links' bounds cut the optimum off: the best
-        of the curves where one pair of links beyond them is held at their bounds' ratio,
-        ρ_i/ρ_j = hi_i/lo_j (i too long against j), else the corner of the two worst pairs,
-        which counts only if no feasible point of the grid beats it."""
+    def bounded(
+        self, e: dict, objective: str = "f", cos_bound: float = 1.0
+    ) -> tuple[tuple[dict, dict] | None, bool]:
+        """The optimum where the links' bounds cut it off (``e``: the design beyond them): the
+        best of the curves where one pair of links beyond them is held at their bounds'
+        ratio, ρ_i/ρ_j = hi_i/lo_j (i too long against j), else the corner of the two worst
+        pairs, which counts only if no feasible point of the grid beats it."""
         rho = np.array(e["rho"])
         excess = np.log(rho[:, None] / self.hi[:, None]) - np.log(rho[None, :] / self.lo[None, :])
         order = [np.unravel_index(k, excess.shape) for k in np.argsort(excess, axis=None)[::-1]]
-        pairs = [ij for ij in order if excess[ij] > 0]
+        pairs = [ij for ij in order if excess[ij] > -NEAR and ij[0] != ij[1]][:3]  # or near
+        key = "f" if objective == "f" else "size"
         best, exact = None, False
         for held in [[ij] for ij in pairs] + ([pairs[:2]] if len(pairs) > 1 else []):
             if len(held) > 1 and best is not None:
                 break  # one pair's optimum within every bound: no corner is needed
-            found, ok = self.holding(held).optimum(1, "f")
+            found, ok = self.holding(held).optimum(1, objective, cos_bound)
             if not found:
                 continue
             psi, u = found[0][1]["at"]
             d, e = self.design(1, psi, 1 + math.exp(u))  # judged by every bound again
-            if e["feasible"] and (best is None or e["f"] < best[1]["f"]):
+            within = objective == "f" or e["f"] <= cos_bound * (1 + 1e-12)
+            if e["feasible"] and within and (best is None or e[key] < best[1][key]):
                 best = d, e
                 corner = len(held) > 1
-                exact = ok and (not corner or e["f"] <= self.grid_best("f") + 1e-12)
+                beaten = corner and e[key] > self.grid_best(key, cos_bound) + 1e-12
+                exact = ok and not beaten
         return best, exact
 
     def holding(self, pairs) -> FourBar:
@@ -268,11 +275,12 @@ class FourBar:
                 held.lo[j] = 0.0
         return held
 
-    def grid_best(self, key: str, sigma: int = 1) -> float:
-        """The least ``key`` over the feasible points of the grid."""
+    def grid_best(self, key: str, cos_bound: float = 1.0) -> float:
+        """The least ``key`` over the feasible points of the grid (cos μ ≤ ``cos_bound``)."""
         psi = np.linspace(*self.psi, GRID)[:, None]
-        e = self.evaluate(sigma, psi, 1 + np.exp(np.linspace(U_LO, U_HI, GRID))[None, :])
-        return float(np.min(np.where(e["feasible"], e[key], np.inf)))
+        e = self.evaluate(1, psi, 1 + np.exp(np.linspace(U_LO, U_HI, GRID))[None, :])
+        ok = e["feasible"] & (e["f"] <= cos_bound)
+        return float(np.min(np.where(ok, e[key], np.inf)))
 
     def smallest(self, cos_bound: float, start: dict | None = None) -> Reduced:
         """The smallest design with the coupler's worst cos ≤ ``cos_bound``: on σ = +1, and
@@ -285,7 +293,11 @@ class FourBar:
                 return Reduced([])
             best = [found[0]] if found else []
         for sigma in (1, -1):
+            self.missed = None
             found, exact = self.optimum(sigma, "size", cos_bound)
+            if found and not exact and self.missed is not None and not self.ratios:
+                held, exact = self.bounded(self.missed, "size", cos_bound)  # a link's bound binds
+                found = [held] if held else found
             if found:
                 return Reduced([d for d, _ in found], exact)
         return Reduced([start] if start else best, exact=False)
@@ -314,21 +326,22 @@ class FourBar:
         key = "f" if objective == "f" else "size"
         points = len(self.ratios) >= (1 if psi_fixed is not None else 2)  # roots, not optima
         roots = 0
-        for x0, value in starts:
-            x = self._newton(sigma, x0, objective, cos_bound, psi_fixed)
-            if x is None and points:
-                continue  # a near-crossing of the two curves that is no intersection
+        for x0, value, optional in starts:
+            x = self._newton(sigma, x0, objective, cos_bound, psi_fixed, optional)
+            if x is None and optional:
+                continue  # a near-crossing of two curves that is no intersection
             roots += x is not None
             at = x0 if x is None else x
             d, e = self.design(sigma, at[0], 1 + math.exp(at[1]))
             e["at"] = at
             within = objective == "f" or e["f"] <= cos_bound * (1 + 1e-12)
-            if points:
+            if optional:
                 if e[ok] and within:
                     found.append((d, e))
                 continue
             if x is None or not (e[ok] and within) or (limits and e["slack"] <= SLACK):
                 exact = False  # the start is a warm start for IPOPT, if it is a design
+                self.missed = e if e["valid"] else None
                 d, e = self.design(sigma, x0[0], 1 + math.exp(x0[1]))
                 e["at"] = x0
                 if e[ok]:
@@ -362,10 +375,11 @@ class FourBar:
 
     def _starts(
         self, sigma, psi, u, objective, cos_bound, limits=True
-    ) -> list[tuple[np.ndarray, float]]:
-        """Grid points to start Newton from, with the objective there: the best one (no ratio
-        fixed), the best crossing of the ratio's curve (one), or the crossings of both curves
-        (two)."""
+    ) -> list[tuple[np.ndarray, float, bool]]:
+        """Grid points to start Newton from: (point, the objective there, whether it is only
+        a possible root). The best point (no ratio held); the best crossing of one ratio's
+        curve, and, for the size, every place the curve crosses the bound (the bound may bind
+        at any of them); with two ratios, or one and ψ held, every crossing of both."""
         e = self.evaluate(sigma, psi, 1 + np.exp(u))
         value = e["f"] if objective == "f" else e["size"]
         ok = e["feasible" if limits else "valid"] & ((objective == "f") | (e["f"] <= cos_bound))
@@ -374,60 +388,68 @@ class FourBar:
             if not np.any(ok):
                 return []
             i, j = np.unravel_index(np.argmin(np.where(ok, value, np.inf)), ok.shape)
-            return [(pts[i, j], float(value[i, j]))]
+            return [(pts[i, j], float(value[i, j]), False)]
         res = self.residuals(e)
         x = _crossings(res[0], e["valid"], pts)
         if len(x) == 0:
             return []
-        if len(self.ratios) == 1 and psi.size > 1:
-            ev = self.evaluate(sigma, x[:, 0], 1 + np.exp(x[:, 1]))
-            v = ev["f"] if objective == "f" else ev["size"]
-            good = ev["feasible"] & ((objective == "f") | (ev["f"] <= cos_bound))
-            if objective == "size" and not np.any(good):
-                good = ev["feasible"]  # the bound may hold only between the crossings
-            if not np.any(good):
-                return []
-            k = int(np.argmin(np.where(good, v, np.inf)))
-            return [(x[k], float(v[k]))]
         if psi.size == 1:
-            return [(y, math.nan) for y in x]
-        # two ratios: the first one's crossings nearest to the second's
-        second = _crossings(res[1], e["valid"], pts)
-        if len(second) == 0:
-            return []
-        gap = np.linalg.norm(x[:, None, :] - second[None, :, :], axis=-1)
-        near = [x[n] for n in np.unique(np.argmin(gap, axis=0)) if gap[n].min() <= 2 * STEP]
-        starts: list[np.ndarray] = []
-        for y in near:  # one start per intersection
-            if all(np.linalg.norm(y - z) > 2 * STEP for z in starts):
-                starts.append(y)
-        return [(y, math.nan) for y in starts]
+            return [(y, math.nan, True) for y in x]
+        if len(self.ratios) == 2:
+            return [(y, math.nan, True) for y in _meet(x, _crossings(res[1], e["valid"], pts))]
+        ev = self.evaluate(sigma, x[:, 0], 1 + np.exp(x[:, 1]))
+        v = ev["f"] if objective == "f" else ev["size"]
+        good = ev["feasible"] & ((objective == "f") | (ev["f"] <= cos_bound))
+        out = []
+        if np.any(good):
+            k = int(np.argmin(np.where(good, v, np.inf)))
+            out.append((x[k], float(v[k]), False))
+        if objective == "size":
+            bound = _crossings(e["f"] - cos_bound, e["valid"], pts)
+            out += [(y, math.nan, True) for y in _meet(x, bound)]
+        return out
 
     def residuals(self, e) -> list[np.ndarray]:
         """log(ρ_i/ρ_j) − c for each ratio held."""
         return [np.log(e["rho"][i] / e["rho"][j]) - c for i, j, c in self.ratios]
 
-    def _newton(self, sigma, x0, objective, cos_bound, psi_fixed):
+    def _newton(self, sigma, x0, objective, cos_bound, psi_fixed, root=False):
         """Newton from x0 = (ψ, u) with the ratios (and, for the size, the bound where it
-        binds) as equalities; a swing that leaves its range is held at the nearer edge."""
+        binds; only the bound from a ``root`` start) as equalities; a swing that leaves its
+        range is held at the nearer edge."""
         lo, hi = self.psi
-        x = self._newton_at(sigma, x0, objective, cos_bound, psi_fixed)
+        x = self._newton_at(sigma, x0, objective, cos_bound, psi_fixed, root)
         if psi_fixed is None and (x is None or not lo <= x[0] <= hi):
             edge = lo if (x if x is not None else x0)[0] < (lo + hi) / 2 else hi
-            x = self._newton_at(sigma, x0, objective, cos_bound, edge)
+            x = self._newton_at(sigma, x0, objective, cos_bound, edge, root)
         return x
 
-    def _newton_at(self, sigma, x0, objective, cos_bound, psi):
-        for bound_active in (True, False) if objective == "size" else (False,):
+    def _newton_at(self, sigma, x0, objective, cos_bound, psi, root=False):
+        """Newton with ψ held (or not); for the size, with the bound binding and, where ratios
+        are held (it may then not bind), without it: the smaller design that keeps it."""
+        both = objective == "size" and bool(self.ratios) and not root
+        best = None
+        y0 = x0 if psi is None else x0[1:]
+        if root:  # the point where the ratios meet each other, or the bound
+            actives = (objective == "size" and len(self.ratios) < y0.size,)
+        else:
+            actives = (True, False) if objective == "size" else (False,)
+        for bound_active in actives:
             rows = self._rows(sigma, objective, cos_bound, bound_active, psi)
             n_eq = len(self.ratios) + bound_active
             y0 = x0 if psi is None else x0[1:]
             if n_eq > y0.size:
                 continue
             y = newton(rows, y0, n_eq, np.ones(y0.size))
-            if y is not None:
-                return y if psi is None else np.array([psi, y[0]])
-        return None
+            if y is None:
+                continue
+            x = y if psi is None else np.array([psi, y[0]])
+            if not both:
+                return x
+            _, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
+            if e["f"] <= cos_bound * (1 + 1e-12) and (best is None or e["size"] < best[0]):
+                best = e["size"], x
+        return None if best is None else best[1]
 
     def _rows(self, sigma, objective, cos_bound, bound_active, psi_fixed):
         def rows(x):
@@ -457,3 +479,16 @@ def _crossings(r: np.ndarray, valid: np.ndarray, pts: np.ndarray) -> np.ndarray:
         ra, rb = r[a][hit], r[b][hit]
         out.append(pts[a][hit] + (ra / (ra - rb))[:, None] * (pts[b][hit] - pts[a][hit]))
     return np.concatenate(out) if out else np.empty((0, 2))
+
+
+def _meet(a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
+    """Points of curve a (points near it) nearest to curve b: one per place they meet."""
+    if len(a) == 0 or len(b) == 0:
+        return []
+    gap = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=-1)
+    near = [a[n] for n in np.unique(np.argmin(gap, axis=0)) if gap[n].min() <= 2 * STEP]
+    out: list[np.ndarray] = []
+    for y in near:
+        if all(np.linalg.norm(y - z) > 2 * STEP for z in out):
+            out.append(y)
+    return out
