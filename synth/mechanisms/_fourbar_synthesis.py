@@ -296,7 +296,9 @@ class FourBar:
             self.missed = None
             found, exact = self.optimum(sigma, "size", cos_bound)
             if found and not exact and self.missed is not None and not self.ratios:
-                held, exact = self.bounded(self.missed, "size", cos_bound)  # a link's bound binds
+                # a link's bound binds: its curve meets the transmission bound at places that
+                # can be closer than the grid tells apart, so this is a start for IPOPT only
+                held, _ = self.bounded(self.missed, "size", cos_bound)
                 found = [held] if held else found
             if found:
                 return Reduced([d for d, _ in found], exact)
@@ -336,7 +338,8 @@ class FourBar:
             e["at"] = at
             within = objective == "f" or e["f"] <= cos_bound * (1 + 1e-12)
             if optional:
-                if e[ok] and within:
+                same = any(np.allclose(at, f[1]["at"], atol=1e-8) for f in found)
+                if e[ok] and within and not same:
                     found.append((d, e))
                 continue
             if x is None or not (e[ok] and within) or (limits and e["slack"] <= SLACK):
@@ -348,7 +351,8 @@ class FourBar:
                     found.append((d, e))
                 continue
             if not self.ratios and e[key] > value + 1e-9 * abs(value):
-                exact = False  # Newton found a worse stationary point than its start
+                exact = False  # Newton found a worse stationary point than its start: its
+                self.missed = self.design(sigma, x0[0], 1 + math.exp(x0[1]))[1]  # best is held?
             found.append((d, e))
         found.sort(key=lambda de: de[1][key])
         if points and starts and not roots:
@@ -482,13 +486,10 @@ def _crossings(r: np.ndarray, valid: np.ndarray, pts: np.ndarray) -> np.ndarray:
 
 
 def _meet(a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
-    """Points of curve a (points near it) nearest to curve b: one per place they meet."""
+    """The points near curve a that are nearest to points near curve b: where they meet (two
+    meetings within a grid cell keep both of a's nearest points, for Newton to tell apart)."""
     if len(a) == 0 or len(b) == 0:
         return []
     gap = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=-1)
-    near = [a[n] for n in np.unique(np.argmin(gap, axis=0)) if gap[n].min() <= 2 * STEP]
-    out: list[np.ndarray] = []
-    for y in near:
-        if all(np.linalg.norm(y - z) > 2 * STEP for z in out):
-            out.append(y)
-    return out
+    nearest = np.argmin(gap, axis=0)
+    return [a[n] for n in np.unique(nearest[gap[nearest, np.arange(len(b))] <= 2 * STEP])]
