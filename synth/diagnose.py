@@ -21,7 +21,7 @@ from .reduced import MAX_TRANSMISSION
 from .results import Infeasible
 from .synthesis import Searched, Spec, Targets, Variant, _ipopt, predict
 
-GRID = 33  # time ratios scanned for the reachable range
+GRID = 17  # time ratios scanned for the reachable range
 TOP = math.pi * (1 - 1e-6)  # β of the largest time ratio tried, about 2e6
 SCAN_TOL = 1e-6  # relative: a design at the scan's time ratio
 
@@ -126,14 +126,16 @@ def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
         return []
     i = flags.index(True)
     j = len(flags) - 1 - flags[::-1].index(True)
-    lo = betas[0] if i == 0 else _edge(ok, betas[i - 1], betas[i])
-    hi = betas[-1] if j == GRID - 1 else _edge(ok, betas[j + 1], betas[j])
+    # the end the target lies beyond to 1e-12, the other to 1e-8 (a bisection step each bit)
+    below = t.beta < betas[i]
+    lo = betas[0] if i == 0 else _edge(ok, betas[i - 1], betas[i], 1e-12 if below else 1e-8)
+    hi = betas[-1] if j == GRID - 1 else _edge(ok, betas[j + 1], betas[j], 1e-8 if below else 1e-12)
     return [(math.pi + b) / (math.pi - b) for b in (lo, hi)]
 
 
-def _edge(ok, out: float, inside: float) -> float:
-    """Bisect between a β without a design and one with, to 1e-12; the side with one."""
-    while abs(inside - out) > 1e-12 * max(1.0, abs(inside)):
+def _edge(ok, out: float, inside: float, tol: float) -> float:
+    """Bisect between a β without a design and one with, to ``tol``; the side with one."""
+    while abs(inside - out) > tol * max(1.0, abs(inside)):
         mid = 0.5 * (out + inside)
         if ok(mid):
             inside = mid

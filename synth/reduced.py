@@ -92,6 +92,22 @@ def unreachable(what: str) -> Unreachable:
     return Unreachable("FIXED_PARTS_CONTRADICT_TARGETS", what)
 
 
+def judge(p: Problem, facts: Callable[[dict], dict], design: dict[str, float]) -> None:
+    """Raise when fixed parts that over-determine a design (more fixed than the targets leave
+    free) miss the targets: by the type's closed forms, to the verification's tolerance."""
+    f = facts(design)
+    beta = abs(float(f["beta"]))
+    got = {"time ratio": ((math.pi + beta) / (math.pi - beta), p.ratio),
+           "stroke": (float(f["stroke"]) * p.stroke, p.stroke)}  # fmt: skip
+    missed = [
+        "{} {}, not {}".format(what, *differ(value, want))
+        for what, (value, want) in got.items()
+        if not agree(value, want)
+    ]
+    if missed:
+        raise unreachable(f"the fixed parts give {' and '.join(missed)} (to a relative {TOL:g})")
+
+
 def within(x: float, box: tuple[float, float]) -> bool:
     """lo ≤ x ≤ hi, to rounding (a value built on its bound)."""
     return box[0] * (1 - 1e-12) <= x <= box[1] * (1 + 1e-12)

@@ -27,7 +27,7 @@ from .errors import InvalidParameters, SynthError
 from .formulation import OBJECTIVES, relevant
 from .mechanisms import Mechanism, all_types, get
 from .mechanisms._registry import TOL, Unreachable
-from .reduced import Problem, Reduced, agree, differ
+from .reduced import Problem, Reduced, agree
 from .results import Candidate, Infeasible, SynthesisResult
 from .solve import built, multistart, starts
 from .verify import verify
@@ -226,22 +226,19 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool 
             hints += answer.designs
         variant = Variant(parts, names, fixed, problem, exact)
         designs = [(_scaled(d, t.stroke), "closed_form") for d in (answer or Reduced()).designs]
-        if not exact:  # the reduced designs are starting points, not answers
+        if not exact and not variant.free:  # nothing to solve: the fixed parts are the design
+            designs = [({}, "closed_form")]
+        elif not exact:  # the reduced designs are starting points, not answers
             designs = _ipopt(m, variant, spec, t, t.objective, [d for d, _ in designs])
-        proposals, missed = [], []
+        proposals = []
         for d, method in designs:
             params = {**d, **spec.fixed, **dict.fromkeys(parts, 0.0)}
             if any(_same(params, o, t.stroke) for o in seen):
                 continue  # a local optimum found again
             seen.append(params)
             p = _proposal(m, index, params, method, t)
-            if isinstance(p, Proposal):
+            if p is not None:
                 proposals.append(p)
-            elif p:
-                missed.append(p)
-        if exact and fixed and missed and not proposals:  # the fixed parts contradict
-            out.reasons.append(Infeasible(m.type, "FIXED_PARTS_CONTRADICT_TARGETS", missed[0]))
-            continue
         out.proposals += proposals
         out.variants.append(variant)
     return out
@@ -270,7 +267,11 @@ def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float
     """(time ratio, stroke, min transmission°, size) by the type's closed forms; None for a
     design that does not run."""
     try:
-        p = m.complete(params)
+        if all(k in params for k in m.names):  # a design the solvers built: check it only
+            p = dict(params)
+            m.check(p)
+        else:
+            p = m.complete(params)
     except SynthError:
         return None
     f = m.facts(p)
@@ -281,22 +282,17 @@ def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float
     return (math.pi + beta) / (math.pi - beta), float(f["stroke"]), angle, size
 
 
-def _proposal(m: Mechanism, index: int, params, method: str, t: Targets) -> Proposal | str:
+def _proposal(m: Mechanism, index: int, params, method: str, t: Targets) -> Proposal | None:
     """The design with its predicted angle and size, if the closed forms say it meets the
-    targets; else why not ("" for a design that does not run or misses the bound)."""
+    targets (a closed form's spurious root, a design that does not run: None)."""
     got = predict(m, params)
     if got is None:
-        return ""
+        return None
     tr, stroke, angle, size = got
-    missed = [
-        "{} {}, not {}".format(what, *differ(value, want))
-        for what, value, want in (("time ratio", tr, t.time_ratio), ("stroke", stroke, t.stroke))
-        if not agree(value, want)
-    ]
-    if missed:
-        return f"the fixed parts give {' and '.join(missed)} (to a relative {TOL:g})"
+    if not (agree(tr, t.time_ratio) and agree(stroke, t.stroke)):
+        return None
     if angle < t.bound_deg - TOL * max(t.bound_deg, 1.0):
-        return ""
+        return None
     return Proposal(index, m.type, params, method, angle, size)
 
 

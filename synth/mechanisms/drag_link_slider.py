@@ -31,7 +31,7 @@ import math
 import numpy as np
 
 from ..geometry import ahead, cos_law, leg, triangle_angle
-from ..reduced import Problem, Reduced, rod
+from ..reduced import Problem, Reduced, agree, differ, rod, unreachable
 from ._fourbar import grashof_conditions, output_pin, output_pin_height
 from ._fourbar_synthesis import FourBar, Roles, worst_cos
 from ._registry import Condition, Mechanism, Parameter, register
@@ -94,6 +94,13 @@ def reduced(p: Problem) -> Reduced | None:
     """Seed 002 eqs. (7)–(13) where ground, crank and follower are fixed: zero, one or two
     couplers give the time ratio (follower_arm = stroke/2, the rod by ``reduced.rod``); any
     other problem goes to the four-bar solver (``_fourbar_synthesis``)."""
+    if "follower_arm" in p.fixed and not agree(2 * p.fixed["follower_arm"], 1.0):
+        raise unreachable(
+            "follower_arm {} gives stroke {}, not {}".format(
+                p.shown(p.fixed["follower_arm"]),
+                *differ(2 * p.fixed["follower_arm"] * p.stroke, p.stroke),
+            )
+        )
     if not {"ground", "crank", "follower"} <= p.fixed.keys() or "coupler" in p.fixed:
         return FourBar(p, ROLES).solve()
     r1, r2, r4 = p.fixed["ground"], p.fixed["crank"], p.fixed["follower"]
@@ -110,18 +117,16 @@ def reduced(p: Problem) -> Reduced | None:
     arm = p.fixed.get("follower_arm", 0.5)
     if "follower_arm" in p.bounds and not p.allows("follower_arm", arm):
         return Reduced([])
-    designs = []
-    for t2a in sorted({math.atan2(b, a) - half, math.atan2(b, a) + half}):
-        r3_sq = r2**2 + (r4 + r1) ** 2 - 2 * r2 * (r4 + r1) * math.cos(t2a)  # eq. (13)
-        coupler = math.sqrt(r3_sq)
-        if not p.allows("coupler", coupler):
-            continue
-        # the crank-rocker it inverts, ground 1: crank r1/r2, coupler r4/r2, rocker r3/r2
-        cos_mu = float(worst_cos(r1 / r2, r4 / r2, coupler / r2))
-        rod_length = float(rod(p, "connecting_rod", None, np.array(arm), 0.0, cos_mu)[0])
-        if math.isfinite(rod_length):
-            design = {"coupler": coupler, "follower_arm": arm, "connecting_rod": rod_length}
-            designs.append({**design, **p.fixed})
+    t2a = np.array(sorted({math.atan2(b, a) - half, math.atan2(b, a) + half}))
+    couplers = np.sqrt(r2**2 + (r4 + r1) ** 2 - 2 * r2 * (r4 + r1) * np.cos(t2a))  # eq. (13)
+    # the crank-rocker each inverts, ground 1: crank r1/r2, coupler r4/r2, rocker r3/r2
+    cos_mu = worst_cos(r1 / r2, r4 / r2, couplers / r2)
+    rods = rod(p, "connecting_rod", None, np.full(couplers.shape, arm), 0.0, cos_mu)[0]
+    designs = [
+        {"coupler": float(coupler), "follower_arm": arm, "connecting_rod": float(length), **p.fixed}
+        for coupler, length in zip(couplers, rods, strict=True)
+        if p.allows("coupler", coupler) and math.isfinite(length)
+    ]
     return Reduced(designs)
 
 

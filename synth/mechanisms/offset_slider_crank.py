@@ -32,6 +32,7 @@ from ..reduced import (
     Reduced,
     clip,
     intersect,
+    judge,
     unreachable,
 )
 from ._registry import TOL, Condition, Mechanism, Parameter, register
@@ -96,6 +97,8 @@ def reduced(p: Problem) -> Reduced:
     ys = _fixed_y(p, s, c)
     if ys is not None:
         design = _design(p, ys[0], ys[1], s, c)
+        if len(p.fixed) > 1:  # the first fixed part sets the design; the others must agree
+            judge(p, facts, design)
         return Reduced([design] if _allowed(p, design) else [])
     designs, seen = [], []
     for sign in (1, -1):

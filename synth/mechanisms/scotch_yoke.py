@@ -20,7 +20,7 @@ import math
 
 import casadi as ca
 
-from ..reduced import Problem, Reduced
+from ..reduced import Problem, Reduced, judge
 from ._registry import TOL, Mechanism, Parameter, Unreachable, register
 
 
@@ -46,7 +46,9 @@ def reduced(p: Problem) -> Reduced:
     """crank = stroke/2; the time ratio is 1 for every design."""
     if p.beta > math.pi / 2 * TOL:  # time ratio 1 to the verification's tolerance
         raise Unreachable("TIME_RATIO_UNREACHABLE", "scotch_yoke has time ratio 1 for every design")
-    if "crank" in p.bounds and not p.allows("crank", 0.5):
+    if "crank" in p.fixed:
+        judge(p, facts, dict(p.fixed))  # stroke = 2 crank
+    elif not p.allows("crank", 0.5):
         return Reduced([])
     return Reduced([{"crank": p.fixed.get("crank", 0.5)}])
 
