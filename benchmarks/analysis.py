@@ -4,8 +4,12 @@
 
 One reference design per type (mechanisms.md). Each case is timed as the median of repeated
 calls, in one run, interleaved with the summary-only baseline so that machine load moves both;
-the report is the ratio to that baseline. Also: how synthesis cost grows with the number of
-candidates asked for and with the multistart size.
+the report is the ratio to that baseline.
+
+Also what a synthesis costs: the default requests (everything free, each objective, several
+time ratios and bounds) and requests a type cannot meet, per type and for all five
+quick-return types at once, each timed against summary analyses of the types asked, calls
+alternated; and how the cost depends on the number of candidates asked for.
 """
 
 from __future__ import annotations
@@ -14,19 +18,14 @@ import argparse
 import statistics
 import time
 from collections.abc import Callable
-from contextlib import AbstractContextManager
 from functools import partial
 from pathlib import Path
 
 import numpy as np
 
 import synth
-from synth import synthesis
-from synth.formulation import relevant
-from synth.solve import starts as synthesis_starts
 
 from .common import RESULTS, report, table
-from .methods import patched, starts
 
 DESIGNS = {
     "scotch_yoke": {"crank": 1.0},
@@ -70,102 +69,141 @@ SYNTH_REQUEST = {"time_ratio": 1.6, "stroke": 1.0, "min_transmission_angle_deg":
 
 
 def synthesis_costs(repeats: int) -> list[dict]:
-    """A family search (crank-rocker, all free): cost against candidates and starts."""
+    """A default request (crank-rocker, all free): cost against the candidates asked for (the
+    verification stops once that many pass), and the generic multistart's cost beside it."""
     rows = []
     base = partial(synth.synthesize, **SYNTH_REQUEST)
     base()
-    for k in (1, 5, 20, 50):
-        ms, ref = median_ms(partial(base, max_candidates=k), base, repeats)
-        rows.append({"case": f"max_candidates {k}", "ms": ms, "ratio": ms / ref})
-    for n in (1, 2, 4, 8, 16, 32):
-        fn = under(starts(n), base)  # the benchmark's "ours_starts_n"
+    cases = {f"max_candidates {k}": partial(base, max_candidates=k) for k in (1, 5, 20, 50)}
+    cases["generic multistart"] = partial(base, accelerators=False)
+    for case, fn in cases.items():
+        fn()
         ms, ref = median_ms(fn, base, repeats)
-        rows.append({"case": f"starts {n}", "ms": ms, "ratio": ms / ref,
-                     "candidates": len(fn().candidates)})  # fmt: skip
+        rows.append({"case": case, "ms": ms, "ratio": ms / ref, "candidates": len(fn().candidates)})
     return rows
 
 
-DEFAULT_TIME_RATIOS = (1.3, 1.6, 2.0)
+# The default request: everything free, each objective, these ratios and bounds (the scotch
+# yoke has time ratio 1 only; min_size needs a bound > 0, synth refuses it without one); and
+# per type, requests it cannot meet: a bound above the best it reaches (its slot drive gives
+# the crank-shaper 90° at any ratio) or a ratio beyond reach.
+DEFAULT_TIME_RATIOS = (1.3, 1.6, 2.0, 2.5)
+DEFAULT_BOUNDS = (0.0, 20.0, 40.0)
+OBJECTIVES = ("max_transmission_angle", "min_size")
+REFUSALS = {  # (time ratio, bound°)
+    "scotch_yoke": ((1.6, 20.0), (3.0, 0.0)),  # time ratio 1 for every design
+    "offset_slider_crank": ((1.6, 89.9), (3.5, 20.0)),  # μ ≤ 84.26° in the default bounds; TR < 3
+    "crank_shaper": ((1.0, 20.0), (1.0, 0.0)),  # TR > 1 for every design
+    "whitworth": ((1.6, 89.9), (1.0, 20.0)),  # μ ≤ 84.26° (its rod); TR > 1
+    "crank_rocker_slider": ((1.6, 89.9), (10.0, 20.0)),  # 28.5° at TR 1.6; 1.2° at TR 10
+    "drag_link_slider": ((1.6, 89.9), (10.0, 20.0)),  # as the crank-rocker
+}
+ALL = "all five"  # mechanisms omitted: the quick-return types
+QUICK_RETURN = [t for t in DESIGNS if synth.mechanisms.get(t).quick_return]
 
 
-def default_requests(repeats: int) -> list[dict]:
-    """The default request (everything free, bound 20°) for each type and for all six at once,
-    the median over DEFAULT_TIME_RATIOS; the baseline is a summary analysis of each type asked."""
-    rows = []
-    for mtype in (*DESIGNS, "all six"):
-        kinds = None if mtype == "all six" else [{"type": mtype}]
-        asked = DESIGNS if kinds is None else {mtype: DESIGNS[mtype]}
+def default_cases(quick: bool = False) -> list[dict]:
+    """Every default request and refusal, per type and for all five quick-return types (quick:
+    time ratio 1.6 and bound 20° only)."""
+    out = []
+    ratios, bounds = ((1.6,), (20.0,)) if quick else (DEFAULT_TIME_RATIOS, DEFAULT_BOUNDS)
+    for mtype in (*DESIGNS, ALL):
+        grid = [(1.0 if mtype == "scotch_yoke" else tr, b) for tr in ratios for b in bounds]
+        grid = list(dict.fromkeys(grid))
+        for kind, pairs in (("default", grid), ("refusal", REFUSALS.get(mtype, ()))):
+            out += [{"type": mtype, "kind": kind, "time_ratio": tr, "bound": b, "objective": o}
+                    for tr, b in pairs for o in OBJECTIVES
+                    if b > 0 or o != "min_size"]  # fmt: skip
+    return out
+
+
+def _request(case: dict, accelerators: bool = True):
+    kinds = None if case["type"] == ALL else [{"type": case["type"]}]
+    return partial(synth.synthesize, case["time_ratio"], 1.0, case["bound"], mechanisms=kinds,
+                   objective=case["objective"], accelerators=accelerators)  # fmt: skip
+
+
+def _best(r: synth.SynthesisResult, objective: str) -> float | None:
+    if not r.candidates:
+        return None
+    c = r.candidates[0]
+    return c.size if objective == "min_size" else c.min_transmission_angle_deg
+
+
+def default_requests(repeats: int, quick: bool = False) -> list[dict]:
+    """Each default request and refusal timed against a summary analysis of each type asked
+    (DESIGNS), calls alternated; with its outcome, and (untimed, not when ``quick``) the
+    generic multistart's outcome on the same request."""
+    out = []
+    for case in default_cases(quick):
+        asked = QUICK_RETURN if case["type"] == ALL else [case["type"]]
 
         def base(asked=asked):
-            for t, p in asked.items():
-                synth.analyze(t, p)
+            for t in asked:
+                synth.analyze(t, DESIGNS[t])
 
-        times, refs = [], []
-        for tr in DEFAULT_TIME_RATIOS:
-            fn = partial(synth.synthesize, tr, 1.0, 20.0, mechanisms=kinds)
-            fn()  # builds the solvers
-            ms, ref = median_ms(fn, base, repeats)
-            times.append(ms), refs.append(ref)
-        ms = statistics.median(times)
-        rows.append({"type": mtype, "ms": ms, "analyses": ms / statistics.median(refs)})
+        fn = _request(case)
+        r = fn()  # builds what it needs
+        ms, ref = median_ms(fn, base, repeats)
+        row = {**case, "ms": ms, "analyses_ms": ref, "answered": bool(r.candidates),
+               "best": _best(r, case["objective"]),
+               "methods": sorted({c.method for c in r.candidates}),
+               "refusals": sorted({i.code for i in r.infeasible})}  # fmt: skip
+        if not quick:
+            g = _request(case, accelerators=False)()
+            row["generic_answered"] = bool(g.candidates)
+            row["generic_best"] = _best(g, case["objective"])
+        out.append(row)
+    return out
+
+
+def default_summary(cases: list[dict]) -> list[dict]:
+    """Per type (and all five): medians over the default requests and over the refusals, in ms
+    and in summary analyses; how many were answered; and the checks: a refusal where generic
+    answers, a worse best design than generic's, and min_size refused where the same targets
+    with max_transmission_angle have a design (the two objectives share their feasible set)."""
+    rows = []
+    answered = {(c["type"], c["time_ratio"], c["bound"], c["objective"]): c["answered"]
+                for c in cases}  # fmt: skip
+    for mtype in dict.fromkeys(c["type"] for c in cases):
+        row: dict = {"type": mtype}
+        for kind in ("default", "refusal"):
+            cs = [c for c in cases if c["type"] == mtype and c["kind"] == kind]
+            if not cs:
+                continue
+            ms = [c["ms"] for c in cs]
+            row |= {f"{kind}_n": len(cs), f"{kind}_answered": sum(c["answered"] for c in cs),
+                    f"{kind}_ms": statistics.median(ms),
+                    f"{kind}_ms_p90": float(np.quantile(ms, 0.9, method="inverted_cdf")),
+                    f"{kind}_ms_max": max(ms),
+                    f"{kind}_analyses": statistics.median(c["ms"] / c["analyses_ms"] for c in cs),
+                    f"{kind}_ipopt": sum(any("ipopt" in m for m in c["methods"])
+                                         for c in cs)}  # fmt: skip
+        checked = [c for c in cases if c["type"] == mtype and "generic_answered" in c]
+        row["worse_than_generic"] = [_label(c) for c in checked if _worse(c)]
+        row["min_size_refused_but_feasible"] = [
+            _label(c) for c in cases if c["type"] == mtype and c["objective"] == "min_size"
+            and not c["answered"] and answered.get((mtype, c["time_ratio"], c["bound"],
+                                                    "max_transmission_angle"))
+        ]  # fmt: skip
+        rows.append(row)
     return rows
 
 
-SESSION = tuple(1.50 + 0.01 * k for k in range(11))  # a designer nudging the time ratio
+def _worse(c: dict) -> bool:
+    """Generic answered and ours did not, or generic's best design is better by > 1e-9."""
+    if not c["generic_answered"]:
+        return False
+    if not c["answered"]:
+        return True
+    o, g = c["best"], c["generic_best"]
+    if c["objective"] == "min_size":
+        return o > g * (1 + 1e-9)
+    return o < g - 1e-9 * max(1.0, g)
 
 
-def warm_starts(repeats: int) -> list[dict]:
-    """A session of requests whose time ratio moves 1.50 → 1.60 (crank-rocker, all free, bound
-    20°): cold, the shipped 8 starts per request; warm, one start, the previous request's best
-    design (the rest of the Halton sequence only where that design does not fit the variant)."""
-    m = synth.mechanisms.get("crank_rocker_slider")
-    frees = [relevant(m, v) for v in (frozenset(), frozenset({"connecting_rod"}))]
-
-    def session(warm: bool) -> list[synth.SynthesisResult]:
-        out, prev = [], None
-        for tr in SESSION:
-            request = {**SYNTH_REQUEST, "time_ratio": tr}
-            if not warm or prev is None:
-                out.append(synth.synthesize(**request))
-            else:
-                with patched(synthesis, STARTS=1, starts=partial(_from, prev, frees)):
-                    out.append(synth.synthesize(**request))
-            prev = out[-1].candidates[0].params if out[-1].candidates else None
-        return out
-
-    cold_ms, warm_ms = median_ms(partial(session, False), partial(session, True), repeats)
-    cold, warm = session(False), session(True)
-    n = len(SESSION)
-    return [
-        {"case": case, "ms_per_request": ms / n, "ratio": ms / cold_ms,
-         "solved": sum(bool(r.candidates) for r in rs) / n,
-         "candidates": statistics.mean(len(r.candidates) for r in rs),
-         "best_angle_lost_deg": max(c.candidates[0].min_transmission_angle_deg
-                                    - w.candidates[0].min_transmission_angle_deg
-                                    if w.candidates else float("inf")
-                                    for c, w in zip(cold, rs, strict=True))}
-        for case, ms, rs in (("cold, 8 starts", cold_ms, cold), ("warm, 1 start", warm_ms, warm))
-    ]  # fmt: skip
-
-
-def _from(prev: dict[str, float], frees, lo, hi, log, n):
-    """The previous design first (where it has the variant's parameters), then Halton."""
-    rest = synthesis_starts(lo, hi, log, n)
-    for free in frees:
-        if len(free) == lo.size and all(k in prev for k in free):
-            first = np.clip([prev[k] for k in free], lo, hi)
-            return np.vstack([first, rest])
-    return rest
-
-
-def under(patch: Callable[[], AbstractContextManager[None]], fn: Callable[[], object]):
-    """fn, called inside ``patch()``."""
-
-    def call():
-        with patch():
-            return fn()
-
-    return call
+def _label(c: dict) -> str:
+    return f"TR {c['time_ratio']:g}, {c['bound']:g}°, {c['objective']}"
 
 
 def main(argv: list[str] | None = None) -> dict:
@@ -173,17 +211,23 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--quick", action="store_true", help="a smoke run: few repeats and sizes")
     a = ap.parse_args(argv)
     repeats = 3 if a.quick else 25
+    cases = default_requests(1 if a.quick else 7, a.quick)
     results = {
         "analysis": analysis_costs(repeats, SAMPLES[:3] if a.quick else SAMPLES),
         "synthesis": synthesis_costs(2 if a.quick else 7),
-        "default_requests": default_requests(1 if a.quick else 5),
-        "warm_starts": warm_starts(1 if a.quick else 3),
+        "default_requests": default_summary(cases),
+        "default_request_cases": cases,
     }
     print(table(results["analysis"], ("type", "case", "ms", "ratio")))
     print(table(results["synthesis"], ("case", "ms", "ratio", "candidates")))
-    print(table(results["default_requests"], ("type", "ms", "analyses")))
-    print(table(results["warm_starts"], ("case", "ms_per_request", "ratio", "solved",
-                                         "candidates", "best_angle_lost_deg")))  # fmt: skip
+    columns = ("type", "default_n", "default_answered", "default_ms", "default_ms_p90",
+               "default_ms_max", "default_analyses", "refusal_n", "refusal_answered",
+               "refusal_ms", "refusal_ms_max", "refusal_analyses")  # fmt: skip
+    print(table(results["default_requests"], columns))
+    for r in results["default_requests"]:
+        for key in ("worse_than_generic", "min_size_refused_but_feasible"):
+            if r[key]:
+                print(f"{r['type']}: {key}: {'; '.join(r[key])}")
     if not a.quick:
         plot(results["analysis"], RESULTS / "analysis_cost_vs_samples.png")
     return report("analysis", results, quick=a.quick)

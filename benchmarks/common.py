@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import datetime
+import hashlib
 import json
 import os
 import platform
+import subprocess
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
@@ -28,6 +30,26 @@ def machine() -> dict:
         "load_average_at_start": os.getloadavg(),
         "python": platform.python_version(),
         "versions": {p: v for p in PACKAGES if (v := ver(p))},
+        "code": code(),
+    }
+
+
+def code() -> dict:
+    """The commit measured, and a digest of uncommitted changes to the library and service (a
+    run on a working tree that differs from it says so)."""
+
+    def git(*args: str) -> str:
+        try:
+            return subprocess.run(["git", *args], cwd=RESULTS.parent.parent, capture_output=True,
+                                  text=True, check=True).stdout  # fmt: skip
+        except (OSError, subprocess.CalledProcessError):
+            return ""
+
+    diff = git("diff", "HEAD", "--", "synth", "api")
+    return {
+        "commit": git("rev-parse", "HEAD").strip() or None,
+        "synth_api_changes": hashlib.sha256(diff.encode()).hexdigest()[:12] if diff else None,
+        "changed_files": git("diff", "HEAD", "--name-only", "--", "synth", "api").split(),
     }
 
 

@@ -67,6 +67,32 @@ def run(port: int, path: str, clients: int, requests: int, seconds: float, bodie
     }  # fmt: skip
 
 
+def alternate(port: int, requests: list[tuple[str, dict]], rounds: int) -> list[dict]:
+    """One client, one keep-alive connection: the requests in turn, ``rounds`` times, so that
+    the machine's load touches each alike. Per request: median and p90 latency, statuses."""
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+    payloads = [(path, json.dumps(b).encode()) for path, b in requests]
+    latencies: list[list[float]] = [[] for _ in requests]
+    statuses: list[dict[int, int]] = [{} for _ in requests]
+    try:
+        for _ in range(rounds):
+            for k, (path, payload) in enumerate(payloads):
+                t0 = time.perf_counter()
+                conn.request("POST", path, payload, {"Content-Type": "application/json"})
+                r = conn.getresponse()
+                r.read()
+                latencies[k].append(time.perf_counter() - t0)
+                statuses[k][r.status] = statuses[k].get(r.status, 0) + 1
+    finally:
+        conn.close()
+    out = []
+    for (path, _), ts, codes in zip(requests, latencies, statuses, strict=True):
+        q = statistics.quantiles(ts, n=10) if len(ts) > 1 else [ts[0]] * 9
+        out.append({"path": path, "requests": len(ts), "p50_ms": statistics.median(ts) * 1e3,
+                    "p90_ms": q[8] * 1e3, "statuses": codes})  # fmt: skip
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--port", type=int, default=8000)

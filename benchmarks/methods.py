@@ -1,28 +1,31 @@
 """The synthesis methods compared on the same targets; each maps a target to candidate designs.
 
-- ``ours``: ``synth.synthesize`` as shipped.
-- Alternatives we weighed, patched in for the call and restored afterwards (synth unchanged):
-  no fast paths (every type's ``inverse`` removed), multistart sizes 1, 4 and 16, and CasADi's
-  ``sqpmethod`` (qpsol ``qrqp``, exact or limited-memory Hessian) in place of IPOPT.
+- ``ours``: ``synth.synthesize`` as shipped: each type's exact reduced solver (closed forms,
+  bracketed roots, Newton's method in at most two variables), IPOPT only where it cannot
+  answer.
+- ``generic``: ``synth.synthesize(..., accelerators=False)``, every type solved as if it had no
+  reduced solver: cold multistart IPOPT, ``synthesis.STARTS`` (8) Halton starts per structural
+  variant. It is the path shipped before the reduced solvers, less the old closed-form fast
+  paths: the "before" of the comparison, and the reference for optimality.
 - Peers on the same NLP (``synth.formulation``: same variables, bounds, objective and
   constraints, per structural variant, the same valid Halton starts): scipy SLSQP from each
   start, scipy differential evolution once per variant, pylinkage's particle swarm once per
   variant on the L1 exact-penalty function of the NLP (it takes only box bounds). They run
   through synthesis's own ``_ipopt`` with its local solve (``multistart``) swapped for theirs,
-  so the problem set-up is shared code, and without a time budget. They return, unverified
-  and without synth's Newton polish, what SLSQP reports converged, and the best point of
-  evolution and swarm (which have no usable convergence test here).
+  so the problem set-up (variants, fixed parts checked, bounds, starts) is shared code, with no
+  reduced solver and no time budget. They return, unverified and without synth's Newton
+  polish, what SLSQP reports converged, and the best point of evolution and swarm (which have
+  no usable convergence test here).
 
 Candidates are in the caller's units; every method's are verified the same way afterwards.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable, Iterator
-from contextlib import AbstractContextManager, contextmanager
-from dataclasses import dataclass
+from contextlib import contextmanager
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
@@ -31,16 +34,27 @@ from scipy.optimize import Bounds, NonlinearConstraint, differential_evolution, 
 
 import synth
 from synth import synthesis
-from synth.formulation import Formulation, formulate, relevant
-from synth.mechanisms import _registry, get
+from synth.formulation import Formulation, relevant
+from synth.mechanisms import get
 from synth.solve import MAX_ITER, Built
 
-Outcome = tuple[list[dict[str, float]], str]  # candidates (caller's units), a note
-Method = Callable[[dict[str, Any]], Outcome]
 SEED = 6
 DE = {"maxiter": 150, "popsize": 15, "tol": 1e-8}  # bounded: ~1 s per variant with its polish
 PSO = {"n_particles": 30, "iterations": 60}
 PENALTY = 1e3  # weight of the swarm's L1 violation (exact once above the multipliers)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a method returned for one target: candidate designs (caller's units); for synth,
+    how each was found (``Candidate.method``) and the codes of its refusals."""
+
+    candidates: list[dict[str, float]]
+    how: tuple[str, ...] = ()
+    refusals: tuple[str, ...] = ()
+
+
+Method = Callable[[dict[str, Any]], Outcome]
 
 
 @contextmanager
@@ -58,76 +72,52 @@ def patched(owner: Any, **values: Any) -> Iterator[None]:
             owner.__setitem__(k, v) if is_dict else setattr(owner, k, v)
 
 
-# --- ours and the alternatives ------------------------------------------------------------
+# --- synth: as shipped, and the generic multistart -----------------------------------------
+
+
+def _synth(target: dict[str, Any], accelerators: bool) -> Outcome:
+    r = synth.synthesize(**target, accelerators=accelerators)
+    return Outcome(
+        [dict(c.params) for c in r.candidates],
+        tuple(c.method for c in r.candidates),
+        tuple(i.code for i in r.infeasible),
+    )
 
 
 def ours(target: dict[str, Any]) -> Outcome:
-    r = synth.synthesize(**target)
-    return [dict(c.params) for c in r.candidates], " ".join(i.code for i in r.infeasible)
+    return _synth(target, True)
 
 
-def ours_with(patch: Callable[[], AbstractContextManager[None]]) -> Method:
-    def run(target: dict[str, Any]) -> Outcome:
-        with patch():
-            return ours(target)
-
-    return run
+def generic(target: dict[str, Any]) -> Outcome:
+    return _synth(target, False)
 
 
-def no_fast_paths() -> AbstractContextManager[None]:
-    reg = _registry._REGISTRY
-    return patched(reg, **{k: dataclasses.replace(m, inverse=None) for k, m in reg.items()})
+@dataclass
+class Solves:
+    """How often IPOPT ran during a call: ``multistart`` calls and the starts it solved."""
+
+    calls: int = 0
+    starts: int = 0
+    where: list[str] = field(default_factory=list)
 
 
-def starts(n: int) -> Callable[[], AbstractContextManager[None]]:
-    """n starts for a whole family, n/2 for what a closed form leaves (as 8 and 4 ship)."""
-    return lambda: patched(synthesis, STARTS=n, STARTS_LEFTOVER=max(1, n // 2))
+def ipopt_solves(target: dict[str, Any]) -> Solves:
+    """``ours`` once more, untimed, counting its fallbacks to IPOPT (search and refusals
+    alike: both go through ``synthesis.multistart``)."""
+    n = Solves()
+    inner = synthesis.multistart
 
+    def counted(b: Built, *args: Any, **kwargs: Any):
+        n.calls += 1
+        n.where.append(f"{b.form.mtype} {'+'.join(sorted(b.form.variant)) or '-'} "
+                       f"{b.form.objective}")  # fmt: skip
+        start_points = args[5] if len(args) > 5 else kwargs["start_points"]
+        n.starts += len(start_points)
+        yield from inner(b, *args, **kwargs)
 
-SQP = {
-    "qpsol": "qrqp",
-    "qpsol_options": {"print_iter": False, "print_header": False, "print_info": False,
-                      "error_on_fail": False},
-    "print_header": False, "print_iteration": False, "print_status": False, "print_time": False,
-    "show_eval_warnings": False, "max_iter": MAX_ITER,
-}  # fmt: skip
-_solvers: dict[tuple, Built] = {}  # the benchmark runs in one thread
-
-
-def solver(plugin: str, options: dict[str, Any]) -> Callable[[], AbstractContextManager[None]]:
-    """Another CasADi nlpsol in place of IPOPT: synth.solve.built with the plugin and options
-    swapped (it hard-codes both), its own cache."""
-
-    def build(m, variant: frozenset[str], free: tuple[str, ...], objective: str) -> Built:
-        key = (plugin, str(options), m.type, variant, free, objective)
-        if key not in _solvers:
-            form = formulate(m, variant, free, objective)
-            nlpsol = ca.nlpsol(f"{m.type}_{plugin}", plugin, form.nlp, options)
-            _solvers[key] = Built(form, _Guarded(nlpsol))  # type: ignore[arg-type]
-        return _solvers[key]
-
-    return lambda: patched(synthesis, built=build)
-
-
-class _Guarded:
-    """An nlpsol whose ``stats()`` may raise: casadi 3.8.2's sqpmethod throws "basic_string:
-    construction from null is not valid" after some failed solves. Those count as failed
-    (and are counted)."""
-
-    raised = 0
-
-    def __init__(self, f: ca.Function) -> None:
-        self.f = f
-
-    def __call__(self, **kwargs: Any) -> dict:
-        return self.f(**kwargs)
-
-    def stats(self) -> dict:
-        try:
-            return self.f.stats()
-        except RuntimeError:
-            _Guarded.raised += 1
-            return {"return_status": "stats() raised"}
+    with patched(synthesis, multistart=counted):
+        ours(target)
+    return n
 
 
 # --- peers on the same NLP ----------------------------------------------------------------
@@ -167,14 +157,15 @@ def nlp(form: Formulation) -> Nlp:
 
 
 # A local solve with synth.solve.multistart's signature: (built, fixed values, TR, cos bound,
-# lower and upper bounds of the free lengths, start points, deadline) -> free lengths (stroke
-# units) of each converged solution.
-LocalSolve = Callable[..., Iterator[dict[str, float]]]
+# lower and upper bounds of the free lengths, start points, deadline) -> (start index, free
+# lengths in stroke units) of each converged solution.
+LocalSolve = Callable[..., Iterator[tuple[int, dict[str, float]]]]
 
 
 def on_nlp(local: LocalSolve) -> Method:
-    """A peer on synthesis's NLP: every structural variant the request allows, its bounds and
-    valid starts from synth, the local solves by ``local``; no fast path, no verification."""
+    """A peer on synthesis's NLP: every structural variant the request allows whose fixed parts
+    can run (as synth checks them), its bounds and valid starts from synth's ``_ipopt``, the
+    local solves by ``local``; no reduced solver, no verification."""
 
     def run(target: dict[str, Any]) -> Outcome:
         spec = synthesis._spec(target["mechanisms"][0], 0)
@@ -184,20 +175,31 @@ def on_nlp(local: LocalSolve) -> Method:
             target.get("objective", "max_transmission_angle"), math.inf,
         )  # fmt: skip
         out = []
-        with patched(synthesis, multistart=local):
-            for variant in synthesis._variants(m, spec):
-                names = relevant(m, variant)
+        with patched(synthesis, multistart=_checked(local)):
+            for parts in synthesis._variants(m, spec):
+                if synthesis._fixed_violation(m, parts, spec.fixed):
+                    continue
+                names = relevant(m, parts)
                 fixed = {k: v for k, v in spec.fixed.items() if k in names}
-                free = tuple(k for k in names if k not in fixed)
-                found = (
-                    synthesis._ipopt(
-                        m, variant, free, fixed, spec, t, synthesis.STARTS, t.objective
-                    )
-                    if free
-                    else [{}]
-                )
-                out += [{**spec.fixed, **x, **dict.fromkeys(variant, 0.0)} for x in found]
-        return out, ""
+                problem = synthesis._problem(m, parts, names, fixed, spec, t)
+                v = synthesis.Variant(parts, names, fixed, problem, exact=False)
+                found = [x for x, _ in synthesis._ipopt(m, v, spec, t, t.objective)]
+                out += [
+                    {**spec.fixed, **x, **dict.fromkeys(parts, 0.0)}
+                    for x in (found if v.free else [{}])
+                ]
+        return Outcome(out)
+
+    return run
+
+
+def _checked(local: LocalSolve) -> LocalSolve:
+    """``local``, after the check ``multistart`` makes first: the rows left out of the NLP (they
+    do not depend on the variables) hold for the fixed parts."""
+
+    def run(b: Built, fixed, tr, cos_bound, *rest):
+        if b.form.holds(_parameters(fixed, tr, cos_bound)):
+            yield from local(b, fixed, tr, cos_bound, *rest)
 
     return run
 
@@ -216,7 +218,7 @@ def _solution(form: Formulation, x: np.ndarray) -> dict[str, float]:
     return dict(zip(form.free, np.asarray(x).ravel()[: len(form.free)], strict=True))
 
 
-def slsqp(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Iterator[dict]:
+def slsqp(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Iterator:
     """scipy SLSQP from each start, with exact gradients and Jacobians."""
     fn, pv = nlp(b.form), _parameters(fixed, tr, cos_bound)
     lb, ub = b.form.lbg, b.form.ubg
@@ -236,7 +238,7 @@ def slsqp(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Ite
         {"type": "ineq", "fun": lambda x: g(x)[1], "jac": lambda x: jac(x)[1]},
     ]
     box = _box(b.form, lo, hi, (-np.inf, np.inf))
-    for x0 in start_points:
+    for i, x0 in enumerate(start_points):
         r = minimize(
             lambda x: float(fn.f(x, pv)),
             np.r_[x0, [1.0] * b.form.n_extra],  # as synth.solve.multistart
@@ -247,10 +249,10 @@ def slsqp(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Ite
             options={"maxiter": MAX_ITER, "ftol": 1e-10},
         )
         if r.success:
-            yield _solution(b.form, r.x)
+            yield i, _solution(b.form, r.x)
 
 
-def evolution(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Iterator[dict]:
+def evolution(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Iterator:
     """scipy differential evolution once over the box: seeded, bounded, its default polish
     (trust-constr) given the constraints' Jacobian. Its best point is returned whatever its
     status: DE calls a point feasible only at zero violation, which equalities never reach."""
@@ -280,10 +282,10 @@ def evolution(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) ->
         )
     except ValueError:  # trust-constr refuses more equalities than variables
         return
-    yield _solution(b.form, r.x)
+    yield 0, _solution(b.form, r.x)
 
 
-def swarm(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Iterator[dict]:
+def swarm(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Iterator:
     """pylinkage's particle swarm once over the box, on f + PENALTY × the L1 violation."""
     from pylinkage.optimization import particle_swarm_optimization
 
@@ -300,7 +302,7 @@ def swarm(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Ite
             score, _NoLinkage(), dimensions=len(box.lb), bounds=(box.lb, box.ub),
             order_relation=min, verbose=False, **PSO,
         )  # fmt: skip
-    yield _solution(b.form, best.dimensions[0])
+    yield 0, _solution(b.form, best.dimensions[0])
 
 
 class _NoLinkage:
@@ -312,24 +314,9 @@ class _NoLinkage:
 
 METHODS: dict[str, Method] = {
     "ours": ours,
-    "ours_no_fast_paths": ours_with(no_fast_paths),
-    "ours_starts_1": ours_with(starts(1)),
-    "ours_starts_4": ours_with(starts(4)),
-    "ours_starts_16": ours_with(starts(16)),
-    "ours_sqpmethod": ours_with(solver("sqpmethod", SQP)),
-    "ours_sqpmethod_bfgs": ours_with(
-        solver("sqpmethod", {**SQP, "hessian_approximation": "limited-memory"})
-    ),
+    "generic": generic,
     "scipy_slsqp": on_nlp(slsqp),
     "scipy_de": on_nlp(evolution),
     "pylinkage_pso": on_nlp(swarm),
 }
-QUICK = (
-    "ours",
-    "ours_no_fast_paths",
-    "ours_starts_1",
-    "ours_sqpmethod_bfgs",
-    "scipy_slsqp",
-    "scipy_de",
-    "pylinkage_pso",
-)
+QUICK = tuple(METHODS)

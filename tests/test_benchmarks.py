@@ -1,31 +1,51 @@
 """The benchmarks (`make bench`) in their quick form, so that they cannot rot: they run, and
 what they report holds (ours solves every feasible target it is given and refuses every
-infeasible one; the service answers every request). Timings are printed, never asserted."""
+infeasible one, to 1e-12, never worse than the generic multistart; the service answers every
+request). Timings are printed, never asserted."""
 
 from benchmarks import analysis, service, synthesis
 
 
 def test_synthesis_benchmark_quick():
-    out = synthesis.main(["--quick", "--methods", "ours,ours_starts_1,scipy_slsqp"])
+    out = synthesis.main(["--quick", "--methods", "ours,generic,scipy_slsqp"])
     ours = [r for r in out["summary"] if r["method"] == "ours"]
     assert len(ours) == 6
     for r in ours:
         assert r["success"] == 1.0 and r["refused"] == 1.0, r
         assert r["error_max"] <= 1e-12, r
+    opt = out["optimality"]
+    assert opt["compared"] == len({r["case"] for r in out["records"]})
+    assert not opt["violations"], opt["violations"]
+    assert {r["method"] for r in out["records"]} == {"ours", "generic", "scipy_slsqp"}
 
 
 def test_analysis_benchmark_quick():
     out = analysis.main(["--quick"])
     assert {r["type"] for r in out["analysis"]} == set(analysis.DESIGNS)
     assert all(r["ms"] > 0 for r in out["analysis"] + out["synthesis"])
+    cases = out["default_request_cases"]
+    assert {c["type"] for c in cases} == {*analysis.DESIGNS, analysis.ALL}
+    # every request a type cannot meet is refused, with a reason
+    refusals = [c for c in cases if c["kind"] == "refusal"]
+    assert refusals and not any(c["answered"] or not c["refusals"] for c in refusals)
+    # the default requests at a 20° bound have designs for every quick-return type
+    for c in cases:
+        if c["kind"] == "default" and c["bound"] == 20.0 and c["type"] != "scotch_yoke":
+            assert c["answered"], c
 
 
 def test_service_benchmark_quick():
     out = service.main(["--quick", "--servers", "shipped"])
+    assert {r["workload"] for r in out["rows"]} == set(service.WORKLOADS)
     for r in out["rows"]:
         assert r["requests"] == 40, r
         bad = {c: n for c, n in r["statuses"].items() if c >= 500}
         assert not bad, r
         # the share of invalid analyses is answered 422, every synthesis 200 (with a reason)
-        expected = {200: 32, 422: 8} if r["path"] == "/v1/analyze" else {200: 40}
+        expected = {200: 32, 422: 8} if r["workload"] == "analyze" else {200: 40}
         assert r["statuses"] == expected, r
+    for r in out["repeated_16_clients"]:
+        assert r["statuses"] == {200: 40}, r
+    assert {p["type"] for p in out["paired"]} == set(analysis.DESIGNS)
+    for p in out["paired"]:
+        assert p["statuses"] == {"synthesize": {200: 5}, "analyze": {200: 5}}, p
