@@ -4,14 +4,14 @@
   bracketed roots, Newton's method in at most two variables), IPOPT only where it cannot
   answer.
 - ``generic``: ``synth.synthesize(..., accelerators=False)``, every type solved as if it had no
-  reduced solver: cold multistart IPOPT, ``synthesis.STARTS`` (8) Halton starts per structural
+  reduced solver: cold multistart IPOPT, ``search.STARTS`` (8) Halton starts per structural
   variant. It is the path shipped before the reduced solvers, less the old closed-form fast
   paths: the "before" of the comparison, and the reference for optimality.
 - Peers on the same NLP (``synth.formulation``: same variables, bounds, objective and
   constraints, per structural variant, the same valid Halton starts): scipy SLSQP from each
   start, scipy differential evolution once per variant, pylinkage's particle swarm once per
   variant on the L1 exact-penalty function of the NLP (it takes only box bounds). They run
-  through synthesis's own ``_ipopt`` with its local solve (``multistart``) swapped for theirs,
+  through synth.search's own ``ipopt`` with its local solve (``multistart``) swapped for theirs,
   so the problem set-up (variants, fixed parts checked, bounds, starts) is shared code, with no
   reduced solver and no time budget. They return, unverified and without synth's Newton
   polish, what SLSQP reports converged, and the best point of evolution and swarm (which have
@@ -33,7 +33,7 @@ import numpy as np
 from scipy.optimize import Bounds, NonlinearConstraint, differential_evolution, minimize
 
 import synth
-from synth import synthesis
+from synth import search, synthesis
 from synth.formulation import Formulation, relevant
 from synth.mechanisms import get
 from synth.solve import MAX_ITER, Built
@@ -103,9 +103,9 @@ class Solves:
 
 def ipopt_solves(target: dict[str, Any]) -> Solves:
     """``ours`` once more, untimed, counting its fallbacks to IPOPT (search and refusals
-    alike: both go through ``synthesis.multistart``)."""
+    alike: both go through ``search.multistart``)."""
     n = Solves()
-    inner = synthesis.multistart
+    inner = search.multistart
 
     def counted(b: Built, *args: Any, **kwargs: Any):
         n.calls += 1
@@ -115,7 +115,7 @@ def ipopt_solves(target: dict[str, Any]) -> Solves:
         n.starts += len(start_points)
         yield from inner(b, *args, **kwargs)
 
-    with patched(synthesis, multistart=counted):
+    with patched(search, multistart=counted):
         ours(target)
     return n
 
@@ -170,20 +170,20 @@ def on_nlp(local: LocalSolve) -> Method:
     def run(target: dict[str, Any]) -> Outcome:
         spec = synthesis._spec(target["mechanisms"][0], 0)
         m = get(spec.type)
-        t = synthesis.Targets(
+        t = search.Targets(
             target["time_ratio"], target["stroke"], target["min_transmission_angle_deg"],
             target.get("objective", "max_transmission_angle"), math.inf,
         )  # fmt: skip
         out = []
-        with patched(synthesis, multistart=_checked(local)):
-            for parts in synthesis._variants(m, spec):
-                if synthesis._fixed_violation(m, parts, spec.fixed):
+        with patched(search, multistart=_checked(local)):
+            for parts in search.variants(m, spec):
+                if search.fixed_violation(m, parts, spec.fixed):
                     continue
                 names = relevant(m, parts)
                 fixed = {k: v for k, v in spec.fixed.items() if k in names}
-                problem = synthesis._problem(m, parts, names, fixed, spec, t)
-                v = synthesis.Variant(parts, names, fixed, problem, exact=False)
-                found = [x for x, _ in synthesis._ipopt(m, v, spec, t, t.objective)]
+                problem = search.build_problem(m, parts, names, fixed, spec, t)
+                v = search.Variant(parts, names, fixed, problem, exact=False)
+                found = [x for x, _ in search.ipopt(m, v, spec, t, t.objective)]
                 out += [
                     {**spec.fixed, **x, **dict.fromkeys(parts, 0.0)}
                     for x in (found if v.free else [{}])

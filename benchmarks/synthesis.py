@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from synth import SynthError, analyze, synthesis
+from synth import SynthError, analyze, search
 from synth.mechanisms import all_types
 
 from . import methods, targets
@@ -401,7 +401,7 @@ def plot(rows: list[dict[str, Any]], path: Path) -> None:
 def settings(names: list[str], sizes: dict[str, int]) -> dict[str, Any]:
     return {
         "methods": names, "targets": sizes, "seed": targets.SEED, "tol": TOL,
-        "same_angle": SAME_ANGLE, "starts": synthesis.STARTS, "starts_warm": synthesis.STARTS_WARM,
+        "same_angle": SAME_ANGLE, "starts": search.STARTS, "starts_warm": search.STARTS_WARM,
         "de": methods.DE, "pso": methods.PSO, "pso_penalty": methods.PENALTY, "goals": GOALS,
     }  # fmt: skip
 

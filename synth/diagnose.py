@@ -19,7 +19,7 @@ from .mechanisms import Mechanism
 from .mechanisms._registry import TOL, Unreachable
 from .reduced import MAX_TRANSMISSION
 from .results import Infeasible
-from .synthesis import Searched, Spec, Targets, Variant, _ipopt, predict
+from .search import Searched, Spec, Targets, Variant, ipopt, predict
 
 GRID = 17  # time ratios scanned for the reachable range
 TOP = math.pi * (1 - 1e-6)  # β of the largest time ratio tried, about 2e6
@@ -146,7 +146,7 @@ def _edge(ok, out: float, inside: float, tol: float) -> float:
 
 def _optima(m: Mechanism, v: Variant, spec: Spec, t: Targets, objective: str, cos_bound=None):
     """(TR, min transmission°) of each verified local optimum of ``objective`` (IPOPT)."""
-    for x, _ in _ipopt(m, v, spec, t, objective, cos_bound=cos_bound):
+    for x, _ in ipopt(m, v, spec, t, objective, cos_bound=cos_bound):
         try:
             a = analyze(m.type, {**spec.fixed, **x, **dict.fromkeys(v.parts, 0.0)})
         except SynthError:
