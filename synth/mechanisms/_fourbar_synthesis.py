@@ -1,195 +1,46 @@
-"""Reduced synthesis of the four-bar types (crank_rocker_slider, drag_link_slider).
+"""Reduced synthesis of the four-bar types on their dead-centre construction
+(``_fourbar_construction``): the best transmission and the smallest design.
 
-Both are solved on the crank-rocker: a drag-link (ground g, crank a, coupler b, follower c)
-moves as the crank-rocker (ground a, crank g, coupler c, rocker b), with the same time ratio
-(its dead centres are the crank-rocker's toggles) and the same coupler transmission angle.
-
-**The dead-centre construction.** Ground 1, crank a2, coupler a3 = λ a2 (λ > 1), rocker a4.
-At the two toggles the crank and coupler are collinear; from the extended toggle to the
-folded one the crank turns φ = π + σβ (σ = ±1: two sheets of solutions) and the rocker
-swings ψ. The loop closures at the toggles (Söylemez 2002),
-
-    (1 + λ) Z1 − Z2 = 1,    (1 − λ) e^{iφ} Z1 − e^{iψ} Z2 = 1,
-
-are linear in the crank and rocker vectors Z1, Z2 at the extended toggle, so
-
-    Z1 = (1 − e^{iψ}) / ((1 − λ) e^{iφ} − (1 + λ) e^{iψ}),   Z2 = (1 + λ) Z1 − 1,
-
-and every (σ, ψ, λ) is one four-bar with the time ratio and the swing: a2 = |Z1|, a4 = |Z2|.
-It is a design when it is a Grashof crank-rocker whose toggles lie in one assembly circuit,
-sin θ sin(θ + φ) < 0 with θ = arg Z1. The worst coupler transmission is at the crank on the
-ground line: f = max(c1, −c2) with c1, c2 = (a3² + a4² − (1 ∓ a2)²)/(2 a3 a4).
-
-**What is known about f** (derived where stated, otherwise established by dense sampling and
-checked in the tests against an independent global search): on σ = +1, for each ψ, f has a
-single minimum in λ, and that minimum is least at ψ = β, where a2 = sin(β/2) = s for every λ
-and f = c1 = ((λ² − 1)s + 1)/(λ sqrt(1 − s² + λ²s²)) is least at λ² = 1 + 1/s (derived):
+**What is known about the coupler's worst cos f** (derived where stated, otherwise
+established by dense sampling and checked in the tests against an independent global
+search): on σ = +1, for each ψ, f has a single minimum in λ, and that minimum is least at
+ψ = β, where a2 = sin(β/2) = s for every λ and f = c1 = ((λ² − 1)s + 1)/(λ sqrt(1 − s² + λ²s²))
+is least at λ² = 1 + 1/s (derived):
 
     cos μ* = 2√s/(1 + s),   sin μ* = (1 − s)/(1 + s),
 
-with links (1, s, sqrt(s(1 + s)), sqrt(1 + s)) / s... (ground 1/s, crank 1, coupler
-sqrt(1 + 1/s), rocker sqrt((1 + 1/s)/s) for a unit crank). The sheet σ = −1 transmits worse
-than σ = +1 at every swing. So the best design is this closed form when the swing ψ = β is
-allowed, else at the nearest allowed swing with λ found by Newton's method.
+for a unit crank: ground 1/s, coupler sqrt(1 + 1/s), rocker sqrt((1 + 1/s)/s). The sheet
+σ = −1 transmits worse than σ = +1 at every swing. So the best design is this closed form when
+the swing ψ = β is allowed, else at the nearest allowed swing with λ found by Newton's method.
 
-The rest follows the four-bar: its scale is free (the smallest the bounds allow, to break
-ties), the crank-rocker's arm sets the stroke, 2 r5 sin(ψ/2) = 1, the drag-link's is half the
-stroke, and a connecting rod takes the rule of ``_rod``.
+Everything else (the smallest design, fixed links' ratios, links' bounds that cut an optimum
+off) is a problem in (ψ, u = log(λ − 1)): a grid, then Newton's method on the Lagrangian
+(``reduced.newton``) from its best points.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
-from ..reduced import MAX_TRANSMISSION, Problem, Reduced, clip, newton, rod, unreachable
-from ._registry import Unreachable
+from ..reduced import MAX_TRANSMISSION, Reduced, clip, newton
+from ._fourbar_construction import Construction, Roles, shape, worst_cos
+
+__all__ = ["FourBar", "Roles", "shape", "worst_cos"]
 
 U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
 GRID = 48
 STEP = (U_HI - U_LO) / (GRID - 1)  # the grid's spacing in u
-BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
 NEAR = 0.1  # log: the links this near their bounds may be the ones that bind
 SLACK = 1e-6  # a design closer to a link's bound than this (log of the scale's range) may be
 # held by that bound, which the Newton steps do not model: IPOPT polishes it
 
 
-@dataclass(frozen=True)
-class Roles:
-    """A type's parameters in the crank-rocker's roles."""
+class FourBar(Construction):
+    """The optima of one variant of a four-bar type."""
 
-    links: tuple[str, str, str, str]  # the crank-rocker's ground, crank, coupler, rocker
-    arm: str
-    rod: str
-    height: str | None  # the slider path's placement (crank-rocker), None: on the ground line
-    swings: bool  # the arm swings with the rocker (stroke 2 r5 sin(ψ/2)); else stroke 2 r5
-
-
-def shape(sigma: int, beta: float, psi, lam):
-    """(a2, a3, a4, valid) of the construction, vectorised over ψ and λ."""
-    e_phi = -complex(math.cos(sigma * beta), math.sin(sigma * beta))  # e^{iφ}, φ = π + σβ
-    e_psi = np.exp(1j * psi)
-    z1 = (1 - e_psi) / ((1 - lam) * e_phi - (1 + lam) * e_psi)
-    a2 = np.abs(z1)
-    a3, a4 = lam * a2, np.abs((1 + lam) * z1 - 1)
-    longest = np.maximum(np.maximum(1.0, a3), a4)
-    valid = (
-        (z1.imag * (z1 * e_phi).imag < 0)  # sin θ sin(θ + φ) < 0: one assembly circuit
-        & (a2 <= np.minimum(1.0, a4))
-        & (a2 + longest <= 1 + a3 + a4 - longest)
-    )
-    return a2, a3, a4, valid
-
-
-def worst_cos(a2, a3, a4):
-    """The largest |cos μ| of the coupler transmission over a revolution."""
-    base = a3 * a3 + a4 * a4
-    c1 = (base - (1 - a2) ** 2) / (2 * a3 * a4)
-    c2 = (base - (1 + a2) ** 2) / (2 * a3 * a4)
-    return np.maximum(c1, -c2)
-
-
-class FourBar:
-    """One variant of a four-bar type, with the problem's fixed parts and bounds."""
-
-    def __init__(self, p: Problem, roles: Roles) -> None:
-        self.p, self.r = p, roles
-        self.fixed_links = [n for n in roles.links if n in p.fixed]
-        shortest = roles.links[1]  # the crank-rocker's crank (a drag-link's ground)
-        for n in self.fixed_links:
-            if shortest in p.fixed and p.fixed[n] < p.fixed[shortest]:
-                raise Unreachable(
-                    "FIXED_PARTS_INVALID",
-                    f"{shortest} {p.shown(p.fixed[shortest])} > {n} {p.shown(p.fixed[n])}: the "
-                    f"{shortest} must be the shortest link",
-                )
-        self.rod = roles.rod not in p.variant
-        self.missed: dict | None = None  # where Newton last crossed a link's bound
-        # the scale's limits from each link's box (the fixed links after the first are held by
-        # their ratios instead)
-        boxes = [p.box(n) if n not in self.fixed_links[1:] else (0, math.inf) for n in roles.links]
-        self.lo, self.hi = np.array(boxes).T
-        # the link whose fixed length sets the scale; else the smallest the bounds allow
-        self.set_by = roles.links.index(self.fixed_links[0]) if self.fixed_links else None
-        # the ratios the fixed links impose, log(ρ_i/ρ_j) = c: each after the first against it
-        first = self.fixed_links[0] if self.fixed_links else None
-        self.ratios = [
-            (roles.links.index(n), self.set_by, math.log(p.fixed[n] / p.fixed[first]))
-            for n in self.fixed_links[1:]
-        ]
-        lo, hi = p.box(roles.arm)
-        self.empty = False  # the bounds leave no arm for the stroke
-        if roles.swings:  # the stroke is 2 r5 sin(ψ/2): ψ from the arm's box
-            if roles.arm in p.fixed and hi < 0.5:
-                raise unreachable(
-                    f"{roles.arm} {p.shown(hi)} gives at most stroke {p.shown(2 * hi)}"
-                )
-            self.empty = hi < 0.5
-            self.psi = (2 * math.asin(0.5 / max(hi, 0.5)), 2 * math.asin(0.5 / max(lo, 0.5)))
-        else:  # the arm is half the stroke (a fixed one is judged by the driver)
-            self.empty = roles.arm not in p.fixed and not lo <= 0.5 <= hi
-            self.psi = (1e-9, math.pi - 1e-9)
-
-    # --- the design at points (σ, ψ, λ) -----------------------------------------------------
-
-    def evaluate(self, sigma: int, psi, lam):
-        """The designs at (ψ, λ), arrays: valid, feasible (within the bounds), f (the coupler's
-        worst cos), size, k (the four-bar's scale), ρ (its links at scale 1, the crank-rocker's
-        order), r5, l, h and the rod's worst cos; a point that is no design is NaN or False."""
-        with np.errstate(all="ignore"):
-            return self._evaluate(sigma, psi, lam)
-
-    def _evaluate(self, sigma: int, psi, lam):
-        a2, a3, a4, valid = shape(sigma, self.p.beta, psi, lam)
-        rho = (1.0, a2, a3, a4)
-        f = worst_cos(a2, a3, a4)
-        lo = [b / r for b, r in zip(self.lo, rho, strict=True)]
-        hi = [b / r for b, r in zip(self.hi, rho, strict=True)]
-        kmin = np.maximum(np.maximum(lo[0], lo[1]), np.maximum(lo[2], lo[3]))
-        kmax = np.minimum(np.minimum(hi[0], hi[1]), np.minimum(hi[2], hi[3]))
-        k = kmin if self.set_by is None else lo[self.set_by]
-        feasible = valid & (kmin <= kmax * (1 + BOUND_TOL))
-        # how far the design is from a link's bound: the scale's room, log(kmax/kmin), when it
-        # is free; else the free links' distance from their boxes (in log)
-        if self.set_by is None:
-            slack = np.log(kmax / kmin)
-        else:
-            rest = [
-                np.minimum(np.log(k / a), np.log(b / k))
-                for i, (a, b) in enumerate(zip(lo, hi, strict=True))
-                if i != self.set_by
-            ]
-            slack = np.minimum(np.minimum(rest[0], rest[1]), rest[2])
-        r5 = (0.5 / np.sin(psi / 2) if self.r.swings else self.p.fixed.get(self.r.arm, 0.5)) + 0 * f
-        l, h, rod_cos = self._rod(r5, psi, f)
-        feasible &= np.isfinite(l)
-        size = k * (1 + a2 + a3 + a4) + r5 + np.where(np.isfinite(l), l, 0.0)
-        return {"valid": valid, "feasible": feasible, "f": f, "size": size, "k": k, "rho": rho,
-                "r5": r5, "l": l, "h": h, "rod_cos": rod_cos, "slack": slack}  # fmt: skip
-
-    def _rod(self, r5, psi, f):
-        """The connecting rod (``reduced.rod``); none in a slot drive."""
-        if not self.rod:
-            return 0.0 * r5, np.full(np.shape(r5), np.nan), 0.0 * r5
-        return rod(self.p, self.r.rod, self.r.height, r5, psi / 2, f)
-
-    def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict]:
-        """The design at one point, and its evaluation."""
-        e = self.evaluate(sigma, np.array([psi]), np.array([lam]))
-        one = {k: float(np.ravel(v)[0]) for k, v in e.items() if k != "rho"}
-        one["rho"] = [float(np.ravel(x)[0]) for x in e["rho"]]
-        r = self.r
-        out = {n: one["k"] * x for n, x in zip(r.links, one["rho"], strict=True)}
-        out[r.arm] = one["r5"]
-        if self.rod:
-            out[r.rod] = one["l"]
-            if r.height:
-                out[r.height] = one["h"]
-        return {**out, **self.p.fixed}, one
-
-    # --- the optima ----------------------------------------------------------------------------
+    missed: dict | None = None  # where Newton last ended beyond, or near, a link's bound
 
     def solve(self) -> Reduced:
         if self.empty:
@@ -412,10 +263,6 @@ class FourBar:
             bound = _crossings(e["f"] - cos_bound, e["valid"], pts)
             out += [(y, math.nan, True) for y in _meet(x, bound)]
         return out
-
-    def residuals(self, e) -> list[np.ndarray]:
-        """log(ρ_i/ρ_j) − c for each ratio held."""
-        return [np.log(e["rho"][i] / e["rho"][j]) - c for i, j, c in self.ratios]
 
     def _newton(self, sigma, x0, objective, cos_bound, psi_fixed, root=False):
         """Newton from x0 = (ψ, u) with the ratios (and, for the size, the bound where it
