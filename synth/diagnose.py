@@ -13,12 +13,11 @@ import math
 import time
 from dataclasses import replace
 
-from .errors import SynthError
+from .errors import SynthError, Unreachable
 from .kinematics import analyze
 from .mechanisms import Mechanism
-from .mechanisms._registry import TOL, Unreachable
 from .reduced import MAX_TRANSMISSION
-from .results import Infeasible
+from .results import TOL, Infeasible
 from .search import Searched, Spec, Targets, Variant, ipopt, predict
 
 GRID = 17  # time ratios scanned for the reachable range

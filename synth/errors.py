@@ -55,3 +55,11 @@ class InvalidDesign(SynthError):
     def __init__(self, msg: str, loc: tuple[str, ...], condition: str) -> None:
         super().__init__(msg, loc, "invalid_design")
         self.condition = condition
+
+
+class Unreachable(Exception):
+    """Raised by a type's ``reduced`` solver when the targets and fixed parts admit no design."""
+
+    def __init__(self, code: str, reason: str) -> None:
+        super().__init__(reason)
+        self.code, self.reason = code, reason

@@ -23,7 +23,8 @@ from functools import cache
 
 import numpy as np
 
-from .mechanisms._registry import TOL, Unreachable
+from .errors import Unreachable
+from .results import TOL
 
 MAX_TRANSMISSION, MIN_SIZE = "max_transmission_angle", "min_size"
 STRICT = 1e-7  # the margin kept by a strict condition, in stroke units (as the NLP keeps)

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+TOL = 1e-9  # relative: how exactly a design must meet the targets (verification, fixed parts)
+
 
 @dataclass(frozen=True)
 class Extreme:

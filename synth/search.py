@@ -20,12 +20,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import SynthError
+from .errors import SynthError, Unreachable
 from .formulation import relevant
 from .mechanisms import Mechanism
-from .mechanisms._registry import TOL, Unreachable
 from .reduced import Problem, Reduced, agree
-from .results import Infeasible
+from .results import TOL, Infeasible
 from .solve import built, multistart, starts
 
 STARTS = 8  # cold multistart for a type without a reduced solver

@@ -8,8 +8,7 @@ from __future__ import annotations
 
 from .errors import SynthError
 from .kinematics import analyze
-from .mechanisms._registry import TOL
-from .results import Analysis
+from .results import TOL, Analysis
 
 
 def verify(

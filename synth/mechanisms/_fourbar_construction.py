@@ -33,8 +33,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import Unreachable
 from ..reduced import Problem, rod, unreachable
-from ._registry import Unreachable
 
 BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
 

@@ -15,7 +15,6 @@ from ..errors import InvalidDesign, InvalidParameters, UnknownMechanism
 
 Params = Mapping[str, Any]  # parameter name -> float, DM, SX or MX
 ROUNDING = 1e-12  # relative slack of the non-strict validity conditions
-TOL = 1e-9  # relative: how exactly a design must meet the targets (verification, fixed parts)
 
 
 @dataclass(frozen=True)
@@ -35,14 +34,6 @@ class Parameter:
     @property
     def required(self) -> bool:
         return self.default is None and self.default_rule is None
-
-
-class Unreachable(Exception):
-    """Raised by a type's ``reduced`` solver when the targets and fixed parts admit no design."""
-
-    def __init__(self, code: str, reason: str) -> None:
-        super().__init__(reason)
-        self.code, self.reason = code, reason
 
 
 @dataclass(frozen=True)

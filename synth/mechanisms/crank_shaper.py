@@ -31,6 +31,7 @@ import math
 import casadi as ca
 import numpy as np
 
+from ..errors import Unreachable
 from ..geometry import leg, lever
 from ..reduced import Problem, Reduced, rod
 from ._inverse import check
@@ -39,7 +40,6 @@ from ._registry import (
     Condition,
     Mechanism,
     Parameter,
-    Unreachable,
     absent,
     reach_condition,
     register,

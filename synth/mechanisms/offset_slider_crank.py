@@ -35,7 +35,8 @@ from ..reduced import (
     judge,
     unreachable,
 )
-from ._registry import TOL, Condition, Mechanism, Parameter, register
+from ..results import TOL
+from ._registry import Condition, Mechanism, Parameter, register
 
 
 def position(p, th):

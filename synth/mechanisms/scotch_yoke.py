@@ -20,8 +20,10 @@ import math
 
 import casadi as ca
 
+from ..errors import Unreachable
 from ..reduced import Problem, Reduced, judge
-from ._registry import TOL, Mechanism, Parameter, Unreachable, register
+from ..results import TOL
+from ._registry import Mechanism, Parameter, register
 
 
 def position(p, th):

@@ -27,11 +27,12 @@ import math
 
 import casadi as ca
 
+from ..errors import Unreachable
 from ..geometry import ahead, leg, lever, sqrt, where
 from ..reduced import MIN_SIZE, STRICT, Problem, Reduced
 from ._inverse import check
 from ._inverse import scale as _scale
-from ._registry import Condition, Mechanism, Parameter, Unreachable, register
+from ._registry import Condition, Mechanism, Parameter, register
 
 
 def _lever(p, th):
