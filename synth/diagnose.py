@@ -3,8 +3,8 @@ reaches at the targets, else the time ratios the type reaches with the bound.
 
 Where a variant's reduced solver answered exactly, the numbers come from the same exact
 reduced problem (certified: the best angle is its global optimum; the time-ratio range is the
-hull of the ratios at which it has a design, its ends bisected to 1e-12). Elsewhere they come
-from IPOPT's local optima of the diagnostic objectives (formulation.DIAGNOSTICS).
+hull of the ratios at which it has a design, its ends bisected). Elsewhere they come from
+IPOPT's local optima of the diagnostic objectives (formulation.DIAGNOSTICS).
 """
 
 from __future__ import annotations
@@ -18,11 +18,14 @@ from .kinematics import analyze
 from .mechanisms import Mechanism
 from .reduced import MAX_TRANSMISSION
 from .results import TOL, Infeasible
-from .search import Searched, Spec, Targets, Variant, ipopt, predict
+from .search import Searched, Spec, Targets, Variant, ipopt, predict, scaled
 
 GRID = 17  # time ratios scanned for the reachable range
 TOP = math.pi * (1 - 1e-6)  # β of the largest time ratio tried, about 2e6
 SCAN_TOL = 1e-6  # relative: a design at the scan's time ratio
+# β of the range's ends: the one the target lies beyond tighter than the verification (it tells
+# how far to move), the other to the six digits a message prints
+NEAR_END, FAR_END = 1e-10, 1e-6
 
 
 def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
@@ -78,28 +81,30 @@ def _angles(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
     if v.exact:
         found = _reduced(m, v, t, v.problem.beta)
         if found is not None:
-            return found
+            return list(found)
     return [mu for _, mu in _optima(m, v, spec, t, "max_transmission_angle", 1.0)]
 
 
 def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL):
     """The predicted angles of the exact reduced optima at β (max transmission, no bound)
-    that meet the time ratio and stroke to ``tol``, or None where the reduced solver is not
-    exact there."""
+    that meet the time ratio and stroke to ``tol``, one by one (each costs a prediction), or
+    None where the reduced solver is not exact there."""
     problem = replace(v.problem, beta=beta, cos_bound=1.0, objective=MAX_TRANSMISSION)
     try:
         answer = m.reduced(problem)
     except Unreachable:
-        return []
+        return iter(())
     if answer is None or not answer.exact:
         return None
     tr = (math.pi + beta) / (math.pi - beta)
-    out = []
-    for d in answer.designs:
-        got = predict(m, {**{k: x * t.stroke for k, x in d.items()}, **dict.fromkeys(v.parts, 0.0)})
-        if got and abs(got[0] - tr) <= tol * tr and abs(got[1] - t.stroke) <= tol * t.stroke:
-            out.append(got[2])
-    return out
+
+    def angles():
+        for d in answer.designs:
+            got = predict(m, {**scaled(d, t.stroke), **dict.fromkeys(v.parts, 0.0)})
+            if got and abs(got[0] - tr) <= tol * tr and abs(got[1] - t.stroke) <= tol * t.stroke:
+                yield got[2]
+
+    return angles()
 
 
 def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
@@ -117,7 +122,7 @@ def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
         # the closed forms lose digits where the range ends in a degenerate design (a time
         # ratio → 3 for the slider-crank, → ∞ for the slotted levers): 1e-6 tells the ends
         angles = _reduced(m, v, t, beta, SCAN_TOL)
-        return bool(angles) and max(angles) >= bound
+        return angles is not None and any(a >= bound for a in angles)
 
     betas = [TOP * k / (GRID - 1) for k in range(GRID)]
     flags = [ok(b) for b in betas]
@@ -125,10 +130,10 @@ def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
         return []
     i = flags.index(True)
     j = len(flags) - 1 - flags[::-1].index(True)
-    # the end the target lies beyond to 1e-12, the other to 1e-8 (a bisection step each bit)
-    below = t.beta < betas[i]
-    lo = betas[0] if i == 0 else _edge(ok, betas[i - 1], betas[i], 1e-12 if below else 1e-8)
-    hi = betas[-1] if j == GRID - 1 else _edge(ok, betas[j + 1], betas[j], 1e-8 if below else 1e-12)
+    # the end the target lies beyond to NEAR_END, the other to FAR_END (a bisection step a bit)
+    near, far = (NEAR_END, FAR_END) if t.beta < betas[i] else (FAR_END, NEAR_END)
+    lo = betas[0] if i == 0 else _edge(ok, betas[i - 1], betas[i], near)
+    hi = betas[-1] if j == GRID - 1 else _edge(ok, betas[j + 1], betas[j], far)
     return [(math.pi + b) / (math.pi - b) for b in (lo, hi)]
 
 

@@ -144,8 +144,9 @@ class Mechanism:
 
         A non-strict condition holds to rounding (−1e-12 × the largest length it involves): a
         design built exactly on a limit in floating point is on it, not past it."""
+        variant = self.variant(p)
         for c in self.conditions:
-            if not c.applies(self.variant(p)):
+            if not c.applies(variant):
                 continue
             tol = ROUNDING * max(abs(float(p[k])) for k in c.params)
             m = min(float(t) for t in c.margin(p))
