@@ -34,6 +34,7 @@ from scipy.optimize import Bounds, NonlinearConstraint, differential_evolution, 
 
 import synth
 from synth import search, synthesis
+from synth.diagnose import forget_ranges
 from synth.formulation import Formulation, relevant
 from synth.mechanisms import get
 from synth.solve import MAX_ITER, Built
@@ -76,6 +77,7 @@ def patched(owner: Any, **values: Any) -> Iterator[None]:
 
 
 def _synth(target: dict[str, Any], accelerators: bool) -> Outcome:
+    forget_ranges()  # each refusal pays its whole scan: no range kept from before
     r = synth.synthesize(**target, accelerators=accelerators)
     return Outcome(
         [dict(c.params) for c in r.candidates],

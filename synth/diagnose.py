@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
 
 from .errors import SynthError, Unreachable
 from .kinematics import analyze
@@ -26,6 +27,7 @@ SCAN_TOL = 1e-6  # relative: a design at the scan's time ratio
 # β of the range's ends: the one the target lies beyond tighter than the verification (it tells
 # how far to move), the other to the six digits a message prints
 NEAR_END, FAR_END = 1e-10, 1e-6
+RANGES = 256  # reachable ranges kept per process (least recently used dropped)
 
 
 def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
@@ -116,36 +118,75 @@ def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
             for tr, mu in _optima(m, v, spec, t, objective)
             if mu >= t.bound_deg - 1e-9
         ]
-    bound = t.bound_deg - TOL * max(t.bound_deg, 1.0)
+    scan = _Scan.of(m, v, t)
+    ends = _ends(scan)
+    if ends is None:
+        return []
+    # the end the target lies beyond to NEAR_END, the other to FAR_END
+    below = t.beta < ends[0][1]
+    for k, tol in enumerate((NEAR_END, FAR_END) if below else (FAR_END, NEAR_END)):
+        ends[k] = _edge(scan.ok, *ends[k], tol)
+    return [(math.pi + inside) / (math.pi - inside) for _, inside in ends]
 
-    def ok(beta: float) -> bool:
-        # the closed forms lose digits where the range ends in a degenerate design (a time
-        # ratio → 3 for the slider-crank, → ∞ for the slotted levers): 1e-6 tells the ends
-        angles = _reduced(m, v, t, beta, SCAN_TOL)
+
+@dataclass(frozen=True)
+class _Scan:
+    """What a reachable range depends on (``key``: not the time ratio), and how to test a β."""
+
+    key: tuple
+    m: Mechanism = field(compare=False)
+    v: Variant = field(compare=False)
+    t: Targets = field(compare=False)
+
+    @classmethod
+    def of(cls, m: Mechanism, v: Variant, t: Targets) -> _Scan:
+        p = v.problem
+        key = (m.type, v.parts, p.variant, tuple(sorted(p.fixed.items())),
+               tuple(sorted(p.bounds.items())), p.explicit,
+               tuple(tuple(sorted(h.items())) for h in p.hints), t.stroke, t.bound_deg)  # fmt: skip
+        return cls(key, m, v, t)
+
+    def ok(self, beta: float) -> bool:
+        """Whether a design at β meets the bound. The closed forms lose digits where the range
+        ends in a degenerate design (a time ratio → 3 for the slider-crank, → ∞ for the
+        slotted levers): SCAN_TOL tells the ends."""
+        bound = self.t.bound_deg - TOL * max(self.t.bound_deg, 1.0)
+        angles = _reduced(self.m, self.v, self.t, beta, SCAN_TOL)
         return angles is not None and any(a >= bound for a in angles)
 
+
+@lru_cache(maxsize=RANGES)
+def _ends(scan: _Scan) -> list[tuple[float, float]] | None:
+    """The brackets (β outside, β inside) of the reachable range's two ends on a grid of β,
+    narrowed in place as queries need; None if no β has a design. Kept per process: a
+    designer sweeping the time ratio past an end, or a tool checking many targets against the
+    same parts, pays the grid once and each end's bisection once."""
     betas = [TOP * k / (GRID - 1) for k in range(GRID)]
-    flags = [ok(b) for b in betas]
+    flags = [scan.ok(b) for b in betas]
     if not any(flags):
-        return []
+        return None
     i = flags.index(True)
     j = len(flags) - 1 - flags[::-1].index(True)
-    # the end the target lies beyond to NEAR_END, the other to FAR_END (a bisection step a bit)
-    near, far = (NEAR_END, FAR_END) if t.beta < betas[i] else (FAR_END, NEAR_END)
-    lo = betas[0] if i == 0 else _edge(ok, betas[i - 1], betas[i], near)
-    hi = betas[-1] if j == GRID - 1 else _edge(ok, betas[j + 1], betas[j], far)
-    return [(math.pi + b) / (math.pi - b) for b in (lo, hi)]
+    low = (betas[i], betas[i]) if i == 0 else (betas[i - 1], betas[i])
+    high = (betas[j], betas[j]) if j == GRID - 1 else (betas[j + 1], betas[j])
+    return [low, high]
 
 
-def _edge(ok, out: float, inside: float, tol: float) -> float:
-    """Bisect between a β without a design and one with, to ``tol``; the side with one."""
+def forget_ranges() -> None:
+    """Drop the reachable ranges kept (a benchmark timing each refusal's whole cost)."""
+    _ends.cache_clear()
+
+
+def _edge(ok, out: float, inside: float, tol: float) -> tuple[float, float]:
+    """Bisect between a β without a design and one with to ``tol`` (where it is not already):
+    the narrowed (outside, inside)."""
     while abs(inside - out) > tol * max(1.0, abs(inside)):
         mid = 0.5 * (out + inside)
         if ok(mid):
             inside = mid
         else:
             out = mid
-    return inside
+    return out, inside
 
 
 def _optima(m: Mechanism, v: Variant, spec: Spec, t: Targets, objective: str, cos_bound=None):

@@ -106,6 +106,29 @@ def test_time_ratio_beyond_reach_says_how_far_the_type_goes():
     assert below.candidates
 
 
+def test_a_range_end_is_exact_and_kept_ranges_answer_alike():
+    """The end a refused time ratio lies beyond is bisected to 1e-10: designs 1e-8 inside it
+    pass the brute-force check, and 1e-8 outside it is refused with the same end. The range is
+    kept per process; the order of the questions changes no number."""
+    from synth.diagnose import forget_ranges
+
+    def reach(tr):
+        (why,) = synth.synthesize(tr, ref.DRAG_LINK_STROKE, 0.0, mechanisms=[PROJECT]).infeasible
+        assert why.code == "TIME_RATIO_UNREACHABLE"
+        return why.time_ratio_range
+
+    forget_ranges()
+    low, high = reach(1.2)[0], reach(10.0)[1]
+    forget_ranges()
+    assert (reach(10.0)[1], reach(1.2)[0]) == (high, low)
+    assert 1.4298 < low < 1.4299 and 3.5381 < high < 3.5382
+    inside = synth.synthesize(low * (1 + 1e-8), ref.DRAG_LINK_STROKE, 0.0, mechanisms=[PROJECT])
+    assert inside.candidates
+    for c in inside.candidates:
+        assert_meets(c, low * (1 + 1e-8), ref.DRAG_LINK_STROKE, 0.0)
+    assert reach(low * (1 - 1e-8))[0] == low
+
+
 def test_transmission_bound_above_any_design():
     r = synth.synthesize(ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 50.0, mechanisms=[PROJECT])
     (why,) = r.infeasible
