@@ -14,7 +14,9 @@ Constraints (all smooth):
   better conditioned near the Grashof limits): (β² − β*²)/(2β*) = 0 accepts either sign of the
   closed form's β (the circuit's orientation) and reads ±(β − β*) near a root;
 - −cos μ_bound ≤ c_k ≤ cos μ_bound for every transmission cosine term;
-- every validity margin term ≥ 0 (≥ ``STRICT`` for strict conditions).
+- every validity margin term ≥ 0 (≥ ``STRICT`` for strict conditions), and the closed forms'
+  own domain (``one_way``: a slider that a rod drives from a swinging pin moves one way over
+  each swing) ≥ ``ONE_WAY``.
 
 A row that does not depend on the variables (fixed parts that set the stroke, the scotch yoke's
 β ≡ 0) is left out of the NLP: a zero Jacobian row makes the equality system rank-deficient.
@@ -36,10 +38,10 @@ import casadi as ca
 import numpy as np
 
 from .mechanisms import Mechanism, get
+from .reduced import ONE_WAY, STRICT
 
 OBJECTIVES = ("max_transmission_angle", "min_size")
 DIAGNOSTICS = ("max_time_ratio", "min_time_ratio")
-STRICT = 1e-7  # margin kept by strict conditions, in stroke units
 TIE = 1e-7  # weight of size against |cos μ| (costs < 1e-5° of transmission angle)
 
 
@@ -107,6 +109,10 @@ def formulate(
         g += [c - cos_b, -c - cos_b]
         lb += [-ca.inf, -ca.inf]
         ub += [0.0, 0.0]
+    for term in facts.get("one_way", ()):  # the closed forms' own domain
+        g.append(term)
+        lb.append(ONE_WAY)
+        ub.append(ca.inf)
     for cond in m.conditions:
         if cond.applies(variant):
             for term in cond.margin(p):

@@ -27,7 +27,11 @@ from .errors import Unreachable
 from .results import TOL
 
 MAX_TRANSMISSION, MIN_SIZE = "max_transmission_angle", "min_size"
-STRICT = 1e-7  # the margin kept by a strict condition, in stroke units (as the NLP keeps)
+STRICT = 1e-7  # the margin kept by a strict condition, in stroke units (the NLP's too)
+# the cos margin kept from the one-way limit (facts' "one_way"): at the limit the slider dwells
+# at its dead centre, a multiple root that the analysis locates only to ~1e-6 in the time
+# ratio; the error falls as 1/margin (worst seen: 4e-9 at 1e-6, 2e-12 at 1e-4 over 180 designs)
+ONE_WAY = 1e-4
 
 
 @dataclass(frozen=True)
@@ -222,31 +226,45 @@ def rod(p: Problem, name: str, height: str | None, arm, half, cos_other):
     l is NaN where the bounds allow no rod.
 
     A pin that swings ±``half`` about the path's normal (``height`` given) transmits worst at
-    mid-swing or at the swing's ends, where its offset from the path is h − arm or
-    h − arm cos(half); h midway between them makes the worst offset w = arm (1 − cos half)/2
-    least. A pin that turns fully about a centre on the path (``height`` None) has w = arm.
-    With max transmission a rod that limits (w > ``cos_other`` × its upper bound, the other
-    joints' worst cos) sits at its upper bound; one that does not takes the shortest length
-    that transmits no worse (ties go to the smaller design). With min size it is the shortest
-    within the bound, w / cos_bound.
+    mid-swing or at the swing's ends, where its offset from the path is g1 = |h − arm| or
+    g2 = |h − arm x|, x = cos(half). The slider moves one way over the swing (so the swing's
+    ends are its dead centres, as the closed forms take them) exactly when g2 ≤ x l: at the
+    ends the rod may not lean further from the path's normal than the pin's own turn (kept
+    ``ONE_WAY`` from it). The shortest rod with worst cos ≤ c is then max(g1/c, g2/m),
+    m = min(c, x − ONE_WAY), least at h = arm (m + c x)/(m + c) (the midpoint when x > c).
+    With max transmission, c is ``cos_other``, the other joints' worst cos: a rod that cannot
+    transmit as well within its upper bound sits there, h at the midpoint (the least worst
+    offset) as far as the one way allows; else the shortest rod that transmits no worse (ties
+    go to the smaller design).
+    With min size c is cos(bound). A pin that turns fully about a centre on the path
+    (``height`` None) needs l > arm, and transmits worst at w = arm.
     """
-    nan = np.full(np.shape(arm), np.nan)
-    if height is not None:
-        h = p.fixed.get(height)
-        if h is None:
-            h = np.clip(arm * (1 + np.cos(half)) / 2, *p.bounds[height])
-        h = h + 0 * arm
-        w = np.maximum(np.abs(h - arm), np.abs(h - arm * np.cos(half)))
-        strict = 0.0
-    else:
-        h, w = nan, np.asarray(arm, dtype=float)
-        strict = STRICT  # a fully turning pin's rod must be strictly longer than its arm
     lo, hi = p.box(name)
-    if p.objective == MIN_SIZE:
-        length = np.maximum(lo, w / p.cos_bound)
-    else:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            length = np.where(w <= cos_other * hi, np.maximum(lo, w / cos_other), hi)
-    length = np.maximum(length, w + strict) + 0 * w
-    length = np.where(length <= hi * (1 + 1e-12), np.minimum(length, hi), np.nan)
-    return length, h, w / length
+    c = p.cos_bound if p.objective == MIN_SIZE else cos_other
+    c = np.asarray(c, dtype=float) + 0 * np.asarray(arm, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if height is None:
+            h, w = np.full(np.shape(c), np.nan), np.asarray(arm, dtype=float) + 0 * c
+            short = np.maximum(np.maximum(lo, w / c), w + STRICT)
+            limited = hi + 0 * c
+        else:
+            x = np.cos(half)
+            m = np.minimum(c, x - ONE_WAY)
+            fixed, box = p.fixed.get(height), p.bounds.get(height)
+
+            def place(h):  # the caller's placement, or one within its bounds
+                return fixed + 0 * h if fixed is not None else np.clip(h, *box)
+
+            h = place(arm * (m + c * x) / (m + c))
+            g1, g2 = np.abs(h - arm), np.abs(h - arm * x)
+            short = np.maximum(lo, np.maximum(g1 / c, g2 / m))  # NaN where c = 0: no rod
+            # at the upper bound: the midpoint, moved as little as the one way needs
+            lean = (x - ONE_WAY) * hi  # the most the one way allows at the upper bound
+            mid = place(np.clip(arm * (1 + x) / 2, arm * x - lean, arm * x + lean))
+            limited = np.where(np.abs(mid - arm * x) <= lean * (1 + 1e-12), hi, np.nan)
+            if p.objective != MIN_SIZE:
+                h = np.where(short <= hi, h, mid)
+            w = np.maximum(np.abs(h - arm), np.abs(h - arm * x))
+        length = short if p.objective == MIN_SIZE else np.where(short <= hi, short, limited)
+        length = np.where(length <= hi * (1 + 1e-12), np.minimum(length, hi), np.nan)
+        return length, h, w / length

@@ -23,6 +23,7 @@ import numpy as np
 from .errors import SynthError, Unreachable
 from .formulation import relevant
 from .mechanisms import Mechanism
+from .mechanisms._registry import ROUNDING
 from .reduced import Problem, Reduced, agree
 from .results import TOL, Infeasible
 from .solve import built, multistart, starts
@@ -173,6 +174,8 @@ def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float
     except SynthError:
         return None
     f = m.facts(p)
+    if any(float(t) < -ROUNDING for t in f.get("one_way", ())):
+        return None  # the slider turns back within a swing: the closed forms do not hold
     beta = abs(float(f["beta"]))
     cos = [abs(float(c)) for c in f["transmission_cos"]]
     angle = math.degrees(math.acos(min(1.0, max(cos)))) if cos else 90.0

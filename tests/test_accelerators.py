@@ -5,6 +5,8 @@ one to 1e-9 wherever the generic path finds it.
 The targets come from random valid designs (tests/designs.py, analysed by the independent
 brute-force simulator): their time ratio and stroke, a bound somewhere below their
 transmission angle, either objective, nothing fixed or one part fixed at the design's value.
+A second set bounds a type's optional rod away from zero, so that the rod variant must
+answer alone (with everything free the slot drive wins and would hide it).
 """
 
 import numpy as np
@@ -29,9 +31,14 @@ def best(result, objective):
     return c.min_transmission_angle_deg if objective == "max_transmission_angle" else -c.size
 
 
-def targets(mtype: str):
-    rng = np.random.default_rng([12, QUICK_RETURN.index(mtype)])
-    for p in random_designs(mtype, N, seed=12):
+def optional(mtype: str) -> str | None:
+    """The part whose zero selects a variant (a slot drive), if the type has one."""
+    return next((q.name for q in synth.mechanisms.get(mtype).parameters if q.zero_means), None)
+
+
+def targets(mtype: str, n: int = N, seed: int = 12):
+    rng = np.random.default_rng([seed, QUICK_RETURN.index(mtype)])
+    for p in random_designs(mtype, n, seed=seed):
         full = bruteforce.complete(mtype, p)
         b = bruteforce.simulate(mtype, full)
         bound = b["min_transmission_deg"] * rng.uniform(0.0, 0.95)
@@ -43,11 +50,28 @@ def targets(mtype: str):
         yield b["time_ratio"], b["stroke"], bound, objective, fixed
 
 
+ROD_TYPES = [t for t in QUICK_RETURN if optional(t)]
+
+
 @pytest.mark.parametrize("mtype", QUICK_RETURN)
 def test_reduced_solver_matches_the_generic_path(mtype):
+    compare(mtype, targets(mtype), N)
+
+
+@pytest.mark.parametrize("mtype", ROD_TYPES)
+def test_the_rod_variant_alone_matches_the_generic_path(mtype):
+    rod, n = optional(mtype), N // 2
+    cases = []
+    for tr, stroke, bound, objective, fixed in targets(mtype, n, seed=13):
+        fixed.pop(rod, None)
+        cases.append((tr, stroke, bound, objective, fixed, {rod: (0.05 * stroke, 5 * stroke)}))
+    compare(mtype, cases, n)
+
+
+def compare(mtype, cases, n):
     worse, differ, refused = [], [], []
-    for tr, stroke, bound, objective, fixed in targets(mtype):
-        spec = [{"type": mtype, "fixed": fixed}]
+    for tr, stroke, bound, objective, fixed, *bounds in cases:
+        spec = [{"type": mtype, "fixed": fixed, "bounds": bounds[0] if bounds else {}}]
         args = (tr, stroke, bound, spec, objective)
         ours = best(synth.synthesize(*args, max_candidates=1), objective)
         generic = best(synth.synthesize(*args, max_candidates=1, accelerators=False), objective)
@@ -64,4 +88,4 @@ def test_reduced_solver_matches_the_generic_path(mtype):
     assert not refused, f"refused where the generic path has a design: {refused[:3]}"
     assert not worse, f"{len(worse)} worse than the generic path, e.g. {worse[:3]}"
     # the generic path is a local search: it may miss, but only now and then
-    assert len(differ) <= N // 10, f"{len(differ)} better than the generic path: {differ[:3]}"
+    assert len(differ) <= n // 10, f"{len(differ)} better than the generic path: {differ[:3]}"

@@ -129,6 +129,22 @@ def test_a_range_end_is_exact_and_kept_ranges_answer_alike():
     assert reach(low * (1 - 1e-8))[0] == low
 
 
+@pytest.mark.parametrize(
+    ("mtype", "rod", "tr", "bound"),
+    [("crank_rocker_slider", "connecting_rod", 1.6, 20.0), ("crank_shaper", "ram_link", 2.5, 10.0)],
+)
+def test_a_rod_from_a_swinging_arm_keeps_the_slider_moving_one_way(mtype, rod, tr, bound):
+    """With the slot drive bounded out, the smallest design with a rod was one whose rod was
+    so short that the slider turned back within each swing (four reversals): it failed the
+    analysis and the request was refused, though designs exist."""
+    spec = [{"type": mtype, "bounds": {rod: (0.05, 5.0)}}]
+    r = synth.synthesize(tr, 1.0, bound, mechanisms=spec, objective="min_size")
+    assert r.candidates, r.infeasible
+    for c in r.candidates:
+        assert c.params[rod] >= 0.05
+        assert_meets(c, tr, 1.0, bound)
+
+
 def test_transmission_bound_above_any_design():
     r = synth.synthesize(ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 50.0, mechanisms=[PROJECT])
     (why,) = r.infeasible

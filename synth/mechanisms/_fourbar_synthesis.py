@@ -134,15 +134,18 @@ class FourBar(Construction):
         return float(np.min(np.where(ok, e[key], np.inf)))
 
     def smallest(self, cos_bound: float, start: dict | None = None) -> Reduced:
-        """The smallest design with the coupler's worst cos ≤ ``cos_bound``: on σ = +1, and
-        on σ = −1 only where σ = +1 has none (it was never smaller in a survey of 300 random
-        targets). None at all when the best transmission misses the bound."""
+        """The smallest design with the coupler's worst cos ≤ ``cos_bound``, the better of
+        the two sheets; with nothing held and no rod, σ = −1 only where σ = +1 has none (it
+        was never smaller in a survey of 300 random targets; a rod or a fixed link can make
+        it smaller). None at all when the best transmission misses the bound."""
         best: list[dict] = []
         if start is None:  # does any coupler transmit well enough?
             found, exact = self.coupler_optimum()
             if exact and found and found[1]["f"] > cos_bound * (1 + 1e-12):
                 return Reduced([])
             best = [found[0]] if found else []
+        both = self.rod or bool(self.ratios)
+        sheets: list[tuple[list, bool]] = []
         for sigma in (1, -1):
             self.missed = None
             found, exact = self.optimum(sigma, "size", cos_bound)
@@ -151,8 +154,13 @@ class FourBar(Construction):
                 # can be closer than the grid tells apart, so this is a start for IPOPT only
                 held, _ = self.bounded(self.missed, "size", cos_bound)
                 found = [held] if held else found
-            if found:
-                return Reduced([d for d, _ in found], exact)
+            sheets.append((found, exact))
+            if found and not both:
+                break
+        found = sorted((de for f, _ in sheets for de in f), key=lambda de: de[1]["size"])
+        if found:
+            exact = all(exact for f, exact in sheets if f)  # then the best alone is the answer
+            return Reduced([d for d, _ in found[: 1 if exact else None]], exact)
         return Reduced([start] if start else best, exact=False)
 
     def optimum(
@@ -232,9 +240,10 @@ class FourBar(Construction):
         self, sigma, psi, u, objective, cos_bound, limits=True
     ) -> list[tuple[np.ndarray, float, bool]]:
         """Grid points to start Newton from: (point, the objective there, whether it is only
-        a possible root). The best point (no ratio held); the best crossing of one ratio's
-        curve, and, for the size, every place the curve crosses the bound (the bound may bind
-        at any of them); with two ratios, or one and ψ held, every crossing of both."""
+        a possible root). The best point (no ratio held); the crossings of one ratio's curve
+        that are best among their neighbours along it (each may be a local optimum), and, for
+        the size, every place the curve crosses the bound (the bound may bind at any of them);
+        with two ratios, or one and ψ held, every crossing of both."""
         e = self.evaluate(sigma, psi, 1 + np.exp(u))
         value = e["f"] if objective == "f" else e["size"]
         ok = e["feasible" if limits else "valid"] & ((objective == "f") | (e["f"] <= cos_bound))
@@ -255,10 +264,8 @@ class FourBar(Construction):
         ev = self.evaluate(sigma, x[:, 0], 1 + np.exp(x[:, 1]))
         v = ev["f"] if objective == "f" else ev["size"]
         good = ev["feasible"] & ((objective == "f") | (ev["f"] <= cos_bound))
-        out = []
-        if np.any(good):
-            k = int(np.argmin(np.where(good, v, np.inf)))
-            out.append((x[k], float(v[k]), False))
+        cell = np.array([np.ptp(psi) / (GRID - 1), STEP])
+        out = [(x[k], float(v[k]), False) for k in _least(x, v, good, cell)]
         if objective == "size":
             bound = _crossings(e["f"] - cos_bound, e["valid"], pts)
             out += [(y, math.nan, True) for y in _meet(x, bound)]
@@ -340,3 +347,11 @@ def _meet(a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
     gap = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=-1)
     nearest = np.argmin(gap, axis=0)
     return [a[n] for n in np.unique(nearest[gap[nearest, np.arange(len(b))] <= 2 * STEP])]
+
+
+def _least(x: np.ndarray, v: np.ndarray, good: np.ndarray, cell: np.ndarray) -> np.ndarray:
+    """The good points no worse than every good point within two grid cells: the local
+    minima of v along a curve sampled by its crossings."""
+    d = np.max(np.abs(x[:, None, :] - x[None, :, :]) / np.maximum(cell, 1e-300), axis=-1)
+    worse = np.where(good[None, :] & (d <= 2), v[None, :], np.inf)
+    return np.flatnonzero(good & (v <= worse.min(axis=1)))

@@ -80,10 +80,12 @@ class Mechanism:
     defaults: Callable[[Params], dict[str, Any]] = lambda p: {}  # derived defaults (polymorphic)
     # the four-bar's (ground, crank, coupler, rocker), for its Grashof class
     fourbar: Callable[[Params], tuple[Any, Any, Any, Any]] | None = None
-    # closed forms from mechanisms.md: "beta", the crank angle by which the strokes differ from
+    # the closed forms: "beta", the crank angle by which the strokes differ from
     # π (the slow one takes π + |β|, the quick one π − |β|: TR = (π + |β|)/(π − |β|); the sign
     # follows the circuit's orientation), "stroke" and "transmission_cos" (the signed cos μ
-    # terms whose largest |·| is the worst transmission; empty for slot drives)
+    # terms whose largest |·| is the worst transmission; empty for slot drives) and, where a
+    # rod follows a swinging pin, "one_way" (cos margins ≥ 0 for the slider to move one way
+    # over each swing: the closed forms hold only then; a design that breaks them still runs)
     facts: Callable[[Params], dict[str, Any]] | None = None
     # the exact reduced solver (an accelerator, synth.reduced): Problem -> Reduced, None where
     # it cannot take the problem (IPOPT on the formulation then solves it); raises Unreachable
@@ -173,6 +175,15 @@ def _check_value(mtype: str, q: Parameter, value: Any) -> float:
             f"{mtype}.{q.name} is a length and must be {allowed}, got {x:g}", (q.name,)
         )
     return x
+
+
+def one_way(link, cos_half, end_offset) -> tuple:
+    """Margins (≥ 0) for a slider driven through ``link`` from a pin that swings ±half about
+    the path's normal to move one way over each swing, so that the swing's ends are its dead
+    centres (the closed forms' time ratio and stroke hold): at the ends the link leans from
+    the path no further than the pin has turned, |cos μ_end| = |end_offset|/link ≤ cos(half).
+    With the reach at mid-swing (``reach_condition``) that holds over the whole swing."""
+    return cos_half - end_offset / link, cos_half + end_offset / link
 
 
 def reach_condition(

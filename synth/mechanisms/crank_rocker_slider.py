@@ -26,7 +26,8 @@ the swing when r6 > 0. Default h = r5 cos(Δψ/2), the path through C's extreme 
 Transmission: coupler → rocker cos μ = (r3² + r4² − |AO4|²)/(2 r3 r4), extremes with the crank on
 the ground line; rod → slider cos μ = (h − r5 cos δ)/r6. Closed forms (mechanisms.md): with φe,
 φf the angles of O2D to the ground line at the toggles, TR = (π + |φf − φe|)/(π − |φf − φe|);
-stroke = 2 r5 sin(Δψ/2) when s is monotonic over the swing.
+stroke = 2 r5 sin(Δψ/2) when s is monotonic over the swing: r6 cos(Δψ/2) ≥ |h − r5 cos(Δψ/2)|
+(``one_way``).
 """
 
 from __future__ import annotations
@@ -38,7 +39,7 @@ import casadi as ca
 from ..geometry import cos_law, leg, triangle_angle
 from ._fourbar import grashof_conditions, output_pin
 from ._fourbar_synthesis import FourBar, Roles
-from ._registry import Mechanism, Parameter, absent, reach_condition, register
+from ._registry import Mechanism, Parameter, absent, one_way, reach_condition, register
 
 LINKS = ("ground", "crank", "coupler", "rocker")
 
@@ -105,12 +106,14 @@ def facts(p):
     # the folded toggle's O2D is shorter, so its angle to the ground line is the larger one
     dphi = triangle_angle(r1, r3 - r2, r4) - triangle_angle(r1, r3 + r2, r4)
     ge, gf = _swing(p)
-    rod = () if absent(r6) else tuple(t / r6 for t in _offsets(p))
+    offsets = _offsets(p)
+    rod = () if absent(r6) else tuple(t / r6 for t in offsets)
     return {
         "beta": dphi,
         "stroke": 2 * r5 * ca.sin((ge - gf) / 2),
         # coupler–rocker with the crank on the ground line; rod at mid-swing and swing ends
         "transmission_cos": (cos_law(r3, r4, r1 - r2), cos_law(r3, r4, r1 + r2), *rod),
+        "one_way": () if absent(r6) else one_way(r6, ca.cos((ge - gf) / 2), offsets[1]),
     }
 
 
