@@ -164,16 +164,22 @@ def _within_default_bounds(c, stroke=1.0):
 
 def _best_angle(mtype, tr, r, effort):
     mine = max(r.candidates, key=lambda c: c.min_transmission_angle_deg)
+    angle = mine.min_transmission_angle_deg
+    return _angle(mtype, tr, angle, effort, f"best {angle!r}° ({mine.params})")
+
+
+def _angle(mtype, tr, claim, effort, what):
+    """The global search's best angle at TR ``tr`` against synth's ``claim`` (``what``)."""
     g = gs.search(mtype, "max_transmission_angle", tr, 0.0, effort)
-    assert g.value is not None, f"the global search found no design; synth found {mine.params}"
-    beat = g.value - mine.min_transmission_angle_deg
+    assert g.value is not None, f"the global search finds no design at TR {tr}; synth: {what}"
+    beat = g.value - claim
     assert beat <= ANGLE_TOL, (
-        f"synth's best {mine.min_transmission_angle_deg!r}° ({mine.params}) is beaten by "
-        f"{g.value!r}° ({g.params}, simulated {g.simulated['min_transmission_deg']!r}°)"
+        f"synth's {what} is beaten by {g.value!r}° ({g.params}, simulated "
+        f"{g.simulated['min_transmission_deg']!r}°)"
     )
     assert beat >= -REACH_DEG, (
-        f"the global search reaches only {g.value!r}° ({g.params}), synth "
-        f"{mine.min_transmission_angle_deg!r}° ({mine.params}): too weak to referee"
+        f"the global search reaches only {g.value!r}° ({g.params}), synth's {what}: one of "
+        f"them is wrong (a weak search, or an angle claimed that no design reaches)"
     )
     return {"beat": beat, "global": g}
 
@@ -196,18 +202,7 @@ def _smallest(mtype, tr, bound, r, effort):
 def _claimed_angle(mtype, tr, why, effort):
     claim = why.best_transmission_angle_deg
     assert claim is not None and math.isfinite(claim), f"no number in the refusal: {why}"
-    g = gs.search(mtype, "max_transmission_angle", tr, 0.0, effort)
-    assert g.value is not None, f"the global search finds no design at TR {tr}; synth: {claim}°"
-    beat = g.value - claim
-    assert beat <= ANGLE_TOL, (
-        f"synth claims at most {claim!r}°; {g.params} reaches {g.value!r}° "
-        f"(simulated {g.simulated['min_transmission_deg']!r}°)"
-    )
-    assert beat >= -REACH_DEG, (
-        f"synth claims {claim!r}° is reachable; the global search finds at most {g.value!r}° "
-        f"({g.params})"
-    )
-    return {"beat": beat, "global": g}
+    return _angle(mtype, tr, claim, effort, f"refusal's best reachable {claim!r}°")
 
 
 def _claimed_range(mtype, tr, bound, why, effort):
