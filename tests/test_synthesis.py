@@ -145,6 +145,28 @@ def test_a_rod_from_a_swinging_arm_keeps_the_slider_moving_one_way(mtype, rod, t
         assert_meets(c, tr, 1.0, bound)
 
 
+@pytest.mark.parametrize(("ground", "smallest"), [(2.0, 6.1086), (4.0, 10.8649)])
+def test_the_smallest_four_bar_with_a_fixed_link_is_searched_on_both_families(ground, smallest):
+    """With the ground fixed the other family of the dead-centre construction holds the
+    smallest design (6.1086 against 6.9075, 10.8649 against 13.1654, both also found by the
+    generic multistart); only one family was searched."""
+    fixed = {"ground": ground, "connecting_rod": 0.0}
+    r = synth.synthesize(1.3, 1.0, 20.0, [{"type": "crank_rocker_slider", "fixed": fixed}],
+                         objective="min_size")  # fmt: skip
+    (c,) = r.candidates
+    assert c.size == pytest.approx(smallest, abs=1e-4)
+    assert_meets(c, 1.3, 1.0, 20.0)
+
+
+@pytest.mark.parametrize("tr", [1 + 5e-9, 1 + 2e-8, 1 + 1e-6, 1 + 1e-4])
+def test_offset_slider_crank_near_time_ratio_one(tr):
+    """The smallest design near TR 1 lost its digits (c² − y² with y → c → 1): a division by
+    zero (HTTP 500) just above TR 1 + 1e-9, refusals up to 1 + 1e-5."""
+    r = synth.synthesize(tr, 1.0, 10.0, [{"type": "offset_slider_crank"}], objective="min_size")
+    (c,) = r.candidates
+    assert_meets(c, tr, 1.0, 10.0)
+
+
 def test_transmission_bound_above_any_design():
     r = synth.synthesize(ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 50.0, mechanisms=[PROJECT])
     (why,) = r.infeasible

@@ -135,16 +135,17 @@ class FourBar(Construction):
 
     def smallest(self, cos_bound: float, start: dict | None = None) -> Reduced:
         """The smallest design with the coupler's worst cos ≤ ``cos_bound``, the better of
-        the two sheets; with nothing held and no rod, σ = −1 only where σ = +1 has none (it
-        was never smaller in a survey of 300 random targets; a rod or a fixed link can make
-        it smaller). None at all when the best transmission misses the bound."""
+        the two sheets; with nothing fixed, no bound given and no rod, σ = −1 only where
+        σ = +1 has none (it was never smaller in a survey of 300 random targets; a rod or a
+        fixed link can make it smaller). None at all when the best transmission misses the
+        bound."""
         best: list[dict] = []
         if start is None:  # does any coupler transmit well enough?
             found, exact = self.coupler_optimum()
             if exact and found and found[1]["f"] > cos_bound * (1 + 1e-12):
                 return Reduced([])
             best = [found[0]] if found else []
-        both = self.rod or bool(self.ratios)
+        both = self.rod or bool(self.p.fixed) or bool(self.p.explicit)
         sheets: list[tuple[list, bool]] = []
         for sigma in (1, -1):
             self.missed = None

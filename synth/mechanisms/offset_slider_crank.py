@@ -78,47 +78,54 @@ def facts(p):
 
 def reduced(p: Problem) -> Reduced:
     """The dead-centre construction: the crank pivot sees the chord between the slider's dead
-    centres, the stroke, under the angle β, so it lies on a circle through them. With s, c =
-    sin, cos(β/2) and y = cos of the chord's angle at the crank pivot's ... one parameter:
+    centres, the stroke, under the angle β, so it lies on a circle through them; one number
+    places it there. With s, c = sin, cos(β/2) and y the cosine of the angle between the
+    pivot's line to the chord's far end and the chord's normal (0 < y < c), take
+    q = c² − y² = |offset| sin β (no digits lost near time ratio 1, where y → c → 1):
 
-        crank = y/(2c),  coupler = sqrt(1 − y²)/(2s),  |offset| = (c² − y²)/sin β,  0 < y < c
+        crank = sqrt(c² − q)/(2c),  coupler = sqrt(s² + q)/(2s),  |offset| = q/sin β
 
-    (stroke units), the worst transmission cos μ = (crank + |offset|)/coupler =
-    (c² + s y − y²)/(c sqrt(1 − y²)). It is 1 at y = s (a dead point: two branches). On the
-    branch y > s it has one minimum, at y* = (sqrt(s² + 4) − s)/2 (the stationary points are
-    the roots of (y − s)(y² + s y − 1)); on y < s (a crank shorter than ...) it increases with
-    y. The size, crank + coupler, is greatest at y = s and falls away from it on both sides.
-    So each branch's optimum is y*, an end of the box, or a root of cos μ = cos(bound)."""
+    (stroke units), 0 < q < c². The worst transmission cos μ = (crank + |offset|)/coupler =
+    (q + s y)/(c sqrt(s² + q)) is 1 at q = c² − s² (y = s, a dead point: two branches). On the
+    branch q < c² − s² (the crank longer than the other branch's) it has one minimum, at
+    q* = s (sqrt(s² + 4) − 3s)/2 (y* = (sqrt(s² + 4) − s)/2: the stationary points are the
+    roots of (y − s)(y² + s y − 1)), and it is 1 at q = 0 (crank = coupler: the slider folds);
+    on the other branch it decreases with q. The size, crank + coupler, is greatest at
+    y = s and falls away from it on both sides. So each branch's optimum is q*, an end of the
+    box, or a root of cos μ = cos(bound)."""
     s, c = p.half
     if p.beta <= math.pi / 2 * TOL:  # a centred slider, time ratio 1: crank half the stroke
         lo, hi = p.box("coupler")
         coupler = hi if p.objective == MAX_TRANSMISSION else max(lo, 0.5 / p.cos_bound)
         design = {"crank": 0.5, "coupler": p.fixed.get("coupler", coupler), "offset": 0.0}
-        return Reduced([{**design, **p.fixed}] if coupler <= hi and _allowed(p, design) else [])
-    ys = _fixed_y(p, s, c)
-    if ys is not None:
-        design = _design(p, ys[0], ys[1], s, c)
+        design = {**design, **p.fixed}
+        if p.fixed:  # they may be another time ratio's or stroke's
+            judge(p, facts, design)
+        return Reduced([design] if coupler <= hi and _allowed(p, design) else [])
+    qs = _fixed_q(p, s, c)
+    if qs is not None:
+        design = _design(p, qs[0], qs[1], s, c)
         if len(p.fixed) > 1:  # the first fixed part sets the design; the others must agree
             judge(p, facts, design)
         return Reduced([design] if _allowed(p, design) else [])
     designs, seen = [], []
     for sign in (1, -1):
-        box = _y_box(p, s, c, sign)
+        box = _q_box(p, s, c, sign)
         if box is None:
             continue
-        lo, hi = max(box[0], s), min(box[1], c)
-        y = _optimum(p, s, c, lo, hi) if lo < hi else None
-        if y is not None and not any(abs(y - o) <= 1e-12 for o in seen):
-            seen.append(y)
-            designs.append(_design(p, y, sign, s, c))
+        lo, hi = box[0], min(box[1], math.cos(p.beta))
+        q = _optimum(p, s, c, lo, hi) if lo < hi else None
+        if q is not None and not any(abs(q - o) <= 1e-12 * max(q, o) for o in seen):
+            seen.append(q)
+            designs.append(_design(p, q, sign, s, c))
     return Reduced(designs)
 
 
-def _design(p: Problem, y: float, sign: int, s: float, c: float) -> dict[str, float]:
+def _design(p: Problem, q: float, sign: int, s: float, c: float) -> dict[str, float]:
     design = {
-        "crank": y / (2 * c),
-        "coupler": math.sqrt((1 - y) * (1 + y)) / (2 * s),
-        "offset": sign * (c - y) * (c + y) / math.sin(p.beta),
+        "crank": math.sqrt(c * c - q) / (2 * c),
+        "coupler": math.sqrt(s * s + q) / (2 * s),
+        "offset": sign * q / math.sin(p.beta),
     }
     return {**design, **p.fixed}
 
@@ -128,43 +135,51 @@ def _allowed(p: Problem, design: dict[str, float]) -> bool:
     return all(p.allows(k, v) for k, v in design.items() if k in p.bounds)
 
 
-def _cos_mu(y: float, s: float, c: float) -> float:
-    return (c * c + s * y - y * y) / (c * math.sqrt((1 - y) * (1 + y)))
+def _cos_mu(q: float, s: float, c: float) -> float:
+    return (q + s * math.sqrt(c * c - q)) / (c * math.sqrt(s * s + q))
 
 
 def _optimum(p: Problem, s: float, c: float, lo: float, hi: float) -> float | None:
-    """The best y in [lo, hi] ⊂ (s, c): max transmission, or min size within the bound."""
+    """The best q in [lo, hi] ⊂ [0, c² − s²]: max transmission, or min size within the bound
+    (the size falls with q on this branch)."""
+    star = clip(s * (math.sqrt(s * s + 4) - 3 * s) / 2, lo, hi)
     if p.objective == MAX_TRANSMISSION:
-        return clip((math.sqrt(s * s + 4) - s) / 2, lo, hi)
+        return star
     cb = p.cos_bound
-    star = clip((math.sqrt(s * s + 4) - s) / 2, lo, hi)
     if _cos_mu(star, s, c) > cb:
         return None
-    if _cos_mu(hi, s, c) <= cb:  # the size falls with y: as far as the bound lets it
-        return hi
-    return brentq(lambda y: _cos_mu(y, s, c) - cb, star, hi, xtol=1e-16)
+    if _cos_mu(lo, s, c) <= cb:  # as small as the bound lets it
+        return lo
+    return brentq(lambda q: _cos_mu(q, s, c) - cb, lo, star, xtol=1e-300, rtol=1e-15)
 
 
-def _y_box(p: Problem, s: float, c: float, sign: int) -> tuple[float, float] | None:
-    """The y the bounds allow, with the offset's sign."""
+def _q_box(p: Problem, s: float, c: float, sign: int) -> tuple[float, float] | None:
+    """The q the bounds allow, with the offset's sign (each length is monotonic in q)."""
     lo_e, hi_e = p.box("offset")
     e_box = (max(lo_e, 0.0), hi_e) if sign > 0 else (max(-hi_e, 0.0), -lo_e)
     if e_box[0] > e_box[1]:
         return None
-    root = lambda v: math.sqrt(max(v, 0.0))  # noqa: E731
     sb = math.sin(p.beta)
     lo2, hi2 = p.box("crank")
     lo3, hi3 = p.box("coupler")
     return intersect(
-        (2 * c * lo2, 2 * c * hi2),
-        (root(1 - (2 * s * hi3) ** 2), root(1 - (2 * s * lo3) ** 2)),
-        (root(c * c - e_box[1] * sb), root(c * c - e_box[0] * sb)),
-        (0.0, c),
+        (_crank_q(hi2, c), _crank_q(lo2, c)),
+        (_coupler_q(lo3, s), _coupler_q(hi3, s)),
+        (e_box[0] * sb, e_box[1] * sb),
+        (0.0, c * c),
     )
 
 
-def _fixed_y(p: Problem, s: float, c: float) -> tuple[float, int] | None:
-    """(y, sign of the offset) set by the first fixed part, or None when nothing is fixed."""
+def _crank_q(r2: float, c: float) -> float:
+    return c * c * (1 - 2 * r2) * (1 + 2 * r2)
+
+
+def _coupler_q(r3: float, s: float) -> float:
+    return s * s * (2 * r3 - 1) * (2 * r3 + 1)
+
+
+def _fixed_q(p: Problem, s: float, c: float) -> tuple[float, int] | None:
+    """(q, sign of the offset) set by the first fixed part, or None when nothing is fixed."""
     f, sb = p.fixed, math.sin(p.beta)
     sign = -1 if f.get("offset", 1.0) < 0 else 1
     if "crank" in f:
@@ -173,7 +188,7 @@ def _fixed_y(p: Problem, s: float, c: float) -> tuple[float, int] | None:
                 f"crank {p.shown(f['crank'])} is at least half the stroke: an offset "
                 "slider-crank's stroke is more than twice its crank"
             )
-        return 2 * c * f["crank"], sign
+        return _crank_q(f["crank"], c), sign
     if "coupler" in f:
         r3 = f["coupler"]
         if not 0.5 < r3 < 0.5 / s:
@@ -181,7 +196,7 @@ def _fixed_y(p: Problem, s: float, c: float) -> tuple[float, int] | None:
                 f"coupler {p.shown(r3)} must be longer than half the stroke and shorter than "
                 f"stroke/(2 sin(β/2)) = {p.shown(0.5 / s)} at time ratio {p.ratio:.9g}"
             )
-        return math.sqrt((1 - 2 * s * r3) * (1 + 2 * s * r3)), sign
+        return _coupler_q(r3, s), sign
     if "offset" in f:
         e = abs(f["offset"])
         if not 0 < e < c * c / sb:
@@ -189,7 +204,7 @@ def _fixed_y(p: Problem, s: float, c: float) -> tuple[float, int] | None:
                 f"|offset| {p.shown(e)} must be > 0 and < stroke/(2 tan(β/2)) = "
                 f"{p.shown(c * c / sb)} at time ratio {p.ratio:.9g}"
             )
-        return math.sqrt((c - math.sqrt(e * sb)) * (c + math.sqrt(e * sb))), sign
+        return e * sb, sign
     return None
 
 
