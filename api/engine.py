@@ -9,6 +9,7 @@ solves run at once and the rest queue.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import multiprocessing
 import os
 import time
@@ -17,6 +18,7 @@ from functools import partial
 from typing import Any
 
 import synth
+from synth.formulation import OBJECTIVES
 
 from .config import Settings, get_settings
 
@@ -65,9 +67,9 @@ class Engine:
         that costs less than handing it to a worker (an analysis without long curves, ~1 ms;
         the loop thread has its own compiled models, as every thread does).
 
-        A synthesis runs here too as far as the reduced solvers take it (a few milliseconds at
-        most, no IPOPT); where it needs IPOPT it goes to the pool with what is left of its
-        budget."""
+        A synthesis runs here too as far as the reduced solvers take it (no IPOPT: 1–5 ms for
+        most requests, up to ~15 ms for a four-bar near time ratio 1); where it needs IPOPT
+        the whole request goes to the pool with what is left of its budget."""
         if inline:
             return _call(op, kwargs)
         if op == "synthesize":
@@ -86,9 +88,13 @@ class Engine:
             return await loop.run_in_executor(self.executor, partial(_call, op, kwargs))
 
     def warm(self) -> None:
-        """Start the workers and build solvers in the background (does not block start-up)."""
+        """Start the workers and build their solvers in the background; build the models a
+        synthesis in the event loop's thread needs here (~0.1 s, before the first request)."""
         for _ in range(self.settings.workers):
             self.executor.submit(_warm)
+        for objective in OBJECTIVES:
+            with contextlib.suppress(synth.SolverNeeded):
+                synth.synthesize(1.5, 1.0, 10.0, objective=objective, ipopt=False)
 
     def close(self) -> None:
         self.executor.shutdown(wait=True, cancel_futures=True)

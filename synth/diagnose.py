@@ -17,7 +17,7 @@ from functools import lru_cache
 from .errors import SynthError, Unreachable
 from .kinematics import analyze
 from .mechanisms import Mechanism
-from .reduced import MAX_TRANSMISSION
+from .reduced import MAX_TRANSMISSION, differ
 from .results import TOL, Infeasible
 from .search import Searched, Spec, Targets, Variant, ipopt, predict, scaled
 
@@ -52,22 +52,27 @@ def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
     trs = [tr for v in searchable for tr in _reach(m, v, spec, t)]
     if time.monotonic() >= t.deadline:
         return _budget(m)
-    if trs and min(trs) <= t.time_ratio <= max(trs):  # designs exist, none passed the analysis
+    if trs and min(trs) <= t.time_ratio <= max(trs):  # designs exist, none passed the check
         return Infeasible(
             m.type,
             "NO_VALID_DESIGN",
-            f"the {m.type} designs found for time ratio {t.time_ratio:g}, stroke "
-            f"{t.stroke:g} and a transmission angle ≥ {t.bound_deg:g}°{_with(spec)} all failed "
-            f"the forward analysis's check (to 1e-9)",
+            f"{m.type} reaches time ratios {min(trs):.6g} … {max(trs):.6g} with a transmission "
+            f"angle ≥ {t.bound_deg:g}° and stroke {t.stroke:g}{_with(spec)}, yet no design its "
+            f"solvers found at {t.time_ratio:.9g} met the targets to {TOL:g} (by the closed "
+            f"forms and the forward analysis)",
         )
     if trs:
+        lo, hi = min(trs), max(trs)
+        if t.time_ratio < lo:  # the end the target lies beyond: with the digits that tell
+            (lo_s, want), hi_s = differ(lo, t.time_ratio), f"{hi:.6g}"
+        else:
+            lo_s, (hi_s, want) = f"{lo:.6g}", differ(hi, t.time_ratio)
         return Infeasible(
             m.type,
             "TIME_RATIO_UNREACHABLE",
-            f"{m.type} reaches time ratios {min(trs):.6g} … {max(trs):.6g} with a transmission "
-            f"angle ≥ {t.bound_deg:g}° and stroke {t.stroke:g}{_with(spec)}, not "
-            f"{t.time_ratio:g}",
-            time_ratio_range=(min(trs), max(trs)),
+            f"{m.type} reaches time ratios {lo_s} … {hi_s} with a transmission angle ≥ "
+            f"{t.bound_deg:g}° and stroke {t.stroke:g}{_with(spec)}, not {want}",
+            time_ratio_range=(lo, hi),
         )
     return Infeasible(
         m.type,
@@ -91,7 +96,7 @@ def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL
     """The predicted angles of the exact reduced optima at β (max transmission, no bound)
     that meet the time ratio and stroke to ``tol``, one by one (each costs a prediction), or
     None where the reduced solver is not exact there."""
-    problem = replace(v.problem, beta=beta, cos_bound=1.0, objective=MAX_TRANSMISSION)
+    problem = replace(v.problem, beta=beta, cos_bound=1.0, objective=MAX_TRANSMISSION, hints=())
     try:
         answer = m.reduced(problem)
     except Unreachable:
@@ -116,17 +121,23 @@ def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
             tr
             for objective in ("max_time_ratio", "min_time_ratio")
             for tr, mu in _optima(m, v, spec, t, objective)
-            if mu >= t.bound_deg - 1e-9
+            if mu >= t.bound_deg - TOL * max(t.bound_deg, 1.0)
         ]
     scan = _Scan.of(m, v, t)
     ends = _ends(scan)
     if ends is None:
         return []
-    # the end the target lies beyond to NEAR_END, the other to FAR_END
+    # the end the target lies beyond to NEAR_END, the other to FAR_END. Bisection from a kept
+    # bracket goes on along the same midpoints, so the numbers do not depend on what was asked
+    # before; threads that narrow the same end at once at most repeat each other's work
     below = t.beta < ends[0][1]
+    out = []
     for k, tol in enumerate((NEAR_END, FAR_END) if below else (FAR_END, NEAR_END)):
-        ends[k] = _edge(scan.ok, *ends[k], tol)
-    return [(math.pi + inside) / (math.pi - inside) for _, inside in ends]
+        bracket = _edge(scan.ok, *ends[k], tol)
+        if abs(bracket[1] - bracket[0]) < abs(ends[k][1] - ends[k][0]):
+            ends[k] = bracket
+        out.append((math.pi + bracket[1]) / (math.pi - bracket[1]))
+    return out
 
 
 @dataclass(frozen=True)
@@ -142,8 +153,7 @@ class _Scan:
     def of(cls, m: Mechanism, v: Variant, t: Targets) -> _Scan:
         p = v.problem
         key = (m.type, v.parts, p.variant, tuple(sorted(p.fixed.items())),
-               tuple(sorted(p.bounds.items())), p.explicit,
-               tuple(tuple(sorted(h.items())) for h in p.hints), t.stroke, t.bound_deg)  # fmt: skip
+               tuple(sorted(p.bounds.items())), p.explicit, t.stroke, t.bound_deg)  # fmt: skip
         return cls(key, m, v, t)
 
     def ok(self, beta: float) -> bool:
@@ -196,7 +206,7 @@ def _optima(m: Mechanism, v: Variant, spec: Spec, t: Targets, objective: str, co
             a = analyze(m.type, {**spec.fixed, **x, **dict.fromkeys(v.parts, 0.0)})
         except SynthError:
             continue
-        if a.reversals == 2 and abs(a.stroke - t.stroke) <= 1e-9 * t.stroke:
+        if a.reversals == 2 and abs(a.stroke - t.stroke) <= TOL * t.stroke:
             yield a.time_ratio, a.transmission.min_deg
 
 

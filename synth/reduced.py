@@ -217,7 +217,9 @@ def _stencil(d: int) -> np.ndarray:
         rows += [np.eye(d)[i], -np.eye(d)[i]]
     if d == 2:
         rows += [np.array(c, dtype=float) for c in ((1, 1), (1, -1), (-1, 1), (-1, -1))]
-    return np.array(rows)
+    out = np.array(rows)
+    out.flags.writeable = False  # shared by every caller
+    return out
 
 
 def rod(p: Problem, name: str, height: str | None, arm, half, cos_other):
@@ -249,15 +251,19 @@ def rod(p: Problem, name: str, height: str | None, arm, half, cos_other):
             limited = hi + 0 * c
         else:
             x = np.cos(half)
-            m = np.minimum(c, x - ONE_WAY)
+            # no rod moves the slider one way past a swing of ±90° (less the margin)
+            m = np.where(x > ONE_WAY, np.minimum(c, x - ONE_WAY), np.nan)
             fixed, box = p.fixed.get(height), p.bounds.get(height)
 
             def place(h):  # the caller's placement, or one within its bounds
                 return fixed + 0 * h if fixed is not None else np.clip(h, *box)
 
-            h = place(arm * (m + c * x) / (m + c))
+            # the shortest rod with worst cos ≤ c; none to find where c = 0 (nothing else
+            # limits the transmission: the rod sits at its upper bound)
+            positive = c > 0
+            h = place(np.where(positive, arm * (m + c * x) / np.where(positive, m + c, 1.0), arm))
             g1, g2 = np.abs(h - arm), np.abs(h - arm * x)
-            short = np.maximum(lo, np.maximum(g1 / c, g2 / m))  # NaN where c = 0: no rod
+            short = np.where(positive, np.maximum(lo, np.maximum(g1 / c, g2 / m)), np.inf)
             # at the upper bound: the midpoint, moved as little as the one way needs
             lean = (x - ONE_WAY) * hi  # the most the one way allows at the upper bound
             mid = place(np.clip(arm * (1 + x) / 2, arm * x - lean, arm * x + lean))

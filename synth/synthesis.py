@@ -43,8 +43,8 @@ def synthesize(
 
     ``accelerators=False`` solves every type as one without a reduced solver would be, by
     cold multistart IPOPT on the formulation: the generic path, for cross-checks.
-    ``ipopt=False`` answers only what the reduced solvers answer exactly (in a millisecond
-    or so) and raises ``SolverNeeded`` for the rest.
+    ``ipopt=False`` answers only what the reduced solvers answer exactly (in milliseconds)
+    and raises ``SolverNeeded`` for the rest.
 
     >>> r = synthesize(2.0, 450.0, mechanisms=[{"type": "crank_shaper",
     ...                "fixed": {"pivot_distance": 240.0, "ram_link": 0.0}}])
