@@ -166,7 +166,7 @@ LocalSolve = Callable[..., Iterator[tuple[int, dict[str, float]]]]
 
 def on_nlp(local: LocalSolve) -> Method:
     """A peer on synthesis's NLP: every structural variant the request allows whose fixed parts
-    can run (as synth checks them), its bounds and valid starts from synth's ``_ipopt``, the
+    can run (as synth checks them), its bounds and valid starts from ``search.ipopt``, the
     local solves by ``local``; no reduced solver, no verification."""
 
     def run(target: dict[str, Any]) -> Outcome:

@@ -401,7 +401,7 @@ def plot(rows: list[dict[str, Any]], path: Path) -> None:
 def settings(names: list[str], sizes: dict[str, int]) -> dict[str, Any]:
     return {
         "methods": names, "targets": sizes, "seed": targets.SEED, "tol": TOL,
-        "same_angle": SAME_ANGLE, "starts": search.STARTS, "starts_warm": search.STARTS_WARM,
+        "same_angle": SAME_ANGLE, "starts": search.STARTS,
         "de": methods.DE, "pso": methods.PSO, "pso_penalty": methods.PENALTY, "goals": GOALS,
     }  # fmt: skip
 

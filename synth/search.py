@@ -28,8 +28,7 @@ from .reduced import Problem, Reduced, agree
 from .results import TOL, Infeasible
 from .solve import built, multistart, starts
 
-STARTS = 8  # cold multistart for a type without a reduced solver
-STARTS_WARM = STARTS  # cold starts beside the warm ones (the generic path's: never worse than it)
+STARTS = 8  # cold multistart starts (also beside warm ones: never worse than the generic path)
 SAME = 1e-4  # two designs within this (× stroke) in every parameter are one local optimum
 
 
@@ -153,7 +152,7 @@ def build_problem(m, parts, names, fixed, spec: Spec, t: Targets, **changes) -> 
         cos_bound=t.cos_bound,
         objective=t.objective,
         stroke=s,
-        explicit=frozenset(spec.bounds) & set(names),
+        explicit=frozenset(spec.bounds) & (set(names) - set(fixed)),
         **changes,
     )
 
@@ -215,11 +214,10 @@ def ipopt(
         return []
     b = built(m, v.parts, free, objective)
     s = t.stroke
-    lo, hi = (np.array(x) / s for x in zip(*(bounds(m, k, spec, s) for k in free), strict=True))
+    lo, hi = np.array([v.problem.bounds[k] for k in free], dtype=float).T
     first = [np.clip([d[k] / s for k in free], lo, hi) for d in warm if all(k in d for k in free)]
-    n = STARTS_WARM if warm else STARTS
     pts = []
-    for x0 in starts(lo, hi, lo > 0, 40 * n):
+    for x0 in starts(lo, hi, lo > 0, 40 * STARTS):
         try:
             m.complete(
                 {**fixed, **dict(zip(free, x0 * s, strict=True)), **dict.fromkeys(v.parts, 0.0)}
@@ -227,7 +225,7 @@ def ipopt(
         except SynthError:
             continue
         pts.append(x0)
-        if len(pts) == n:
+        if len(pts) == STARTS:
             break
     fx = np.array([fixed[k] / s for k in b.form.fixed])
     cb = t.cos_bound if cos_bound is None else cos_bound

@@ -25,9 +25,9 @@ import math
 import numpy as np
 
 from ..reduced import MAX_TRANSMISSION, Reduced, clip, newton
-from ._fourbar_construction import Construction, Roles, shape, worst_cos
+from ._fourbar_construction import Construction, Roles, worst_cos
 
-__all__ = ["FourBar", "Roles", "shape", "worst_cos"]
+__all__ = ["FourBar", "Roles", "worst_cos"]
 
 U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
 GRID = 48

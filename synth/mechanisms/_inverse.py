@@ -46,9 +46,5 @@ def scale(p: Problem, pivot_per_crank: float, reach: float = math.inf) -> float 
         if span is None:
             return None
         crank = span[0]
-    ok = crank <= reach * (1 + 1e-12)
-    if "crank" in p.bounds:
-        ok = ok and p.allows("crank", crank)
-    if "pivot_distance" in p.bounds:
-        ok = ok and p.allows("pivot_distance", crank * pivot_per_crank)
-    return crank if ok else None
+    ok = crank <= reach * (1 + 1e-12) and p.allows("crank", crank)
+    return crank if ok and p.allows("pivot_distance", crank * pivot_per_crank) else None

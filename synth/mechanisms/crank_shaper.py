@@ -122,7 +122,7 @@ def reduced(p: Problem) -> Reduced:
     check(p, time_ratio, lambda lever: 2 * lever * k)
     lever = f.get("lever", 0.5 / k)
     crank = _scale(p, 1 / k, reach=lever * k / (1 + k))
-    if crank is None or ("lever" in p.bounds and not p.allows("lever", lever)):
+    if crank is None or not p.allows("lever", lever):
         return Reduced([])
     design = {"crank": crank, "pivot_distance": crank / k, "lever": lever}
     if "ram_link" not in p.variant:

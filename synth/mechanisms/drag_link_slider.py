@@ -115,7 +115,7 @@ def reduced(p: Problem) -> Reduced | None:
     # ratio's extreme over the coupler the roots merge (R = C, up to rounding)
     half = math.atan2(math.sqrt(max(rr - c, 0.0) * (rr + c)), c)
     arm = p.fixed.get("follower_arm", 0.5)
-    if "follower_arm" in p.bounds and not p.allows("follower_arm", arm):
+    if not p.allows("follower_arm", arm):
         return Reduced([])
     t2a = np.array(sorted({math.atan2(b, a) - half, math.atan2(b, a) + half}))
     couplers = np.sqrt(r2**2 + (r4 + r1) ** 2 - 2 * r2 * (r4 + r1) * np.cos(t2a))  # eq. (13)

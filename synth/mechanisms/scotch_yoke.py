@@ -47,7 +47,10 @@ def facts(p):
 def reduced(p: Problem) -> Reduced:
     """crank = stroke/2; the time ratio is 1 for every design."""
     if p.beta > math.pi / 2 * TOL:  # time ratio 1 to the verification's tolerance
-        raise Unreachable("TIME_RATIO_UNREACHABLE", "scotch_yoke has time ratio 1 for every design")
+        raise Unreachable(
+            "TIME_RATIO_UNREACHABLE",
+            f"scotch_yoke has time ratio 1 for every design, not {p.ratio:.9g}",
+        )
     if "crank" in p.fixed:
         judge(p, facts, dict(p.fixed))  # stroke = 2 crank
     elif not p.allows("crank", 0.5):
