@@ -2,7 +2,7 @@
 
 This module is the INDEPENDENT reference that the project's analysis is tested against. It
 shares no code with ``synth`` or ``api`` (and imports nothing from them): every type's geometry
-is written directly from ``/work/shared/design/mechanisms.md`` as plain circle/line
+is written directly from the model (the README's mechanism table) as plain circle/line
 intersections in vector arithmetic, and none of the contract's closed forms ("facts") is used.
 Extremes are found by forward simulation on an even grid of crank angles followed by
 refinement: the derivative d/dtheta comes from complex-step differentiation

@@ -1,6 +1,6 @@
 """An independent global search for the synthesis optima: the referee of synth.synthesize.
 
-Written from the contract (shared/design/mechanisms.md), sharing no formula or code with synth:
+Written from the model (the parameters and their meaning), sharing no formula or code with synth:
 only the parameter names and default bounds are read from the registry (bounds are part of
 the contract). Every design is at stroke 1 (lengths scale with the stroke; synthesise at 1).
 

@@ -91,9 +91,10 @@ def facts(p):
 
 
 def reduced(p: Problem) -> Reduced | None:
-    """Seed 002 eqs. (7)–(13) where ground, crank and follower are fixed: zero, one or two
-    couplers give the time ratio (follower_arm = stroke/2, the rod by ``reduced.rod``); any
-    other problem goes to the four-bar solver (``_fourbar_synthesis``)."""
+    """Podhorodeski, Nokleby & Wittchen (2005), eqs. (7)–(13), where ground, crank and
+    follower are fixed: zero, one or two couplers give the time ratio (follower_arm =
+    stroke/2, the rod by ``reduced.rod``); any other problem goes to the four-bar solver
+    (``_fourbar_synthesis``)."""
     if "follower_arm" in p.fixed and not agree(2 * p.fixed["follower_arm"], 1.0):
         raise unreachable(
             "follower_arm {} gives stroke {}, not {}".format(
