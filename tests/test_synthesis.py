@@ -158,6 +158,24 @@ def test_the_smallest_four_bar_with_a_fixed_link_is_searched_on_both_families(gr
     assert_meets(c, 1.3, 1.0, 20.0)
 
 
+@pytest.mark.parametrize(
+    "tr, stroke, follower",
+    [(1.0255889517581471, 0.6098632148922783, 0.40052145596204525),
+     (1.0461947415855506, 24.278736481423202, 34.765720600521206)],
+)  # fmt: skip
+def test_a_fixed_follower_with_two_links_at_their_bounds_is_answered_exactly(tr, stroke, follower):
+    """The best drag-link with its follower fixed lies where a link's bound cuts the curve
+    off at a second bound (a corner the pairs' ranking missed), or beside a grid minimum
+    where Newton fails, far worse than the best: both went to IPOPT (~100 ms); benchmark
+    targets drag_link_slider/f007 and f086. The answer must be the generic multistart's."""
+    mechs = [{"type": "drag_link_slider", "fixed": {"follower": follower}}]
+    (c,) = synth.synthesize(tr, stroke, 0.0, mechs, max_candidates=1).candidates
+    (g,) = synth.synthesize(tr, stroke, 0.0, mechs, max_candidates=1, accelerators=False).candidates
+    assert c.method == "closed_form"
+    assert c.min_transmission_angle_deg >= g.min_transmission_angle_deg - 1e-9
+    assert_meets(c, tr, stroke, 0.0)
+
+
 @pytest.mark.parametrize("tr", [1 + 5e-9, 1 + 2e-8, 1 + 1e-6, 1 + 1e-4])
 def test_offset_slider_crank_near_time_ratio_one(tr):
     """The smallest design near TR 1 lost its digits (c² − y² with y → c → 1): a division by

@@ -88,18 +88,19 @@ class FourBar(Construction):
     ) -> tuple[tuple[dict, dict] | None, bool]:
         """The optimum where the links' bounds cut it off (``e``: the design beyond them): the
         best of the curves where one pair of links beyond them is held at their bounds'
-        ratio, ρ_i/ρ_j = hi_i/lo_j (i too long against j), else the corner of the two worst
-        pairs, which counts only if no feasible point of the grid beats it."""
-        rho = np.array(e["rho"])
-        excess = np.log(rho[:, None] / self.hi[:, None]) - np.log(rho[None, :] / self.lo[None, :])
-        order = [np.unravel_index(k, excess.shape) for k in np.argsort(excess, axis=None)[::-1]]
-        pairs = [ij for ij in order if excess[ij] > -NEAR and ij[0] != ij[1]][:3]  # or near
+        ratio, ρ_i/ρ_j = hi_i/lo_j (i too long against j), else a corner of two pairs: the two
+        worst, and each pair with the worst that its own optimum leaves beyond the bounds (an
+        active-set step: one fixed link and two bounds, e.g.). A corner counts only if no
+        feasible point of the grid beats it."""
+        pairs = self._beyond(e)[:3]
+        queue = [[ij] for ij in pairs] + ([pairs[:2]] if len(pairs) > 1 else [])
         key = "f" if objective == "f" else "size"
         best, exact = None, False
-        for held in [[ij] for ij in pairs] + ([pairs[:2]] if len(pairs) > 1 else []):
-            if len(held) > 1 and best is not None:
+        for held in queue:
+            if len(held) > 1 and best is not None and exact:
                 break  # one pair's optimum within every bound: no corner is needed
-            found, ok = self.holding(held).optimum(1, objective, cos_bound)
+            holding = self.holding(held)
+            found, ok = holding.optimum(1, objective, cos_bound)
             if not found:
                 continue
             psi, u = found[0][1]["at"]
@@ -110,7 +111,21 @@ class FourBar(Construction):
                 corner = len(held) > 1
                 beaten = corner and e[key] > self.grid_best(key, cos_bound) + 1e-12
                 exact = ok and not beaten
+            beyond = e if not e["feasible"] else holding.missed if not ok else None
+            if len(held) == 1 and beyond is not None and beyond["valid"]:
+                more = [[*held, ij] for ij in self._beyond(beyond) if ij != held[0]][:1]
+                queue += [c for c in more if c not in queue]
         return best, exact
+
+    def _beyond(self, e: dict) -> list[tuple[int, int]]:
+        """The pairs (i, j) of links of ``e``'s design, i too long against j by their bounds
+        (or nearly), the worst first."""
+        rho = np.array(e["rho"])
+        with np.errstate(divide="ignore"):  # a held pair's links: no bound (0, ∞)
+            long, short = np.log(rho / self.hi), np.log(rho / self.lo)
+        excess = long[:, None] - short[None, :]
+        order = [np.unravel_index(k, excess.shape) for k in np.argsort(excess, axis=None)[::-1]]
+        return [(int(i), int(j)) for i, j in order if excess[i, j] > -NEAR and i != j]
 
     def holding(self, pairs) -> FourBar:
         """This problem with each pair (i, j) held at ρ_i/ρ_j = hi_i/lo_j (the pair's own two
@@ -187,8 +202,8 @@ class FourBar(Construction):
         found, exact = [], bool(starts)  # no start is no proof: a link's bound may cut it off
         key = "f" if objective == "f" else "size"
         points = len(self.ratios) >= (1 if psi_fixed is not None else 2)  # roots, not optima
-        roots = 0
-        for x0, value, optional in starts:
+        roots, least, doubts = 0, math.inf, []
+        for x0, value, optional, floor in starts:
             x = self._newton(sigma, x0, objective, cos_bound, psi_fixed, optional)
             if x is None and optional:
                 continue  # a near-crossing of two curves that is no intersection
@@ -203,7 +218,7 @@ class FourBar(Construction):
                     found.append((d, e))
                 continue
             if x is None or not (e[ok] and within) or (limits and e["slack"] <= SLACK):
-                exact = False  # the start is a warm start for IPOPT, if it is a design
+                doubts.append(floor)  # the start is a warm start for IPOPT, if it is a design
                 self.missed = e if e["valid"] else None
                 d, e = self.design(sigma, x0[0], 1 + math.exp(x0[1]))
                 e["at"] = x0
@@ -213,7 +228,11 @@ class FourBar(Construction):
             if not self.ratios and e[key] > value + 1e-9 * abs(value):
                 exact = False  # Newton found a worse stationary point than its start: its
                 self.missed = self.design(sigma, x0[0], 1 + math.exp(x0[1]))[1]  # best is held?
+            least = min(least, e[key])
             found.append((d, e))
+        # a start Newton failed from is no doubt if nothing near it can beat the best found
+        if any(floor <= least + 1e-9 * abs(least) for floor in doubts):
+            exact = False
         found.sort(key=lambda de: de[1][key])
         if points and starts and not roots:
             exact = False  # crossings, but no intersection found: perhaps a tangency
@@ -239,10 +258,13 @@ class FourBar(Construction):
 
     def _starts(
         self, sigma, psi, u, objective, cos_bound, limits=True
-    ) -> list[tuple[np.ndarray, float, bool]]:
+    ) -> list[tuple[np.ndarray, float, bool, float]]:
         """Grid points to start Newton from: (point, the objective there, whether it is only
-        a possible root). The best point (no ratio held); the crossings of one ratio's curve
-        that are best among their neighbours along it (each may be a local optimum), and, for
+        a possible root, the least the objective can be near it). The best point (no ratio
+        held); the crossings of one ratio's curve that are best among their neighbours along
+        it (each may be a local optimum: at least its value less the largest difference to
+        a neighbour within two grid cells, which bounds a smooth function's dip between
+        samples many times over), and, for
         the size, every place the curve crosses the bound (the bound may bind at any of them);
         with two ratios, or one and ψ held, every crossing of both."""
         e = self.evaluate(sigma, psi, 1 + np.exp(u))
@@ -253,23 +275,25 @@ class FourBar(Construction):
             if not np.any(ok):
                 return []
             i, j = np.unravel_index(np.argmin(np.where(ok, value, np.inf)), ok.shape)
-            return [(pts[i, j], float(value[i, j]), False)]
+            return [(pts[i, j], float(value[i, j]), False, -math.inf)]
         res = self.residuals(e)
         x = _crossings(res[0], e["valid"], pts)
         if len(x) == 0:
             return []
         if psi.size == 1:
-            return [(y, math.nan, True) for y in x]
+            return [(y, math.nan, True, -math.inf) for y in x]
         if len(self.ratios) == 2:
-            return [(y, math.nan, True) for y in _meet(x, _crossings(res[1], e["valid"], pts))]
+            meet = _meet(x, _crossings(res[1], e["valid"], pts))
+            return [(y, math.nan, True, -math.inf) for y in meet]
         ev = self.evaluate(sigma, x[:, 0], 1 + np.exp(x[:, 1]))
         v = ev["f"] if objective == "f" else ev["size"]
         good = ev["feasible"] & ((objective == "f") | (ev["f"] <= cos_bound))
         cell = np.array([np.ptp(psi) / (GRID - 1), STEP])
-        out = [(x[k], float(v[k]), False) for k in _least(x, v, good, cell)]
+        least, floors = _least(x, v, good, cell)
+        out = [(x[k], float(v[k]), False, fl) for k, fl in zip(least, floors, strict=True)]
         if objective == "size":
             bound = _crossings(e["f"] - cos_bound, e["valid"], pts)
-            out += [(y, math.nan, True) for y in _meet(x, bound)]
+            out += [(y, math.nan, True, -math.inf) for y in _meet(x, bound)]
         return out
 
     def _newton(self, sigma, x0, objective, cos_bound, psi_fixed, root=False):
@@ -350,9 +374,13 @@ def _meet(a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
     return [a[n] for n in np.unique(nearest[gap[nearest, np.arange(len(b))] <= 2 * STEP])]
 
 
-def _least(x: np.ndarray, v: np.ndarray, good: np.ndarray, cell: np.ndarray) -> np.ndarray:
-    """The good points no worse than every good point within two grid cells: the local
-    minima of v along a curve sampled by its crossings."""
+def _least(x: np.ndarray, v: np.ndarray, good: np.ndarray, cell: np.ndarray):
+    """The good points no worse than every good point within two grid cells (the local
+    minima of v along a curve sampled by its crossings), and for each its value less the
+    largest difference to those neighbours."""
     d = np.max(np.abs(x[:, None, :] - x[None, :, :]) / np.maximum(cell, 1e-300), axis=-1)
-    worse = np.where(good[None, :] & (d <= 2), v[None, :], np.inf)
-    return np.flatnonzero(good & (v <= worse.min(axis=1)))
+    near = good[None, :] & (d <= 2)
+    worse = np.where(near, v[None, :], np.inf)
+    k = np.flatnonzero(good & (v <= worse.min(axis=1)))
+    spread = np.max(np.where(near[k], np.abs(v[None, :] - v[k, None]), 0.0), axis=1)
+    return k, (v[k] - spread).tolist()
