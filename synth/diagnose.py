@@ -84,11 +84,12 @@ def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
 
 def _angles(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
     """The minimum transmission angle of the variant's best designs at the targets (any
-    angle): exact where the reduced solver is, else IPOPT's local optima, verified."""
-    if v.exact:
-        found = _reduced(m, v, t, v.problem.beta)
-        if found is not None:
-            return list(found)
+    angle): exact where the reduced solver is, else IPOPT's local optima, verified. The
+    reduced problem is asked even where it was not exact for the request: without the bound
+    it may be (a bound no rod can meet leaves no start on its grid)."""
+    found = _reduced(m, v, t, v.problem.beta)
+    if found is not None:
+        return list(found)
     return [mu for _, mu in _optima(m, v, spec, t, "max_transmission_angle", 1.0)]
 
 

@@ -9,6 +9,7 @@ import math
 import pytest
 
 import synth
+from synth import search
 
 from . import bruteforce
 from . import reference_cases as ref
@@ -200,6 +201,25 @@ def test_the_best_angle_in_a_refusal_is_over_every_variant():
     best = synth.synthesize(2.5581, 0.5785, 0.0, mechanisms=spec).candidates[0]
     assert why.code == "TRANSMISSION_UNREACHABLE"
     assert f"{best.min_transmission_angle_deg:.4f}°" in why.reason
+
+
+@pytest.mark.parametrize("mtype", ["crank_rocker_slider", "drag_link_slider"])
+def test_a_bound_no_rod_meets_is_refused_without_ipopt(mtype, monkeypatch):
+    """min_size at 89.9°: no rod is long enough, so the rod variant's grid had no start and
+    its answer was inexact; IPOPT searched, then diagnosed (200–300 ms for a refusal). A rod
+    only adds a joint: the best coupler without it already misses the bound. The angle is
+    the generic path's (IPOPT's)."""
+    spec = [{"type": mtype}]
+    generic = synth.synthesize(1.6, 1.0, 89.9, spec, objective="min_size", accelerators=False)
+    runs = []
+    inner = search.multistart
+    monkeypatch.setattr(search, "multistart", lambda *a, **k: runs.append(1) or inner(*a, **k))
+    (why,) = synth.synthesize(1.6, 1.0, 89.9, spec, objective="min_size").infeasible
+    assert why.code == "TRANSMISSION_UNREACHABLE" and not runs
+    (other,) = generic.infeasible
+    assert why.best_transmission_angle_deg == pytest.approx(
+        other.best_transmission_angle_deg, abs=1e-6
+    )
 
 
 def test_fixed_parts_that_contradict_the_targets():

@@ -20,6 +20,7 @@ off) is a problem in (ψ, u = log(λ − 1)): a grid, then Newton's method on th
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -155,10 +156,14 @@ class FourBar(Construction):
         fixed link can make it smaller). None at all when the best transmission misses the
         bound."""
         best: list[dict] = []
-        if start is None:  # does any coupler transmit well enough?
-            found, exact = self.coupler_optimum()
+        if start is None:  # does any coupler transmit well enough? (a rod only adds a joint,
+            # and with a bound no rod meets no design is feasible: ask without it)
+            coupler = copy.copy(self)
+            coupler.rod = False
+            found, exact = coupler.coupler_optimum()
             if exact and found and found[1]["f"] > cos_bound * (1 + 1e-12):
                 return Reduced([])
+            found, exact = self.coupler_optimum() if self.rod else (found, exact)
             best = [found[0]] if found else []
         both = self.rod or bool(self.p.fixed) or bool(self.p.explicit)
         sheets: list[tuple[list, bool]] = []
