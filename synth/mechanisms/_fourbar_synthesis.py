@@ -156,14 +156,15 @@ class FourBar(Construction):
         fixed link can make it smaller). None at all when the best transmission misses the
         bound."""
         best: list[dict] = []
-        if start is None:  # does any coupler transmit well enough? (a rod only adds a joint,
-            # and with a bound no rod meets no design is feasible: ask without it)
-            coupler = copy.copy(self)
-            coupler.rod = False
-            found, exact = coupler.coupler_optimum()
+        if start is None:  # does any coupler transmit well enough? A rod only adds a joint
+            # (and a bound no rod meets leaves no feasible design), so ask without it
+            alone = copy.copy(self)
+            alone.rod = False
+            found, exact = alone.coupler_optimum()
             if exact and found and found[1]["f"] > cos_bound * (1 + 1e-12):
                 return Reduced([])
-            found, exact = self.coupler_optimum() if self.rod else (found, exact)
+            if self.rod:  # the start IPOPT gets has the rod
+                found, _ = self.coupler_optimum()
             best = [found[0]] if found else []
         both = self.rod or bool(self.p.fixed) or bool(self.p.explicit)
         sheets: list[tuple[list, bool]] = []
@@ -267,11 +268,10 @@ class FourBar(Construction):
         """Grid points to start Newton from: (point, the objective there, whether it is only
         a possible root, the least the objective can be near it). The best point (no ratio
         held); the crossings of one ratio's curve that are best among their neighbours along
-        it (each may be a local optimum: at least its value less the largest difference to
-        a neighbour within two grid cells, which bounds a smooth function's dip between
-        samples many times over), and, for
-        the size, every place the curve crosses the bound (the bound may bind at any of them);
-        with two ratios, or one and ψ held, every crossing of both."""
+        it (each may be a local optimum, at least its value less the largest difference to a
+        neighbour within two grid cells: a smooth function dips between samples far less)
+        and, for the size, every place the curve crosses the bound (the bound may bind at
+        any of them); with two ratios, or one and ψ held, every crossing of both."""
         e = self.evaluate(sigma, psi, 1 + np.exp(u))
         value = e["f"] if objective == "f" else e["size"]
         ok = e["feasible" if limits else "valid"] & ((objective == "f") | (e["f"] <= cos_bound))
