@@ -1,7 +1,8 @@
 """Analysis of one design over a crank revolution, generic over the registry.
 
 Each type's position s(θ) and transmission cosines are compiled once per thread into a CasADi
-function that also returns their first and second θ-derivatives (automatic differentiation).
+function that also returns their first and second θ-derivatives (automatic differentiation),
+built to machine code where a C compiler is at hand (``native``).
 Dead centres and transmission extremes are the stationary points of those functions: bracketed
 on a grid, then polished by a safeguarded Newton iteration (bisection where Newton leaves the
 bracket) to machine precision. Nothing here uses a type's closed forms.
@@ -21,6 +22,7 @@ import numpy as np
 from .errors import InvalidDesign, InvalidParameters
 from .mechanisms import Mechanism, get
 from .mechanisms._fourbar import grashof_class
+from .native import native
 from .results import (
     NEAR_DEAD_POINT_DEG,
     NEAR_LIMIT,
@@ -53,13 +55,12 @@ class Model:
         g1 = ca.jacobian(g, th)
         g2 = ca.jacobian(g1, th)
         self.joints = tuple(joints)
-        self.fn = _Batched(f"{m.type}_kinematics", th, pv, ca.vertcat(g, g1, g2))
+        name = "_".join((m.type, *sorted(variant)))  # one symbol per compiled library
+        self.fn = _Batched(f"{name}_kinematics", th, pv, ca.vertcat(g, g1, g2))
         self.dead = None
         if m.dead_centres is not None:
             h = m.dead_centres(p, th)
-            self.dead = _Batched(
-                f"{m.type}_dead_centres", th, pv, ca.vertcat(h, ca.jacobian(h, th))
-            )
+            self.dead = _Batched(f"{name}_dead_centres", th, pv, ca.vertcat(h, ca.jacobian(h, th)))
 
     def __call__(self, theta: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, ...]:
         """g, g', g'' at each θ: arrays of shape (rows, len(θ))."""
@@ -77,7 +78,7 @@ class _Batched:
     same operands, so the same results, from half the instructions."""
 
     def __init__(self, name: str, th: ca.SX, pv: ca.SX, out: ca.SX) -> None:
-        self.fn = ca.Function(name, [th, pv], [out], {"cse": True})
+        self.fn = native(ca.Function(name, [th, pv], [out], {"cse": True}))
         self.buffers: dict[int, tuple] = {}
 
     def __call__(self, theta, pv: np.ndarray) -> np.ndarray:
