@@ -1,11 +1,12 @@
 # The service image: slim Python 3.11, dependencies from the hash-pinned lock, non-root.
 #   docker build -t quickreturn-synth . && docker run -p 8000:8000 quickreturn-synth
-FROM python:3.11-slim
+FROM python:3.11-slim AS base
 
 ENV PYTHONDONTWRITEBYTECODE=1 \
     PYTHONUNBUFFERED=1 \
     OMP_NUM_THREADS=1 \
-    OPENBLAS_NUM_THREADS=1
+    OPENBLAS_NUM_THREADS=1 \
+    SYNTH_CACHE=/opt/synth
 
 WORKDIR /app
 COPY requirements.lock .
@@ -13,6 +14,15 @@ RUN pip install --no-cache-dir --require-hashes -r requirements.lock
 COPY synth synth
 COPY api api
 
+# the analysis compiled to machine code (synth/native.py), built here with a C compiler so that
+# the image carries the libraries and not the compiler
+FROM base AS native
+RUN apt-get update && apt-get install -y --no-install-recommends gcc libc6-dev \
+    && rm -rf /var/lib/apt/lists/*
+RUN python -c "import synth.kinematics as k; k.compile_all()"
+
+FROM base
+COPY --from=native /opt/synth /opt/synth
 RUN useradd --create-home --uid 10001 app
 USER app
 EXPOSE 8000

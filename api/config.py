@@ -1,4 +1,6 @@
-"""Settings: the only place that reads the environment (read once, overridable in tests)."""
+"""Settings: the only place the service reads the environment (read once, overridable in tests).
+
+The library reads its own two, for the compiled analysis, in ``synth.native``."""
 
 from __future__ import annotations
 

@@ -11,6 +11,7 @@ bracket) to machine precision. Nothing here uses a type's closed forms.
 from __future__ import annotations
 
 import functools
+import itertools
 import math
 import sys
 import threading
@@ -20,7 +21,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import InvalidDesign, InvalidParameters
-from .mechanisms import Mechanism, get
+from .mechanisms import Mechanism, all_types, get
 from .mechanisms._fourbar import grashof_class
 from .native import native
 from .results import (
@@ -111,6 +112,20 @@ def model(m: Mechanism, variant: frozenset[str]) -> Model:
     if key not in cache:
         cache[key] = Model(m, variant)
     return cache[key]
+
+
+def compile_all() -> None:
+    """Every type's analysis, in every structural variant, built into the native cache: an
+    image's build step (elsewhere each is built on first use). Raises where one cannot be."""
+    for mtype in all_types():
+        m = get(mtype)
+        optional = [q.name for q in m.parameters if q.zero_means]
+        for k in range(len(optional) + 1):
+            for parts in itertools.combinations(optional, k):
+                f = Model(m, frozenset(parts))
+                for fn in (f.fn.fn, f.dead and f.dead.fn):
+                    if fn is not None and fn.class_name() != "External":
+                        raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.native)")
 
 
 def stationary_points(

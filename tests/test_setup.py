@@ -292,29 +292,45 @@ def test_the_readme_python_examples_run():
 # --- the Dockerfile, without a Docker engine ------------------------------------------------
 
 
-def dockerfile() -> dict[str, list[str]]:
-    """Instruction -> its arguments, in order (continuation lines joined)."""
+def dockerfile() -> dict[str, dict[str, list[str]]]:
+    """Stage name -> instruction -> its arguments, in order (continuation lines joined); the
+    last stage is the image, under the name ""."""
     text = (ROOT / "Dockerfile").read_text().replace("\\\n", " ")
-    out: dict[str, list[str]] = {}
+    stages: list[tuple[str, dict[str, list[str]]]] = []
     for line in text.splitlines():
         if line.strip() and not line.lstrip().startswith("#"):
             word, _, rest = line.strip().partition(" ")
-            out.setdefault(word.upper(), []).append(rest.strip())
-    return out
+            if word.upper() == "FROM":
+                base, _, name = rest.partition(" AS ")
+                stages.append((name.strip(), {"FROM": [base.strip()]}))
+            else:
+                stages[-1][1].setdefault(word.upper(), []).append(rest.strip())
+    *built, (_, image) = stages
+    return dict(built) | {"": image}
 
 
 def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
+    """The image's stages played out on this machine: the base's files and install, the
+    compiled analysis built in the native stage, then the image (no compiler) serving."""
     work = served[1]
     d = dockerfile()
-    assert d["FROM"] == ["python:3.11-slim"]
+    base, native, image = d["base"], d["native"], d[""]
+    assert base["FROM"] == ["python:3.11-slim"]
+    assert native["FROM"] == image["FROM"] == ["base"]
     # the install step is the lock make serve installed into the fresh checkout's .venv
-    (install,) = [r for r in d["RUN"] if "pip install" in r]
-    assert "--require-hashes -r requirements.lock" in install
-    assert d["USER"] and d["USER"][-1] not in ("root", "0")
-    assert d["EXPOSE"] == ["8000"]
-    # the image's /app: only what the Dockerfile copies
-    app = tmp_path / "app"
-    for args in d["COPY"]:
+    installs = [r for stage in d.values() for r in stage.get("RUN", []) if "pip install" in r]
+    assert installs == [r for r in base["RUN"] if "pip install" in r] and len(installs) == 1
+    assert "--require-hashes -r requirements.lock" in installs[0]
+    assert image["USER"] and image["USER"][-1] not in ("root", "0")
+    assert image["EXPOSE"] == ["8000"]
+    root = tmp_path / "root"  # the image's file system: absolute paths land under it
+
+    def at(path: str) -> str:
+        return str(root / path.lstrip("/")) if path.startswith("/") else path
+
+    # the base's /app: only what its COPYs bring
+    app = Path(at(base["WORKDIR"][0]))
+    for args in base["COPY"]:
         src, dest = args.split()
         target = app / dest if dest not in (".", "./") else app / src
         if (work / src).is_dir():
@@ -322,9 +338,31 @@ def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
         else:
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(work / src, target)
-    env = dict(pair.split("=", 1) for pair in shlex.split(" ".join(d["ENV"])))
-    env |= {"PATH": f"{work / '.venv/bin'}:{os.environ['PATH']}", "HOME": str(tmp_path)}
-    cmd = json.loads(d["CMD"][0])
+
+    def environment(stage) -> dict[str, str]:
+        pairs = [shlex.split(e) for e in stage["ENV"]]
+        env = dict(pair.split("=", 1) for p in pairs for pair in p)
+        return {k: at(v) for k, v in env.items()} | {
+            "PATH": f"{work / '.venv/bin'}:{os.environ['PATH']}", "HOME": str(tmp_path)
+        }  # fmt: skip
+
+    # the native stage: its compiler is this machine's; its build writes the libraries
+    (build,) = [r for r in native["RUN"] if "apt-get" not in r]
+    subprocess.run(["sh", "-c", build], cwd=app, env=environment(base), check=True,
+                   timeout=300)  # fmt: skip
+    (copy,) = image["COPY"]
+    src, dest = copy.removeprefix("--from=native ").split()
+    assert Path(at(src)).is_dir() and at(src) == at(dest)  # the same folder, now in the image
+    # the image: no compiler, and every type's analysis compiled from the libraries it carries
+    env = environment(base) | {"CC": str(tmp_path / "no-compiler")}
+    probe = (
+        "from synth.kinematics import model; from synth.mechanisms import all_types, get; "
+        "print({model(get(t), frozenset()).fn.fn.class_name() for t in all_types()})"
+    )
+    out = subprocess.run(["python", "-c", probe], cwd=app, env=env, check=True,
+                         capture_output=True, text=True, timeout=120).stdout  # fmt: skip
+    assert out.strip() == "{'External'}", out
+    cmd = json.loads(image["CMD"][0])
     assert cmd[:3] == ["python", "-m", "api.serve"]
     image_port = free_port()
     cmd = [c.replace("8000", str(image_port)) for c in cmd]
@@ -332,7 +370,7 @@ def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
                             stderr=subprocess.DEVNULL)  # fmt: skip
     try:
         wait_for_health(image_port, proc, timeout=120)
-        health = d["HEALTHCHECK"][0].split(" CMD ", 1)[1].replace("8000", str(image_port))
+        health = image["HEALTHCHECK"][0].split(" CMD ", 1)[1].replace("8000", str(image_port))
         assert subprocess.run(["sh", "-c", health], cwd=app, env=env, timeout=30).returncode == 0
         status, out = call(image_port, "/v1/synthesize", PROJECT)
         assert status == 200 and len(out["candidates"]) == 2
