@@ -40,7 +40,7 @@ def _warm() -> None:
     synth.synthesize(1.5, 1.0, 10.0, time_budget_ms=5000)
     for t in synth.mechanisms.all_types():
         m = synth.mechanisms.get(t)
-        synth.kinematics.model(m, frozenset())
+        synth.model.model(m, frozenset())
 
 
 class Engine:

@@ -12,7 +12,7 @@ from typing import Annotated, Any, Literal, Union
 from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
 
 from synth import results
-from synth.kinematics import MAX_CURVE_POINTS
+from synth.kinematics import INCLUDE, MAX_CURVE_POINTS
 from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.sweep import MAX_POINTS
 from synth.synthesis import MAX_CANDIDATES
@@ -111,6 +111,20 @@ TypeSpec = _union(_spec)
 # --- requests ----------------------------------------------------------------------------
 
 
+class ToleranceSpec(BaseModel):
+    """± on every parameter of the design: one of the two."""
+
+    model_config = STRICT
+    absolute: float | None = Field(None, ge=0.0, le=LENGTH_MAX, description="in the lengths' unit")
+    relative: float | None = Field(None, ge=0.0, le=1.0, description="a fraction of each length")
+
+    @model_validator(mode="after")
+    def _one(self) -> ToleranceSpec:
+        if (self.absolute is None) == (self.relative is None):
+            raise ValueError("give absolute or relative, one of them")
+        return self
+
+
 class AnalyzeRequest(BaseModel):
     model_config = STRICT
     mechanism: Design
@@ -121,6 +135,19 @@ class AnalyzeRequest(BaseModel):
     )
     samples: int | None = Field(
         None, ge=1, le=MAX_CURVE_POINTS, description="curves at evenly spaced angles"
+    )
+
+    include: list[Literal[INCLUDE]] = Field(  # type: ignore[valid-type]
+        [],
+        max_length=len(INCLUDE),
+        description="computed only when asked: motion (cutting-speed fluctuation over the "
+        "working stroke, peak accelerations per stroke) and sensitivities (first-order "
+        "derivatives of time ratio, stroke and minimum transmission angle to every parameter)",
+    )
+    tolerance: ToleranceSpec | None = Field(
+        None,
+        description="± on every parameter: adds the sensitivities and their worst-case "
+        "first-order deviations",
     )
 
     @model_validator(mode="after")
@@ -258,6 +285,10 @@ class AnalyzeResponse(BaseModel):
     grashof: str | None
     reversals: int = Field(description="slider reversals per revolution (2: a clean design)")
     conditioning: results.Conditioning
+    motion: results.Motion | None = Field(None, description="when include has motion")
+    sensitivities: results.Sensitivities | None = Field(
+        None, description="when include has sensitivities, or with a tolerance"
+    )
     curves: Curves | None = None
 
 

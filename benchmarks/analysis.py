@@ -1,4 +1,5 @@
-"""What an analysis costs: the summary alone against curves, and how it grows with samples.
+"""What an analysis costs: the summary alone against curves (and how they grow with samples),
+motion quality and sensitivities.
 
     python -m benchmarks.analysis [--quick]
 
@@ -58,6 +59,13 @@ def analysis_costs(repeats: int, samples: tuple[int, ...]) -> list[dict]:
         summary()  # builds the compiled model
         cases = {"summary": summary, "curves, 1 angle": partial(summary, crank_angles_deg=[60.0])}
         cases |= {f"curves, {n} samples": partial(summary, samples=n) for n in samples}
+        cases |= {
+            "motion": partial(summary, include=["motion"]),
+            "sensitivities": partial(summary, include=["sensitivities"]),
+            "sensitivities and tolerance": partial(
+                summary, tolerance=synth.Tolerance(relative=1e-3)
+            ),
+        }
         for case, fn in cases.items():
             ms, ref = median_ms(fn, summary, repeats)
             rows.append({"type": mtype, "case": case, "ms": ms, "ratio": ms / ref})

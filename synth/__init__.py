@@ -11,7 +11,7 @@ from importlib.metadata import PackageNotFoundError, version
 from . import mechanisms
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
 from .kinematics import analyze, joints
-from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult
+from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
 from .sweep import sweep
 from .synthesis import SolverNeeded, Spec, synthesize
 
@@ -31,6 +31,7 @@ __all__ = [
     "SweepResult",
     "SynthError",
     "SynthesisResult",
+    "Tolerance",
     "UnknownMechanism",
     "analyze",
     "joints",

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
+
+from .errors import InvalidParameters
 
 TOL = 1e-9  # relative: how exactly a design must meet the targets (verification, fixed parts)
 
@@ -66,6 +69,69 @@ class Curves:
 
 
 @dataclass(frozen=True)
+class SpeedFluctuation:
+    """The largest slider speed over the working stroke against its mean speed (1: uniform)."""
+
+    whole: float  # over the whole working stroke
+    middle: float  # over its middle 80% by position, where a tool cuts
+
+
+@dataclass(frozen=True)
+class PeakAcceleration:
+    """The largest |slider acceleration| over each stroke, in units of ω²·stroke."""
+
+    working_stroke: float
+    return_stroke: float
+
+
+@dataclass(frozen=True)
+class Motion:
+    """How evenly the slider moves at a constant crank speed ω: dimensionless, so it holds for
+    any speed and any length unit."""
+
+    working_speed_fluctuation: SpeedFluctuation
+    peak_acceleration: PeakAcceleration
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """± on every length: ``absolute`` (in the lengths' unit) or ``relative`` (of each)."""
+
+    absolute: float | None = None
+    relative: float | None = None
+
+    def __post_init__(self) -> None:
+        given = {k: v for k, v in vars(self).items() if v is not None}
+        if len(given) != 1:
+            msg = "tolerance: give absolute or relative, one of them"
+            raise InvalidParameters(msg, ("tolerance",))
+        ((k, v),) = given.items()
+        if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
+            msg = f"tolerance.{k} must be ≥ 0 and finite, got {v!r}"
+            raise InvalidParameters(msg, ("tolerance", k))
+
+    def of(self, value: float) -> float:
+        return self.absolute if self.absolute is not None else (self.relative or 0.0) * abs(value)
+
+
+@dataclass(frozen=True)
+class Sensitivities:
+    """First-order derivatives of the time ratio, the stroke and the minimum transmission angle
+    (degrees) with respect to each parameter of the design (per unit of length).
+
+    ``min_transmission_angle_deg`` is None where that angle is not differentiable (0°: a
+    locking joint). With a tolerance, ``deviation`` is the worst-case first-order change of
+    each when every parameter may be off by its tolerance (the sum of |derivative| × tolerance).
+    """
+
+    time_ratio: dict[str, float]
+    stroke: dict[str, float]
+    min_transmission_angle_deg: dict[str, float] | None
+    tolerance: Tolerance | None = None
+    deviation: dict[str, float | None] | None = None
+
+
+@dataclass(frozen=True)
 class Analysis:
     """One design over a crank revolution (POST /v1/analyze)."""
 
@@ -83,12 +149,15 @@ class Analysis:
     reversals: int
     conditioning: Conditioning
     curves: Curves | None = None
+    motion: Motion | None = None  # only when asked
+    sensitivities: Sensitivities | None = None  # only when asked
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
-        if self.curves is None:
-            del out["curves"]
-        else:
+        for k in ("curves", "motion", "sensitivities"):  # computed only when asked
+            if out[k] is None:
+                del out[k]
+        if self.curves is not None:
             out["curves"] = {k: np.asarray(v).tolist() for k, v in out["curves"].items()}
         return out
 

@@ -100,9 +100,23 @@ def test_analyze_without_curves_has_no_curves(client):
     body = {"mechanism": design("whitworth", crank=75, pivot_distance=50, lever=150,
                                 connecting_rod=200)}  # fmt: skip
     out = client.post("/v1/analyze", json=body).json()
-    assert "curves" not in out
+    assert "curves" not in out and "motion" not in out and "sensitivities" not in out
     assert out["time_ratio"] == pytest.approx(2.73524, abs=5e-6)
     assert out["stroke"] == pytest.approx(300.0, rel=1e-12)
+
+
+def test_analyze_includes_motion_and_tolerances_when_asked(client):
+    body = {"mechanism": design("scotch_yoke", crank=35.0), "include": ["motion"],
+            "tolerance": {"relative": 1e-3}}  # fmt: skip
+    out = client.post("/v1/analyze", json=body).json()
+    assert out["motion"]["working_speed_fluctuation"]["whole"] == pytest.approx(math.pi / 2)
+    assert out["motion"]["peak_acceleration"] == {
+        "working_stroke": pytest.approx(0.5), "return_stroke": pytest.approx(0.5)
+    }  # fmt: skip
+    sens = out["sensitivities"]  # the stroke is 2r: ± 2 × 1e-3 × 35
+    assert sens["stroke"] == {"crank": pytest.approx(2.0)}
+    assert sens["deviation"]["stroke"] == pytest.approx(0.07)
+    assert sens["tolerance"] == {"absolute": None, "relative": 1e-3}
 
 
 def test_invalid_design_names_each_parameter(client):
@@ -189,6 +203,11 @@ BAD = [
     ("/v1/analyze", with_(ANALYZE, ["crank_angles_deg"], [0.0, "nan"]), "crank_angles_deg"),
     ("/v1/analyze", {**ANALYZE, "samples": 4, "crank_angles_deg": [1.0]}, "not both"),
     ("/v1/analyze", with_(ANALYZE, ["crank_speed"], "inf"), "crank_speed"),
+    ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"absolute": -0.1}), "tolerance"),
+    ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"absolute": 1.0, "relative": 0.1}),
+     "tolerance"),
+    ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"relative": "nan"}), "relative"),
+    ("/v1/analyze", with_(ANALYZE, ["include"], ["curvature"]), "include"),
     ("/v1/synthesize", {**SYNTH, "time_ratio": 0.5}, "time_ratio"),
     ("/v1/synthesize", {**SYNTH, "time_ratio": "NaN"}, "time_ratio"),
     ("/v1/synthesize", {**SYNTH, "stroke": -1.0}, "stroke"),

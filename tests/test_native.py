@@ -11,8 +11,8 @@ import shutil
 import numpy as np
 import pytest
 
-from synth.kinematics import GRID, Model
 from synth.mechanisms import all_types, get
+from synth.model import GRID, Model
 from synth.native import FLAGS
 
 from .designs import random_designs

@@ -4,6 +4,8 @@ from typing import Annotated
 
 from fastapi import APIRouter, Body, Request
 
+from synth.results import Tolerance
+
 from ..examples import ANALYZE
 from ..schemas import AnalyzeRequest, AnalyzeResponse
 from .common import run_design
@@ -19,7 +21,8 @@ async def analyze(
     request: Request, body: Annotated[AnalyzeRequest, Body(openapi_examples=ANALYZE)]
 ) -> AnalyzeResponse:
     """Time ratio, stroke, dead centres, strokes and transmission angles of a design; curves at
-    exactly ``crank_angles_deg`` or at ``samples`` evenly spaced angles, and only then."""
+    exactly ``crank_angles_deg`` or at ``samples`` evenly spaced angles, and only then; motion
+    quality and sensitivities only when ``include`` names them (or a ``tolerance`` is given)."""
     points = len(body.crank_angles_deg or ()) + (body.samples or 0)
     a = await run_design(
         request,
@@ -30,5 +33,7 @@ async def analyze(
         crank_acceleration=body.crank_acceleration,
         crank_angles_deg=body.crank_angles_deg,
         samples=body.samples,
+        include=body.include,
+        tolerance=Tolerance(**body.tolerance.model_dump()) if body.tolerance else None,
     )
     return AnalyzeResponse(**a.to_dict())

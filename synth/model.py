@@ -1,0 +1,134 @@
+"""Each type's kinematics compiled for one structural variant, once per thread.
+
+The rows are the slider's position s(θ) and each pin joint's transmission cosine, with their
+first and second θ-derivatives (automatic differentiation); ``kind="motion"`` gives the rows
+s′ and s″ instead, whose stationary points are the velocity and acceleration extremes. The
+functions are built to machine code where a C compiler is at hand (``native``), and are never
+shared between threads.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import threading
+
+import casadi as ca
+import numpy as np
+
+from .mechanisms import Mechanism, all_types, get
+from .native import native
+
+GRID = 128  # samples per revolution that bracket the stationary points
+
+_local = threading.local()
+
+
+KINDS = ("kinematics", "motion")
+
+
+class Model:
+    """A type's kinematics compiled for one variant, evaluated at a vector of crank angles.
+
+    Kind ``kinematics``: the rows are s, then each joint's cos μ. Kind ``motion``: s′ and s″
+    (per unit crank speed), whose stationary points are the extremes of the slider's velocity
+    and acceleration. A call gives the rows and their first two θ-derivatives.
+    """
+
+    def __init__(self, m: Mechanism, variant: frozenset[str], kind: str = "kinematics") -> None:
+        th = ca.SX.sym("theta")
+        pv = ca.SX.sym("p", len(m.parameters))
+        p = {q.name: (0.0 if q.name in variant else pv[i]) for i, q in enumerate(m.parameters)}
+        s = m.position(p, th)
+        joints = m.transmission(p, th) if kind == "kinematics" else {}
+        if kind == "kinematics":
+            g = ca.vertcat(s, *joints.values())
+        else:
+            s1 = ca.jacobian(s, th)
+            g = ca.vertcat(s1, ca.jacobian(s1, th))
+        g1 = ca.jacobian(g, th)
+        g2 = ca.jacobian(g1, th)
+        self.joints = tuple(joints)
+        self.kind = kind
+        base = "_".join((m.type, *sorted(variant)))  # one symbol per compiled library
+        self.name = f"{base}_{kind}"
+        self.fn = _Batched(self.name, th, pv, ca.vertcat(g, g1, g2))
+        self._rows = (th, pv, ca.vertcat(g, g1))
+        self.dead = None
+        if kind == "kinematics" and m.dead_centres is not None:
+            h = m.dead_centres(p, th)
+            self.dead = _Batched(f"{base}_dead_centres", th, pv, ca.vertcat(h, ca.jacobian(h, th)))
+
+    def __call__(self, theta: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, ...]:
+        """g, g', g'' at each θ: arrays of shape (rows, len(θ))."""
+        out = self.fn(theta, pv)
+        return tuple(out.reshape(3, out.shape[0] // 3, -1))
+
+    def dp(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
+        """∂g/∂p and ∂g'/∂p at each θ: shape (len(θ), 2·rows, parameters)."""
+        out = self._dp(theta, pv)
+        return out.T.reshape(out.shape[1], len(pv), -1).transpose(0, 2, 1)
+
+    @functools.cached_property
+    def _dp(self) -> _Batched:  # built on first use: only sensitivities need it
+        th, pv, g = self._rows
+        return _Batched(f"{self.name}_dp", th, pv, ca.densify(ca.vec(ca.jacobian(g, pv))))
+
+
+class _Batched:
+    """out(θ, p) compiled, evaluated at each θ of a vector.
+
+    Up to GRID angles go through a buffer preallocated for their number (made on first use,
+    owned like the function by one thread's Model): an ordinary call's numpy <-> DM
+    conversions cost ~40 µs, more than a few-angle Newton step's evaluation. Common
+    subexpressions are merged (the derivatives repeat g's terms): the same operations on the
+    same operands, so the same results, from half the instructions."""
+
+    def __init__(self, name: str, th: ca.SX, pv: ca.SX, out: ca.SX) -> None:
+        self.fn = native(ca.Function(name, [th, pv], [out], {"cse": True}))
+        self.buffers: dict[int, tuple] = {}
+
+    def __call__(self, theta, pv: np.ndarray) -> np.ndarray:
+        theta = np.atleast_1d(theta)
+        n = theta.size
+        if n > GRID:  # curves: the conversions are small against the work
+            return self.fn(theta[None, :], pv).full()
+        if n not in self.buffers:
+            self.buffers[n] = self._buffer(n)
+        x, p, out, run, _ = self.buffers[n]
+        x[:], p[:] = theta, pv
+        run()
+        return out.T.copy()  # the buffer is reused by the next call
+
+    def _buffer(self, width: int) -> tuple:
+        f = self.fn.map(width, [False, True], [False])
+        x, p = np.zeros(width), np.zeros(self.fn.nnz_in(1))
+        out = np.zeros((width, self.fn.nnz_out(0)))  # column-major (rows, width)
+        buf, run = f.buffer()
+        buf.set_arg(0, memoryview(x))
+        buf.set_arg(1, memoryview(p))
+        buf.set_res(0, memoryview(out))
+        return x, p, out, run, buf  # buf holds the bindings run uses
+
+
+def model(m: Mechanism, variant: frozenset[str], kind: str = "kinematics") -> Model:
+    """The compiled model, cached per thread: CasADi functions are never shared by threads."""
+    cache: dict[tuple, Model] = _local.__dict__.setdefault("models", {})
+    key = (m.type, variant, kind)
+    if key not in cache:
+        cache[key] = Model(m, variant, kind)
+    return cache[key]
+
+
+def compile_all() -> None:
+    """Every type's analysis, in every structural variant, built into the native cache: an
+    image's build step (elsewhere each is built on first use). Raises where one cannot be."""
+    for mtype in all_types():
+        m = get(mtype)
+        optional = [q.name for q in m.parameters if q.zero_means]
+        for k in range(len(optional) + 1):
+            for parts, kind in itertools.product(itertools.combinations(optional, k), KINDS):
+                f = Model(m, frozenset(parts), kind)
+                for fn in (f.fn.fn, f._dp.fn, f.dead and f.dead.fn):
+                    if fn is not None and fn.class_name() != "External":
+                        raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.native)")

@@ -1,0 +1,132 @@
+"""How a design runs beyond its targets: how evenly the slider cuts, how hard each stroke
+accelerates it, and how its time ratio, stroke and transmission move with its lengths.
+
+Everything is exact to rounding, with no sampling and no finite differences:
+
+- the extremes of the slider's velocity and acceleration are the stationary points of s′ and
+  s″ (the model's ``motion`` kind), found as the dead centres are (``roots``);
+- the middle 80% of the working stroke ends where s reaches 10% and 90% of its travel:
+  bracketed roots of s − level, polished by the same safeguarded Newton iteration;
+- the sensitivities follow from the conditions that fix the analysis's angles, by the
+  implicit function theorem: a dead centre θ* has s′(θ*, p) = 0, so dθ*/dp = −∂s′/∂p / s″;
+  the stroke and the transmission extremes are values at stationary points, so their
+  derivatives are the partial derivatives there (the angle's own motion drops out).
+  CasADi differentiates the type's expressions with respect to the parameters.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .mechanisms import Mechanism
+from .model import Model, model
+from .results import Motion, PeakAcceleration, Sensitivities, SpeedFluctuation, Tolerance
+from .roots import TWO_PI, _rtsafe, stationary_points
+
+CUT = 0.1  # a tool cuts over the middle 80% of the working stroke: 10% run-in, 10% run-out
+
+
+class Strokes:
+    """The working stroke of an analysed design: it starts at crank angle ``start`` (radians)
+    and lasts ``working`` radians, while the slider goes from ``s0`` to ``s1``."""
+
+    def __init__(self, t_min: float, t_max: float, s_min: float, s_max: float) -> None:
+        up = (t_max - t_min) % TWO_PI  # crank travel while the slider goes min -> max
+        slow_up = up >= TWO_PI - up
+        self.start, self.working = (t_min, up) if slow_up else (t_max, TWO_PI - up)
+        self.s0, self.s1 = (s_min, s_max) if slow_up else (s_max, s_min)
+        self.t_min, self.t_max, self.slow_up = t_min, t_max, slow_up
+        self.stroke = s_max - s_min
+
+
+def _inside(x: np.ndarray, start: float, length: float) -> np.ndarray:
+    """Which angles x lie in the crank interval [start, start + length) (radians)."""
+    return (x - start) % TWO_PI < length
+
+
+def motion(m: Mechanism, variant: frozenset[str], f: Model, pv: np.ndarray, st: Strokes) -> Motion:
+    """Speed fluctuation over the working stroke and peak accelerations, at constant ω."""
+    fm = model(m, variant, "motion")
+    rows, x, values = stationary_points(fm, pv)
+    v_at, a_at = x[rows == 0], x[rows == 1]  # where |s′| and |s″| may peak
+    v_peak, a_peak = np.abs(values[rows == 0]), np.abs(values[rows == 1])
+
+    def fd(t):  # s − level and s′, for the ends of the middle of the working stroke
+        g, g1, _ = f(t, pv)
+        return np.array([g[0] - levels, g1[0]])
+
+    levels = st.s0 + np.array([CUT, 1 - CUT]) * (st.s1 - st.s0)
+    lo, hi = np.full(2, st.start), np.full(2, st.start + st.working)
+    ends = _rtsafe(fd, lo, hi, st.s0 - levels, st.s1 - levels, np.full(2, abs(st.stroke)))
+    middle = ends[1] - ends[0]
+
+    def v_max(start: float, length: float, at_ends: np.ndarray) -> float:
+        inside = _inside(v_at, start, length)
+        return float(max(np.max(v_peak[inside], initial=0.0), *at_ends))
+
+    ds_ends = np.abs(f(ends, pv)[1][0])
+    whole = v_max(st.start, st.working, (0.0,)) * st.working / st.stroke
+    cut = v_max(ends[0], middle, ds_ends) * middle / ((1 - 2 * CUT) * st.stroke)
+
+    dd_dead = np.abs(fm(np.array([st.start, st.start + st.working]), pv)[0][1])
+
+    def a_max(start: float, length: float) -> float:
+        inside = _inside(a_at, start, length)
+        return float(max(np.max(a_peak[inside], initial=0.0), *dd_dead)) / st.stroke
+
+    return Motion(
+        SpeedFluctuation(whole, float(cut)),
+        PeakAcceleration(
+            a_max(st.start, st.working), a_max(st.start + st.working, TWO_PI - st.working)
+        ),
+    )
+
+
+def sensitivities(
+    m: Mechanism,
+    variant: frozenset[str],
+    f: Model,
+    pv: np.ndarray,
+    st: Strokes,
+    worst: tuple[int, float, float] | None,
+    tolerance: Tolerance | None,
+) -> Sensitivities:
+    """d(time ratio, stroke, minimum transmission angle)/d(each parameter of the design).
+
+    ``worst`` is the limiting joint's (row, crank angle, cos μ) at its transmission extreme,
+    None where the transmission is 90° throughout (no pin-jointed output, slot drives)."""
+    at = [st.t_min, st.t_max] + ([worst[1]] if worst else [])
+    d = f.dp(np.array(at), pv)  # (angle, [rows; their θ-derivatives], parameter)
+    nr = d.shape[1] // 2
+    s2 = f(np.array(at[:2]), pv)[2][0]
+    dt_min, dt_max = -d[0, nr] / s2[0], -d[1, nr] / s2[1]  # s′(θ*, p) = 0
+    d_working = (dt_max - dt_min) if st.slow_up else (dt_min - dt_max)
+    quick = TWO_PI - st.working
+    d_ratio = d_working * TWO_PI / quick**2  # TR = W / (2π − W)
+    d_stroke = d[1, 0] - d[0, 0]
+    d_mu: np.ndarray | None = np.zeros_like(d_stroke)
+    if worst is not None:
+        row, _, c = worst
+        d_mu = None if abs(c) >= 1 else -math.copysign(1, c) / math.sqrt(1 - c * c) * d[2, row]
+        d_mu = None if d_mu is None else np.degrees(d_mu)
+    names = [q.name for q in m.parameters if q.name not in variant]
+    keep = [i for i, q in enumerate(m.parameters) if q.name not in variant]
+
+    def per(dv: np.ndarray | None) -> dict[str, float] | None:
+        return None if dv is None else {n: float(dv[i]) for n, i in zip(names, keep, strict=True)}
+
+    deviation = None
+    if tolerance is not None:
+        tol = np.array([tolerance.of(pv[i]) for i in keep])
+
+        def worst_case(dv: np.ndarray | None) -> float | None:
+            return None if dv is None else float(np.abs(dv[keep]) @ tol)
+
+        deviation = {
+            "time_ratio": worst_case(d_ratio),
+            "stroke": worst_case(d_stroke),
+            "min_transmission_angle_deg": worst_case(d_mu),
+        }
+    return Sensitivities(per(d_ratio), per(d_stroke), per(d_mu), tolerance, deviation)

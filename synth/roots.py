@@ -1,0 +1,183 @@
+"""Stationary points of a compiled model's rows over a crank revolution, to machine precision.
+
+Bracketed on a grid (refined where the motion is fast), then polished by a safeguarded Newton
+iteration (bisection where Newton leaves the bracket). Nothing here uses a type's closed forms.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import sys
+
+import numpy as np
+
+from .errors import InvalidDesign
+from .model import GRID, Model
+
+TWO_PI = 2 * math.pi
+EPS4 = 4 * sys.float_info.epsilon
+
+
+def stationary_points(
+    f: Model, pv: np.ndarray, n: int = GRID
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every stationary point of every row that changes the sign of its derivative.
+
+    Returns (row, θ, value) arrays. Roots are bracketed on an n-point grid, refined where the
+    motion is fast (see ``_refine``), and polished by a vectorised safeguarded Newton
+    iteration on g' with g''.
+    """
+    grid, widths = _grid(n)
+    g, g1, g2 = f(grid, pv)
+    if not np.all(np.isfinite(g)):
+        bad = grid[np.nonzero(~np.all(np.isfinite(g), axis=0))[0][0]]
+        msg = f"the design cannot be assembled at crank angle {math.degrees(bad):.6g}°"
+        raise InvalidDesign(msg, (), "assembly")
+    if f.kind == "kinematics":  # row 0 is the slider's position
+        _refuse_dwell(grid, g1[0])
+    grid, widths, g1 = _refine(f, pv, grid, widths, g1, g2)
+    nxt = _next(g1)
+    rows, k = np.nonzero((g1 < 0) & (nxt > 0) | (g1 > 0) & (nxt < 0))
+    # exact stationary points on the grid, and kinks (a change point's flat configuration,
+    # where the derivative of sqrt(0) is undefined)
+    zr, zk = np.nonzero((g1 == 0) | ~np.isfinite(g1))
+    lo, hi = grid[k], grid[k] + widths[k]
+    scale = np.max(np.abs(np.where(np.isfinite(g1), g1, 0)), axis=1)[rows]
+
+    nr, idx = g1.shape[0], np.arange(rows.size)
+
+    def derivatives(x):  # g', g'' of each root's own row
+        return f.fn(x, pv).reshape(3, nr, -1)[1:, rows, idx]
+
+    x = _rtsafe(derivatives, lo, hi, g1[rows, k], nxt[rows, k], scale)
+    if f.dead is not None:
+        x = _dead_centres(f, pv, rows, x, TWO_PI / n)
+    rows = np.concatenate([rows, zr])
+    x = np.concatenate([x, grid[zk]]) % TWO_PI
+    values = f.fn(x, pv)[rows, np.arange(x.size)] if x.size else np.empty(0)
+    return rows, x, values
+
+
+@functools.cache
+def _grid(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """n angles over a revolution and the widths of their cells (read-only: shared)."""
+    grid = np.linspace(0.0, TWO_PI, n, endpoint=False)
+    widths = _widths(grid)
+    grid.flags.writeable = widths.flags.writeable = False
+    return grid, widths
+
+
+def _widths(grid: np.ndarray) -> np.ndarray:
+    return np.diff(np.append(grid, TWO_PI))
+
+
+def _next(a: np.ndarray) -> np.ndarray:
+    """Each column's successor around the revolution: np.roll(a, -1, axis=1), 4× cheaper."""
+    return np.concatenate((a[:, 1:], a[:, :1]), axis=1)
+
+
+def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
+    """The roots of fd (x -> (value, derivative), vectorised) in the brackets [lo, hi], where
+    it changes sign from f_lo to f_hi: Newton from the secant point while it stays in the
+    bracket and at least halves the step before last, else bisection (rtsafe), to machine
+    precision; ``scale`` is the function's size, to tell a root from a kink."""
+    # start from the secant (regula falsi) point: already close on a fine grid
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = lo + (hi - lo) * f_lo / (f_lo - f_hi)
+    x = np.where(np.isfinite(x), x, 0.5 * (lo + hi))
+    if x.size == 0:
+        return x
+    # one evaluation of fd for all roots per step, the steps in Python floats: numpy's
+    # per-operation overhead on a handful of roots cost more than the evaluations
+    x, lo, hi, dx_old = x.tolist(), lo.tolist(), hi.tolist(), (hi - lo).tolist()
+    rising, tiny = (f_lo < 0).tolist(), (1e-12 * scale).tolist()
+    for _ in range(100):
+        done = True
+        for i, (fx, dfx) in enumerate(zip(*fd(np.array(x)).tolist(), strict=True)):
+            xi = x[i]
+            if fx < 0 if rising[i] else fx > 0:  # on lo's side (not where fx is 0 or NaN)
+                lo[i] = xi
+            else:
+                hi[i] = xi
+            a, b = lo[i], hi[i]
+            step = fx / dfx if dfx else math.nan
+            newton = math.isfinite(step) and a <= xi - step <= b
+            newton = newton and abs(step) <= 0.5 * abs(dx_old[i])
+            dx = step if newton else xi - 0.5 * (a + b)
+            if not newton:
+                dx_old[i] = dx
+            tol = EPS4 * max(1.0, xi)
+            # a tiny Newton step is convergence only where the function is ~0 too: at a kink
+            # (a change point, a rod at its reach) it jumps across 0, and bisection must finish
+            small = abs(fx) <= tiny[i]
+            done &= fx == 0 or b - a <= tol or (abs(dx) <= tol and newton and small)
+            if fx != 0:
+                x[i] = xi - dx
+        if done:
+            break
+    return np.array(x)
+
+
+def _dead_centres(f: Model, pv, rows, x, width: float) -> np.ndarray:
+    """Move the slider's stationary points onto the zeros of the type's dead-centre function,
+    searched within a grid cell (and a quarter of the gap to the next one) of each."""
+    on_s = np.nonzero(rows == 0)[0]
+    if on_s.size < 2:
+        return x
+    t = x[on_s]
+    gap = np.abs((t[:, None] - t[None, :] + math.pi) % TWO_PI - math.pi)
+    np.fill_diagonal(gap, np.inf)
+    w = np.minimum(width, 0.25 * gap.min(axis=1))
+    lo, hi = t - w, t + w
+    h_lo, h_hi = f.dead(np.concatenate([lo, hi]), pv)[0].reshape(2, -1)
+    ok = np.sign(h_lo) * np.sign(h_hi) < 0
+    scale = np.maximum(np.abs(h_lo), np.abs(h_hi))[ok]
+    x = x.copy()
+    x[on_s[ok]] = _rtsafe(lambda y: f.dead(y, pv), lo[ok], hi[ok], h_lo[ok], h_hi[ok], scale)
+    return x
+
+
+def _refine(f: Model, pv, grid, widths, g1, g2, levels: int = 3, split: int = 16):
+    """Subdivide the cells where a pair of roots could hide between two grid points.
+
+    A cell whose ends have the same sign of g' can still hold two roots if g' turns inside it
+    (g'' changes sign) and is small against its rate of change, |g'| < |g''| × width (a quick
+    stroke squeezed into a few degrees, an extreme just inside a lever's swing): such cells are
+    split ``split`` ways, up to ``levels`` times."""
+    for _ in range(levels):
+        nxt1, nxt2 = _next(g1), _next(g2)
+        with np.errstate(invalid="ignore"):
+            fast = (np.abs(g1) < np.abs(g2) * widths) | (np.abs(nxt1) < np.abs(nxt2) * widths)
+            suspect = np.any(fast & (g1 * nxt1 > 0) & (g2 * nxt2 <= 0), axis=0)
+        if not np.any(suspect):
+            break
+        k = np.nonzero(suspect)[0]
+        inner = (grid[k, None] + widths[k, None] * np.arange(1, split) / split).ravel()
+        _, n1, n2 = f(inner, pv)
+        order = np.argsort(np.concatenate([grid, inner]), kind="stable")
+        grid = np.concatenate([grid, inner])[order]
+        g1 = np.concatenate([g1, n1], axis=1)[:, order]
+        g2 = np.concatenate([g2, n2], axis=1)[:, order]
+        widths = _widths(grid)
+    return grid, widths, g1
+
+
+def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:
+    """A slider that stands still over an interval (a linkage folded onto itself, e.g. an
+    offset slider-crank with coupler = crank and no offset) has no defined strokes.
+
+    Standing still is ds/dθ = 0 exactly at three grid points in a row: the cancellation-free
+    position formulas give an exact 0 for a folded linkage, while a near-stall keeps its tiny
+    but real motion (a drag-link kite 1e-9 off its change point moves its slider by ~1e-23 of
+    the stroke per radian over 20° of the turn, and its strokes are well defined)."""
+    still = ds == 0
+    ring = np.concatenate((still[-1:], still, still[:1]))  # around the revolution
+    if np.any(ring[:-2] & ring[1:-1] & ring[2:]):
+        raise InvalidDesign(
+            f"the slider stands still over about {360 * np.count_nonzero(still) / len(grid):.3g}°"
+            " of the crank's turn: the linkage folds onto itself, so its strokes and time ratio"
+            " are undefined",
+            (),
+            "dwell",
+        )

@@ -1,0 +1,191 @@
+"""Motion quality and sensitivities (synth.quality) against independent computations.
+
+- Speed fluctuation and peak accelerations against a brute force on tests/bruteforce.py's
+  geometry (which shares no code with synth): the slider's velocity by complex step, its
+  acceleration by a Cauchy contour integral of the position, both sampled densely over each
+  stroke and the largest refined by a bounded scalar maximiser. 1e-9 relative.
+- The scotch yoke's exact values: fluctuation π/2 over the whole stroke, peak acceleration
+  ω²·r, i.e. 0.5 in units of ω²·stroke.
+- Sensitivities against central differences of the analysis, Richardson-extrapolated over two
+  steps (the step-size control): 1e-6 relative to the largest derivative of each quantity.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq, minimize_scalar
+
+import synth
+from synth.errors import InvalidParameters
+from synth.results import Tolerance
+
+from . import bruteforce
+from .designs import TYPES, random_designs
+
+N = 200
+SAMPLES = 2000  # per stroke, before the maximiser refines the largest
+CONTOUR = 24  # points on the circle of the Cauchy integral for s″
+
+
+def velocity(mtype, p, theta):
+    """ds/dθ by complex step: exact to rounding."""
+    h = 1e-30
+    return np.imag(bruteforce.position(mtype, p, np.asarray(theta) + 1j * h)) / h
+
+
+def acceleration(mtype, p, theta, rho=0.02):
+    """d²s/dθ² = 2/(N ρ²) Σ (s(θ + ρ wʲ) − s(θ)) w⁻²ʲ, w = e^(2πi/N): Cauchy's integral on a
+    circle, exact but for terms of order ρᴺ; a smaller circle where the geometry cannot be
+    continued that far from the real axis."""
+    theta = np.atleast_1d(np.asarray(theta, dtype=float))
+    w = np.exp(2j * np.pi * np.arange(CONTOUR) / CONTOUR)
+    try:
+        s = bruteforce.position(mtype, p, theta[:, None] + rho * w[None, :])
+    except ValueError:
+        if rho < 1e-3:
+            raise
+        return acceleration(mtype, p, theta, rho / 4)
+    s0 = bruteforce.position(mtype, p, theta)[:, None]
+    return np.real(2 * np.sum((s - s0) * w[None, :] ** -2, axis=1) / (CONTOUR * rho**2))
+
+
+def peak(f, lo, hi):
+    """max f over [lo, hi]: dense samples, the best refined by a bounded maximiser."""
+    t = np.linspace(lo, hi, SAMPLES)
+    y = f(t)
+    k = int(np.argmax(y))
+    a, b = t[max(k - 1, 0)], t[min(k + 1, t.size - 1)]
+    r = minimize_scalar(lambda x: -f(np.array([x]))[0], bounds=(a, b), method="bounded",
+                        options={"xatol": 1e-13})  # fmt: skip
+    return max(y[k], -r.fun, f(np.array([lo]))[0], f(np.array([hi]))[0])
+
+
+def brute_motion(mtype, p):
+    b = bruteforce.simulate(mtype, p, n=4000)
+    work = b["working_angle"]
+    start = b["theta_min"] if b["working_direction"] == 1 else b["theta_max"]
+    s0, s1 = (b["s_min"], b["s_max"]) if b["working_direction"] == 1 else (b["s_max"], b["s_min"])
+    stroke = b["stroke"]
+
+    def speed(t):
+        return np.abs(velocity(mtype, p, t))
+
+    def accel(t):
+        return np.abs(acceleration(mtype, p, t))
+
+    mean = stroke / work
+    whole = peak(speed, start, start + work) / mean
+
+    def at(level):
+        return brentq(lambda t: bruteforce.position(mtype, p, np.array([t]))[0] - level,
+                      start, start + work, xtol=1e-15, rtol=1e-15)  # fmt: skip
+
+    a, b_ = at(s0 + 0.1 * (s1 - s0)), at(s0 + 0.9 * (s1 - s0))
+    middle = peak(speed, a, b_) / (0.8 * stroke / (b_ - a))
+    working = peak(accel, start, start + work) / stroke
+    ret = peak(accel, start + work, start + 2 * math.pi) / stroke
+    return whole, middle, working, ret
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_motion_matches_a_brute_force(mtype):
+    for p in random_designs(mtype, N, seed=13):
+        m = synth.analyze(mtype, p, include=["motion"]).motion
+        whole, middle, working, ret = brute_motion(mtype, p)
+        ours = m.working_speed_fluctuation
+        assert ours.whole == pytest.approx(whole, rel=1e-9), p
+        assert ours.middle == pytest.approx(middle, rel=1e-9), p
+        assert m.peak_acceleration.working_stroke == pytest.approx(working, rel=1e-9), p
+        assert m.peak_acceleration.return_stroke == pytest.approx(ret, rel=1e-9), p
+        assert ours.middle >= 1 and ours.whole >= 1  # a peak is never below the mean
+
+
+def test_the_scotch_yoke_moves_harmonically():
+    for r in (1e-3, 1.0, 37.5, 1e4):
+        m = synth.analyze("scotch_yoke", {"crank": r}, include=["motion"]).motion
+        assert m.working_speed_fluctuation.whole == pytest.approx(math.pi / 2, rel=1e-12)
+        # over the middle 80%: from cos θ = 0.8 to −0.8, speed sin θ peaks at 1 at 90°
+        arc = math.pi - 2 * math.acos(0.8)
+        assert m.working_speed_fluctuation.middle == pytest.approx(arc / 1.6, rel=1e-12)
+        assert m.peak_acceleration.working_stroke == pytest.approx(0.5, rel=1e-12)
+        assert m.peak_acceleration.return_stroke == pytest.approx(0.5, rel=1e-12)
+
+
+QUANTITIES = ("time_ratio", "stroke", "min_transmission_angle_deg")
+
+
+def values(mtype, p):
+    a = synth.analyze(mtype, p)
+    return np.array([a.time_ratio, a.stroke, a.transmission.min_deg])
+
+
+def central(mtype, p, name, h):
+    up, down = dict(p, **{name: p[name] + h}), dict(p, **{name: p[name] - h})
+    return (values(mtype, up) - values(mtype, down)) / (2 * h)
+
+
+def derivative(mtype, p, name, scale):
+    """d(values)/d(name) by Richardson-extrapolated central differences, the step shrunk by
+    tens until two steps agree to 1e-8 (None if they never do: a kink or a limit in reach)."""
+    prev, floor = None, np.abs(values(mtype, p)) / scale  # each quantity's own size
+    for k in range(3, 10):
+        h = 10.0**-k * scale
+        try:
+            r = (4 * central(mtype, p, name, h / 2) - central(mtype, p, name, h)) / 3
+        except synth.SynthError:  # the step crosses a validity limit: a smaller one
+            continue
+        if prev is not None and np.all(np.abs(r - prev) <= 1e-8 * (np.abs(r) + floor)):
+            return r
+        prev = r
+    return None
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_sensitivities_match_central_differences(mtype):
+    checked = 0
+    for p in random_designs(mtype, N, seed=17):
+        a = synth.analyze(mtype, p, include=["sensitivities"])
+        sens = a.sensitivities
+        scale = max(abs(v) for v in a.params.values())
+        fd = {name: derivative(mtype, a.params, name, scale) for name in sens.stroke}
+        if any(d is None for d in fd.values()):
+            continue
+        checked += 1
+        for q, quantity in enumerate(QUANTITIES):
+            ours = getattr(sens, quantity)
+            if ours is None:
+                continue
+            value = values(mtype, a.params)[q]
+            size = max(max(abs(v) for v in ours.values()), abs(value) / scale)
+            for name, v in ours.items():
+                assert v == pytest.approx(fd[name][q], rel=1e-6, abs=1e-6 * size), (
+                    quantity, name, p)  # fmt: skip
+    assert checked >= 0.9 * N
+
+
+def test_a_tolerance_gives_the_worst_first_order_deviation():
+    p = {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200}
+    s = synth.analyze("whitworth", p, tolerance=Tolerance(absolute=0.1)).sensitivities
+    assert s.deviation["stroke"] == pytest.approx(0.1 * sum(map(abs, s.stroke.values())))
+    r = synth.analyze("whitworth", p, tolerance=Tolerance(relative=1e-3)).sensitivities
+    want = sum(abs(v) * 1e-3 * p[k] for k, v in r.time_ratio.items())
+    assert r.deviation["time_ratio"] == pytest.approx(want, rel=1e-12)
+    # here the lever's end swings through a half turn: the stroke is twice the lever
+    assert s.stroke["lever"] == pytest.approx(2.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "bad", [dict(absolute=-1.0), dict(relative=math.nan), dict(), dict(absolute=1, relative=1)]
+)
+def test_a_bad_tolerance_is_refused_with_its_field(bad):
+    with pytest.raises(InvalidParameters) as e:
+        Tolerance(**bad)
+    assert e.value.loc[0] == "tolerance"
+
+
+def test_unknown_inclusions_are_refused():
+    with pytest.raises(InvalidParameters, match="include"):
+        synth.analyze("scotch_yoke", {"crank": 1.0}, include=["curvature"])
