@@ -125,8 +125,26 @@ class ToleranceSpec(BaseModel):
         return self
 
 
-class AnalyzeRequest(BaseModel):
+class Extras(BaseModel):
+    """What an analysis adds only when asked: to the analysis, or to each candidate."""
+
     model_config = STRICT
+    include: list[Literal[INCLUDE]] = Field(  # type: ignore[valid-type]
+        [],
+        max_length=len(INCLUDE),
+        description="computed only when asked: motion (cutting-speed fluctuation over the "
+        "working stroke, peak accelerations per stroke), sensitivities (first-order "
+        "derivatives of time ratio, stroke and minimum transmission angle to every parameter) "
+        "and envelope (the box the frame must hold: every pivot and every pin's path)",
+    )
+    tolerance: ToleranceSpec | None = Field(
+        None,
+        description="± on every parameter: adds the sensitivities and their worst-case "
+        "first-order deviations",
+    )
+
+
+class AnalyzeRequest(Extras):
     mechanism: Design
     crank_speed: float = Field(1.0, ge=-1e6, le=1e6, description="ω, rad/s")
     crank_acceleration: float = Field(0.0, ge=-1e9, le=1e9, description="α, rad/s²")
@@ -137,19 +155,6 @@ class AnalyzeRequest(BaseModel):
         None, ge=1, le=MAX_CURVE_POINTS, description="curves at evenly spaced angles"
     )
 
-    include: list[Literal[INCLUDE]] = Field(  # type: ignore[valid-type]
-        [],
-        max_length=len(INCLUDE),
-        description="computed only when asked: motion (cutting-speed fluctuation over the "
-        "working stroke, peak accelerations per stroke) and sensitivities (first-order "
-        "derivatives of time ratio, stroke and minimum transmission angle to every parameter)",
-    )
-    tolerance: ToleranceSpec | None = Field(
-        None,
-        description="± on every parameter: adds the sensitivities and their worst-case "
-        "first-order deviations",
-    )
-
     @model_validator(mode="after")
     def _one_curve_kind(self) -> AnalyzeRequest:
         if self.crank_angles_deg is not None and self.samples is not None:
@@ -157,8 +162,7 @@ class AnalyzeRequest(BaseModel):
         return self
 
 
-class SynthesizeRequest(BaseModel):
-    model_config = STRICT
+class SynthesizeRequest(Extras):
     time_ratio: float = Field(..., ge=1.0, le=1e3, description="slow/quick crank angle, ≥ 1")
     stroke: float = Field(..., ge=LENGTH_MIN, le=LENGTH_MAX)
     min_transmission_angle_deg: float = Field(0.0, ge=0.0, lt=90.0)
@@ -289,6 +293,7 @@ class AnalyzeResponse(BaseModel):
     sensitivities: results.Sensitivities | None = Field(
         None, description="when include has sensitivities, or with a tolerance"
     )
+    envelope: results.Envelope | None = Field(None, description="when include has envelope")
     curves: Curves | None = None
 
 

@@ -1,5 +1,5 @@
 """What an analysis costs: the summary alone against curves (and how they grow with samples),
-motion quality and sensitivities.
+motion quality, sensitivities and the envelope.
 
     python -m benchmarks.analysis [--quick]
 
@@ -62,9 +62,8 @@ def analysis_costs(repeats: int, samples: tuple[int, ...]) -> list[dict]:
         cases |= {
             "motion": partial(summary, include=["motion"]),
             "sensitivities": partial(summary, include=["sensitivities"]),
-            "sensitivities and tolerance": partial(
-                summary, tolerance=synth.Tolerance(relative=1e-3)
-            ),
+            "tolerance": partial(summary, tolerance=synth.Tolerance(relative=1e-3)),
+            "envelope": partial(summary, include=["envelope"]),
         }
         for case, fn in cases.items():
             ms, ref = median_ms(fn, summary, repeats)

@@ -11,7 +11,6 @@ from __future__ import annotations
 import math
 from collections.abc import Collection, Mapping, Sequence
 
-import casadi as ca
 import numpy as np
 
 from . import quality
@@ -34,7 +33,7 @@ from .results import (
 from .roots import TWO_PI, stationary_points
 
 MAX_CURVE_POINTS = 100_000
-INCLUDE = ("motion", "sensitivities")  # what an analysis adds only when asked
+INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis adds only when asked
 
 
 def analyze(
@@ -52,20 +51,16 @@ def analyze(
 
     Curves are computed only when asked: at exactly ``crank_angles_deg``, or at ``samples``
     evenly spaced angles (0° included, 360° not). So are ``include``'s ``"motion"`` (speed
-    fluctuation and peak accelerations) and ``"sensitivities"`` (to every length; also with a
-    ``tolerance``, which adds the worst-case deviations).
+    fluctuation and peak accelerations), ``"sensitivities"`` (to every length; also with a
+    ``tolerance``, which adds the worst-case deviations) and ``"envelope"`` (the box the frame
+    must hold).
 
     >>> a = analyze("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
     ...                           "connecting_rod": 200})
     >>> round(a.time_ratio, 5), round(a.stroke, 9)
     (2.73524, 300.0)
     """
-    unknown = sorted(set(include) - set(INCLUDE))
-    if unknown:
-        raise InvalidParameters(
-            f"include: unknown {', '.join(map(repr, unknown))}; choose from {', '.join(INCLUDE)}",
-            ("include",),
-        )
+    check_include(include)
     m = get(mechanism)
     p = m.complete(params)
     variant = m.variant(p)
@@ -76,7 +71,9 @@ def analyze(
     if crank_angles_deg is not None or samples is not None:
         summary["curves"] = _curves(f, pv, crank_speed, crank_acceleration, crank_angles_deg,
                                     samples)  # fmt: skip
-    if include or tolerance is not None:
+    if "envelope" in include:
+        summary["envelope"] = quality.envelope(m, variant, p, pv)
+    if {"motion", "sensitivities"} & set(include) or tolerance is not None:
         st = quality.Strokes(*_ends(rows, theta, values))
         if "motion" in include:
             summary["motion"] = quality.motion(m, variant, f, pv, st)
@@ -86,6 +83,16 @@ def analyze(
                 m, variant, f, pv, st, worst, tolerance
             )
     return Analysis(**summary)
+
+
+def check_include(include: Collection[str]) -> None:
+    """Raise InvalidParameters for anything ``include`` names that an analysis cannot add."""
+    unknown = sorted(set(include) - set(INCLUDE))
+    if unknown:
+        raise InvalidParameters(
+            f"include: unknown {', '.join(map(repr, unknown))}; choose from {', '.join(INCLUDE)}",
+            ("include",),
+        )
 
 
 def _ends(rows, theta, values) -> tuple[float, float, float, float]:
@@ -120,10 +127,12 @@ def joints(
     if m.joints is None:
         raise InvalidParameters(f"{mechanism} has no drawing yet", ("mechanism",))
     p = m.complete(params)
-    # θ as a CasADi number: a branch not taken (a division by zero on a pivot line) is inf
-    # there, as in the compiled analysis, instead of raising as on a Python float
-    at = [m.joints(p, ca.DM(math.radians(a))) for a in crank_angles_deg]
-    return {k: np.array([pins[k] for pins in at], dtype=float) for k in at[0]} if at else {}
+    f = model(m, m.variant(p), "pins")
+    theta = np.radians(np.asarray(crank_angles_deg, dtype=float).ravel())
+    if theta.size == 0:
+        return {}
+    g = f(theta, np.array([p[n] for n in m.names], dtype=float))[0]
+    return {k: g[2 * i : 2 * i + 2].T.copy() for i, k in enumerate(f.names)}
 
 
 def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -> dict:
@@ -143,7 +152,7 @@ def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -
         )
     slow_up = up >= down
     joints = []
-    for j, name in enumerate(f.joints, start=1):
+    for j, name in enumerate(f.names, start=1):
         c = values[rows == j]
         lo, hi = float(c.min()), float(c.max())
         worst = min(1.0, max(abs(lo), abs(hi)))

@@ -24,31 +24,29 @@ GRID = 128  # samples per revolution that bracket the stationary points
 _local = threading.local()
 
 
-KINDS = ("kinematics", "motion")
+KINDS = ("kinematics", "motion", "pins", "envelope")
 
 
 class Model:
     """A type's kinematics compiled for one variant, evaluated at a vector of crank angles.
 
-    Kind ``kinematics``: the rows are s, then each joint's cos μ. Kind ``motion``: s′ and s″
-    (per unit crank speed), whose stationary points are the extremes of the slider's velocity
-    and acceleration. A call gives the rows and their first two θ-derivatives.
+    A call gives the rows and their first two θ-derivatives. The rows, by ``kind``:
+
+    - ``kinematics``: s, then each transmission joint's cos μ (``names``);
+    - ``motion``: s′ and s″ (per unit crank speed), whose stationary points are the extremes
+      of the slider's velocity and acceleration;
+    - ``pins``: x and y of every pin of the type's drawing (``names``, in pairs);
+    - ``envelope``: those of the pins' coordinates that move (``axes``: 0 for x, 1 for y),
+      whose stationary points bound the space the frame must hold.
     """
 
     def __init__(self, m: Mechanism, variant: frozenset[str], kind: str = "kinematics") -> None:
         th = ca.SX.sym("theta")
         pv = ca.SX.sym("p", len(m.parameters))
         p = {q.name: (0.0 if q.name in variant else pv[i]) for i, q in enumerate(m.parameters)}
-        s = m.position(p, th)
-        joints = m.transmission(p, th) if kind == "kinematics" else {}
-        if kind == "kinematics":
-            g = ca.vertcat(s, *joints.values())
-        else:
-            s1 = ca.jacobian(s, th)
-            g = ca.vertcat(s1, ca.jacobian(s1, th))
+        g, self.names, self.axes = _rows(m, p, th, kind)
         g1 = ca.jacobian(g, th)
         g2 = ca.jacobian(g1, th)
-        self.joints = tuple(joints)
         self.kind = kind
         base = "_".join((m.type, *sorted(variant)))  # one symbol per compiled library
         self.name = f"{base}_{kind}"
@@ -72,7 +70,24 @@ class Model:
     @functools.cached_property
     def _dp(self) -> _Batched:  # built on first use: only sensitivities need it
         th, pv, g = self._rows
-        return _Batched(f"{self.name}_dp", th, pv, ca.densify(ca.vec(ca.jacobian(g, pv))))
+        return _Batched(f"{self.name}_dp", th, pv, ca.vec(ca.jacobian(g, pv)))
+
+
+def _rows(m: Mechanism, p: dict, th: ca.SX, kind: str) -> tuple[ca.SX, tuple, np.ndarray]:
+    """A kind's rows (see ``Model``), their names and their axes."""
+    none = np.zeros(0, dtype=int)
+    if kind == "kinematics":
+        joints = m.transmission(p, th)
+        return ca.vertcat(m.position(p, th), *joints.values()), tuple(joints), none
+    if kind == "motion":
+        s1 = ca.jacobian(m.position(p, th), th)
+        return ca.vertcat(s1, ca.jacobian(s1, th)), (), none
+    pins = m.joints(p, th)
+    coords = [(axis, ca.SX(c)) for xy in pins.values() for axis, c in enumerate(xy)]
+    if kind == "envelope":
+        coords = [(axis, c) for axis, c in coords if ca.depends_on(c, th)]
+    axes = np.array([axis for axis, _ in coords], dtype=int)
+    return ca.vertcat(*(c for _, c in coords)), tuple(pins), axes
 
 
 class _Batched:
@@ -85,6 +100,7 @@ class _Batched:
     same operands, so the same results, from half the instructions."""
 
     def __init__(self, name: str, th: ca.SX, pv: ca.SX, out: ca.SX) -> None:
+        out = ca.densify(out)  # structural zeros (a fixed pivot, a constant row) as numbers
         self.fn = native(ca.Function(name, [th, pv], [out], {"cse": True}))
         self.buffers: dict[int, tuple] = {}
 

@@ -1,5 +1,6 @@
 """How a design runs beyond its targets: how evenly the slider cuts, how hard each stroke
-accelerates it, and how its time ratio, stroke and transmission move with its lengths.
+accelerates it, how its time ratio, stroke and transmission move with its lengths, and how
+much space its frame must hold.
 
 Everything is exact to rounding, with no sampling and no finite differences:
 
@@ -11,7 +12,9 @@ Everything is exact to rounding, with no sampling and no finite differences:
   implicit function theorem: a dead centre θ* has s′(θ*, p) = 0, so dθ*/dp = −∂s′/∂p / s″;
   the stroke and the transmission extremes are values at stationary points, so their
   derivatives are the partial derivatives there (the angle's own motion drops out).
-  CasADi differentiates the type's expressions with respect to the parameters.
+  CasADi differentiates the type's expressions with respect to the parameters;
+- the envelope's sides are extremes of the pins' moving coordinates: their stationary points
+  (the model's ``envelope`` kind), with the fixed pivots.
 """
 
 from __future__ import annotations
@@ -22,7 +25,14 @@ import numpy as np
 
 from .mechanisms import Mechanism
 from .model import Model, model
-from .results import Motion, PeakAcceleration, Sensitivities, SpeedFluctuation, Tolerance
+from .results import (
+    Envelope,
+    Motion,
+    PeakAcceleration,
+    Sensitivities,
+    SpeedFluctuation,
+    Tolerance,
+)
 from .roots import TWO_PI, _rtsafe, stationary_points
 
 CUT = 0.1  # a tool cuts over the middle 80% of the working stroke: 10% run-in, 10% run-out
@@ -130,3 +140,15 @@ def sensitivities(
             "min_transmission_angle_deg": worst_case(d_mu),
         }
     return Sensitivities(per(d_ratio), per(d_stroke), per(d_mu), tolerance, deviation)
+
+
+def envelope(m: Mechanism, variant: frozenset[str], p: dict, pv: np.ndarray) -> Envelope:
+    """The bounding box of every pivot and every pin's path over a revolution."""
+    moving = model(m, variant, "envelope")
+    rows, _, values = stationary_points(moving, pv)
+    axes = moving.axes[rows]
+    at_zero = model(m, variant, "pins")(np.zeros(1), pv)[0][:, 0]  # the fixed pivots too
+    x = np.concatenate([values[axes == 0], at_zero[0::2]])
+    y = np.concatenate([values[axes == 1], at_zero[1::2]])
+    lo, hi = (float(x.min()), float(x.max())), (float(y.min()), float(y.max()))
+    return Envelope(lo, hi, lo[1] - lo[0], hi[1] - hi[0], float(m.size(p)))

@@ -94,6 +94,19 @@ class Motion:
 
 
 @dataclass(frozen=True)
+class Envelope:
+    """The box the frame must hold over a revolution: every pivot, every pin's path and the
+    slider's travel, in the drawing's frame (the crank pivot at the origin, x along the ground
+    line). ``link_length_sum`` is the other measure of size (a candidate's ``size``)."""
+
+    x: tuple[float, float]
+    y: tuple[float, float]
+    width: float
+    height: float
+    link_length_sum: float
+
+
+@dataclass(frozen=True)
 class Tolerance:
     """± on every length: ``absolute`` (in the lengths' unit) or ``relative`` (of each)."""
 
@@ -151,10 +164,11 @@ class Analysis:
     curves: Curves | None = None
     motion: Motion | None = None  # only when asked
     sensitivities: Sensitivities | None = None  # only when asked
+    envelope: Envelope | None = None  # only when asked
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
-        for k in ("curves", "motion", "sensitivities"):  # computed only when asked
+        for k in ("curves", "motion", "sensitivities", "envelope"):  # only when asked
             if out[k] is None:
                 del out[k]
         if self.curves is not None:
@@ -181,6 +195,10 @@ class Candidate:
     size: float  # sum of the link lengths
     conditioning: Conditioning
     active: tuple[str, ...]  # constraints at (within 1e-6 of) their limit: bound, bounds
+    # what the request's include (or tolerance) asked for, else None
+    motion: Motion | None = None
+    sensitivities: Sensitivities | None = None
+    envelope: Envelope | None = None
 
 
 @dataclass(frozen=True)

@@ -178,7 +178,7 @@ def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float
     beta = abs(float(f["beta"]))
     cos = [abs(float(c)) for c in f["transmission_cos"]]
     angle = math.degrees(math.acos(min(1.0, max(cos)))) if cos else 90.0
-    size = sum(p[q.name] for q in m.parameters if q.link)
+    size = m.size(p)
     return (math.pi + beta) / (math.pi - beta), float(f["stroke"]), angle, size
 
 

@@ -10,15 +10,16 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from .diagnose import diagnose
 from .errors import InvalidParameters, SynthError
 from .formulation import OBJECTIVES
+from .kinematics import check_include
 from .mechanisms import Mechanism, all_types, get
-from .results import Candidate, SynthesisResult
+from .results import Candidate, SynthesisResult, Tolerance
 from .search import Proposal, Searched, SolverNeeded, Spec, Targets, Variant, search
 from .verify import verify
 
@@ -36,6 +37,8 @@ def synthesize(
     max_candidates: int = 5,
     time_budget_ms: float = 2000.0,
     *,
+    include: Collection[str] = (),
+    tolerance: Tolerance | None = None,
     accelerators: bool = True,
     ipopt: bool = True,
 ) -> SynthesisResult:
@@ -45,6 +48,8 @@ def synthesize(
     cold multistart IPOPT on the formulation: the generic path, for cross-checks.
     ``ipopt=False`` answers only what the reduced solvers answer exactly (in milliseconds)
     and raises ``SolverNeeded`` for the rest.
+    ``include`` and ``tolerance`` add to each candidate what they add to an analysis
+    (``synth.analyze``): motion quality, sensitivities, the envelope.
 
     >>> r = synthesize(2.0, 450.0, mechanisms=[{"type": "crank_shaper",
     ...                "fixed": {"pivot_distance": 240.0, "ram_link": 0.0}}])
@@ -53,6 +58,7 @@ def synthesize(
     """
     t0 = time.monotonic()
     _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
+    check_include(include)
     if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
         raise InvalidParameters(
             f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
@@ -66,7 +72,8 @@ def synthesize(
     searched = [
         search(get(spec.type), spec, i, targets, accelerators) for i, spec in enumerate(specs)
     ]
-    found, left = _verified(searched, targets, max_candidates)
+    extras = {"include": include, "tolerance": tolerance}
+    found, left = _verified(searched, targets, max_candidates, extras)
     infeasible = [
         diagnose(get(spec.type), spec, targets, s)
         for i, (spec, s) in enumerate(zip(specs, searched, strict=True))
@@ -89,7 +96,7 @@ class _Found:
 
 
 def _verified(
-    searched: list[Searched], t: Targets, max_candidates: int
+    searched: list[Searched], t: Targets, max_candidates: int, extras: dict[str, Any]
 ) -> tuple[list[_Found], list[bool]]:
     """Verify the proposals best first (predicted) until ``max_candidates`` pass: a design
     that cannot be among the answer is never analysed. Also, per spec, whether proposals were
@@ -104,7 +111,7 @@ def _verified(
             for q in pool[k:]:
                 left[q.spec] = True
             break
-        c = _candidate(get(p.type), p, t, searched[p.spec].variants)
+        c = _candidate(get(p.type), p, t, searched[p.spec].variants, extras)
         if c is not None:
             found.append(_Found(p.spec, c))
     return found, left
@@ -123,16 +130,18 @@ def _rank(objective: str):
     return lambda c: (-round(c.min_transmission_angle_deg, 9), c.size, c.type)
 
 
-def _candidate(m: Mechanism, p: Proposal, t: Targets, variants: list[Variant]) -> Candidate | None:
+def _candidate(
+    m: Mechanism, p: Proposal, t: Targets, variants: list[Variant], extras: dict[str, Any]
+) -> Candidate | None:
     try:
         params = m.complete(p.params)
     except SynthError:
         return None
-    checked = verify(m.type, params, t.time_ratio, t.stroke, t.bound_deg)
+    checked = verify(m.type, params, t.time_ratio, t.stroke, t.bound_deg, **extras)
     if checked is None:
         return None
     a, residuals = checked
-    size = sum(params[q.name] for q in m.parameters if q.link)
+    size = m.size(params)
     mu = a.transmission.min_deg
     limits = {}
     for v in variants:
@@ -152,6 +161,9 @@ def _candidate(m: Mechanism, p: Proposal, t: Targets, variants: list[Variant]) -
         size=size,
         conditioning=a.conditioning,
         active=_active(params, mu, t, limits),
+        motion=a.motion,
+        sensitivities=a.sensitivities,
+        envelope=a.envelope,
     )
 
 

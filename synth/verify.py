@@ -6,21 +6,28 @@ from root finding on ds/dθ of the position function, not from the closed forms 
 
 from __future__ import annotations
 
+from typing import Any
+
 from .errors import SynthError
 from .kinematics import analyze
 from .results import TOL, Analysis
 
 
 def verify(
-    mtype: str, params: dict[str, float], time_ratio: float, stroke: float, bound_deg: float
+    mtype: str,
+    params: dict[str, float],
+    time_ratio: float,
+    stroke: float,
+    bound_deg: float,
+    **extras: Any,
 ) -> tuple[Analysis, dict[str, float]] | None:
     """The analysis and the relative residuals if the design meets every target, else None.
 
     A design must also run cleanly: exactly two slider reversals per revolution (one working
-    and one return stroke).
+    and one return stroke). ``extras`` (include, tolerance) are added to the analysis.
     """
     try:
-        a = analyze(mtype, params)
+        a = analyze(mtype, params, **extras)
     except SynthError:
         return None
     residuals = {

@@ -106,7 +106,7 @@ def test_analyze_without_curves_has_no_curves(client):
 
 
 def test_analyze_includes_motion_and_tolerances_when_asked(client):
-    body = {"mechanism": design("scotch_yoke", crank=35.0), "include": ["motion"],
+    body = {"mechanism": design("scotch_yoke", crank=35.0), "include": ["motion", "envelope"],
             "tolerance": {"relative": 1e-3}}  # fmt: skip
     out = client.post("/v1/analyze", json=body).json()
     assert out["motion"]["working_speed_fluctuation"]["whole"] == pytest.approx(math.pi / 2)
@@ -117,6 +117,9 @@ def test_analyze_includes_motion_and_tolerances_when_asked(client):
     assert sens["stroke"] == {"crank": pytest.approx(2.0)}
     assert sens["deviation"]["stroke"] == pytest.approx(0.07)
     assert sens["tolerance"] == {"absolute": None, "relative": 1e-3}
+    # the crank pin's circle holds everything: the yoke's pin travels along its diameter
+    assert out["envelope"] == {"x": [-35.0, 35.0], "y": [-35.0, 35.0], "width": 70.0,
+                               "height": 70.0, "link_length_sum": 35.0}  # fmt: skip
 
 
 def test_invalid_design_names_each_parameter(client):
@@ -216,6 +219,8 @@ BAD = [
     ("/v1/synthesize", {**SYNTH, "max_candidates": 51}, "max_candidates"),
     ("/v1/synthesize", {**SYNTH, "time_budget_ms": 0}, "time_budget_ms"),
     ("/v1/synthesize", {**SYNTH, "objective": "cheapest"}, "objective"),
+    ("/v1/synthesize", {**SYNTH, "include": ["colour"]}, "include"),
+    ("/v1/synthesize", {**SYNTH, "tolerance": {"relative": -1e-3}}, "tolerance"),
     ("/v1/synthesize", {**SYNTH, "stroke_mm": 1.0}, "stroke_mm"),
     ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "fixed": {"rod": 1.0}}]}, "rod"),
     ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "fixed": {"lever": 0.0}}]}, "lever"),

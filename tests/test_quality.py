@@ -6,13 +6,15 @@
   stroke and the largest refined by a bounded scalar maximiser. 1e-9 relative.
 - The scotch yoke's exact values: fluctuation π/2 over the whole stroke, peak acceleration
   ω²·r, i.e. 0.5 in units of ω²·stroke.
-- Sensitivities against central differences of the analysis, Richardson-extrapolated over two
-  steps (the step-size control): 1e-6 relative to the largest derivative of each quantity.
+- Sensitivities against central differences of the analysis, Richardson-extrapolated, the
+  step shrunk until two agree (the step-size control): 1e-6 relative to each quantity's scale.
+- The envelope against every pin's path sampled by synth.joints at 100 000 crank angles.
 """
 
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -26,6 +28,7 @@ from . import bruteforce
 from .designs import TYPES, random_designs
 
 N = 200
+STRESS = os.environ.get("HYPOTHESIS_PROFILE") == "stress"  # make stress: more envelopes
 SAMPLES = 2000  # per stroke, before the maximiser refines the largest
 CONTOUR = 24  # points on the circle of the Cauchy integral for s″
 
@@ -189,3 +192,37 @@ def test_a_bad_tolerance_is_refused_with_its_field(bad):
 def test_unknown_inclusions_are_refused():
     with pytest.raises(InvalidParameters, match="include"):
         synth.analyze("scotch_yoke", {"crank": 1.0}, include=["curvature"])
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_the_envelope_holds_every_pin_path_sampled_densely(mtype):
+    angles = np.arange(100_000) * (360 / 100_000)
+    for p in random_designs(mtype, 40 if STRESS else 8, seed=19):
+        a = synth.analyze(mtype, p, include=["envelope"])
+        e = a.envelope
+        pins = np.concatenate(list(synth.joints(mtype, a.params, angles).values()))
+        scale = max(abs(v) for v in a.params.values())
+        sampled = [(pins[:, k].min(), pins[:, k].max()) for k in (0, 1)]
+        for (lo, hi), (slo, shi) in zip((e.x, e.y), sampled, strict=True):
+            assert lo <= slo + 1e-12 * scale and shi <= hi + 1e-12 * scale, p  # holds them all
+            assert slo - lo <= 1e-7 * scale and hi - shi <= 1e-7 * scale, p  # and no more
+        assert e.width == pytest.approx(e.x[1] - e.x[0]) and e.height == pytest.approx(
+            e.y[1] - e.y[0]
+        )
+        links = [q.name for q in synth.mechanisms.get(mtype).parameters if q.link]
+        assert e.link_length_sum == pytest.approx(sum(a.params[n] for n in links), rel=1e-15)
+
+
+def test_candidates_carry_what_the_request_includes():
+    asked = synth.synthesize(1.6, 300.0, 20.0, include=["motion", "envelope"],
+                             tolerance=Tolerance(relative=1e-3))  # fmt: skip
+    plain = synth.synthesize(1.6, 300.0, 20.0)
+    assert [c.params for c in asked.candidates] == [c.params for c in plain.candidates]
+    for c, bare in zip(asked.candidates, plain.candidates, strict=True):
+        a = synth.analyze(c.type, c.params, include=["motion", "envelope"],
+                          tolerance=Tolerance(relative=1e-3))  # fmt: skip
+        assert (c.motion, c.envelope, c.sensitivities) == (a.motion, a.envelope, a.sensitivities)
+        assert c.sensitivities.deviation is not None
+        assert (bare.motion, bare.envelope, bare.sensitivities) == (None, None, None)
+    with pytest.raises(InvalidParameters, match="include"):
+        synth.synthesize(1.6, 300.0, 20.0, include=["colour"])

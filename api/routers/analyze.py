@@ -4,11 +4,9 @@ from typing import Annotated
 
 from fastapi import APIRouter, Body, Request
 
-from synth.results import Tolerance
-
 from ..examples import ANALYZE
 from ..schemas import AnalyzeRequest, AnalyzeResponse
-from .common import run_design
+from .common import run_design, tolerance
 
 router = APIRouter(tags=["analysis"])
 # an analysis with at most this many curve points runs in the request's own thread: it costs
@@ -34,6 +32,6 @@ async def analyze(
         crank_angles_deg=body.crank_angles_deg,
         samples=body.samples,
         include=body.include,
-        tolerance=Tolerance(**body.tolerance.model_dump()) if body.tolerance else None,
+        tolerance=tolerance(body),
     )
     return AnalyzeResponse(**a.to_dict())

@@ -5,8 +5,10 @@ from typing import Any
 from fastapi import Request
 
 from synth.errors import InvalidDesign, SynthError
+from synth.results import Tolerance
 
 from ..engine import Engine
+from ..schemas import Extras
 
 
 async def run(
@@ -30,3 +32,8 @@ async def run_design(
     params = design.params.model_dump(exclude_none=True)
     loc = ("mechanism", "params")
     return await run(request, loc, op, inline, mechanism=design.type, params=params, **kwargs)
+
+
+def tolerance(body: Extras) -> Tolerance | None:
+    """The request's tolerance as synth takes it."""
+    return Tolerance(**body.tolerance.model_dump()) if body.tolerance else None

@@ -6,7 +6,7 @@ from fastapi import APIRouter, Body, Request
 
 from ..examples import SYNTHESIZE
 from ..schemas import SynthesizeRequest, SynthesizeResponse
-from .common import run
+from .common import run, tolerance
 
 router = APIRouter(tags=["synthesis"])
 
@@ -38,5 +38,7 @@ async def synthesize(
         objective=body.objective,
         max_candidates=body.max_candidates,
         time_budget_ms=body.time_budget_ms,
+        include=body.include,
+        tolerance=tolerance(body),
     )
     return r

@@ -92,8 +92,8 @@ class Mechanism:
     # for fixed parts that contradict the targets
     reduced: Callable[[Any], Any] | None = None
     # the pin positions {name: (x, y)} at crank angle θ, named as in the module docstring, the
-    # slider's pin last (for drawings: θ a CasADi number, never symbolic or differentiated)
-    joints: Callable[[Params, float], dict[str, tuple[float, float]]] | None = None
+    # slider's pin last, in CasADi maths (for drawings, and the envelope the frame must hold)
+    joints: Callable[[Params, Any], dict[str, tuple[Any, Any]]] | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -107,6 +107,10 @@ class Mechanism:
             f"{self.type} has no parameter {name!r}; its parameters: {', '.join(self.names)}",
             (name,),
         )
+
+    def size(self, p: Params) -> Any:
+        """The sum of the link lengths (placements, such as an offset, do not count)."""
+        return sum(p[q.name] for q in self.parameters if q.link)
 
     def variant(self, p: Params) -> frozenset[str]:
         """The optional parts set to zero (``ram_link`` 0 = slot drive): a structural choice."""

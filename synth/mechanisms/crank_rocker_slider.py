@@ -32,8 +32,6 @@ stroke = 2 r5 sin(Δψ/2) when s is monotonic over the swing: r6 cos(Δψ/2) ≥
 
 from __future__ import annotations
 
-import math
-
 import casadi as ca
 
 from ..geometry import cos_law, leg, triangle_angle
@@ -91,11 +89,11 @@ def defaults(p):
 
 def joints(p, th):
     r1, r2, r4, r5 = p["ground"], p["crank"], p["rocker"], p["rocker_arm"]
-    vx, vy, _ = (float(v) for v in output_pin(*(p[n] for n in LINKS), th))
-    ge, gf = (float(v) for v in _swing(p))
-    mx, my = -math.cos((ge + gf) / 2), math.sin((ge + gf) / 2)  # the mid-swing line
-    h, s = p["slider_height"], float(position(p, th))  # R = O4 + h m + s m⊥, m⊥ = (−my, mx)
-    return {"O2": (0.0, 0.0), "A": (r2 * math.cos(th), r2 * math.sin(th)), "O4": (r1, 0.0),
+    vx, vy, _ = output_pin(*(p[n] for n in LINKS), th)
+    ge, gf = _swing(p)
+    mx, my = -ca.cos((ge + gf) / 2), ca.sin((ge + gf) / 2)  # the mid-swing line
+    h, s = p["slider_height"], position(p, th)  # R = O4 + h m + s m⊥, m⊥ = (−my, mx)
+    return {"O2": (0.0, 0.0), "A": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (r1, 0.0),
             "D": (r1 + vx, vy), "C": (r1 + r5 * vx / r4, r5 * vy / r4),
             "R": (r1 + h * mx - s * my, h * my + s * mx)}  # fmt: skip
 

@@ -88,9 +88,9 @@ def defaults(p):
 
 def joints(p, th):
     r2, d, L, h = p["crank"], p["pivot_distance"], p["lever"], p["ram_height"]
-    c, s = (float(v) for v in _lever(p, th))
-    return {"O2": (0.0, 0.0), "B": (r2 * math.cos(th), r2 * math.sin(th)), "O4": (-d, 0.0),
-            "P": (-d + L * c, L * s), "R": (-d + h, float(position(p, th)))}  # fmt: skip
+    c, s = _lever(p, th)
+    return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (-d, 0.0),
+            "P": (-d + L * c, L * s), "R": (-d + h, position(p, th))}  # fmt: skip
 
 
 def facts(p):

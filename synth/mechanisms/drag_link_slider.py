@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 
+import casadi as ca
 import numpy as np
 
 from ..geometry import ahead, cos_law, leg, triangle_angle
@@ -69,10 +70,10 @@ def transmission(p, th):
 
 def joints(p, th):
     r1, r2, r4, r5 = p["ground"], p["crank"], p["follower"], p["follower_arm"]
-    vx, vy, _ = (float(v) for v in output_pin(*(p[n] for n in LINKS), th))
-    return {"O2": (0.0, 0.0), "A": (r2 * math.cos(th), r2 * math.sin(th)), "O4": (r1, 0.0),
+    vx, vy, _ = output_pin(*(p[n] for n in LINKS), th)
+    return {"O2": (0.0, 0.0), "A": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (r1, 0.0),
             "B": (r1 + vx, vy), "C": (r1 + r5 * vx / r4, r5 * vy / r4),
-            "D": (float(position(p, th)), 0.0)}  # fmt: skip
+            "D": (position(p, th), 0.0)}  # fmt: skip
 
 
 def facts(p):

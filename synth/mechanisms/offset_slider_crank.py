@@ -61,8 +61,8 @@ def transmission(p, th):
 
 def joints(p, th):
     r2 = p["crank"]
-    return {"O2": (0.0, 0.0), "B": (r2 * math.cos(th), r2 * math.sin(th)),
-            "C": (float(position(p, th)), p["offset"])}  # fmt: skip
+    return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)),
+            "C": (position(p, th), p["offset"])}  # fmt: skip
 
 
 def facts(p):

@@ -36,8 +36,8 @@ def transmission(p, th):
 
 def joints(p, th):
     r = p["crank"]
-    return {"O2": (0.0, 0.0), "B": (r * math.cos(th), r * math.sin(th)),
-            "yoke": (float(position(p, th)), 0.0)}  # fmt: skip
+    return {"O2": (0.0, 0.0), "B": (r * ca.cos(th), r * ca.sin(th)),
+            "yoke": (position(p, th), 0.0)}  # fmt: skip
 
 
 def facts(p):

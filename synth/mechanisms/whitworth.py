@@ -61,9 +61,9 @@ def transmission(p, th):
 
 def joints(p, th):
     r2, d, L = p["crank"], p["pivot_distance"], p["lever"]
-    c, s = (float(v) for v in _lever(p, th))
-    return {"O2": (0.0, 0.0), "B": (r2 * math.cos(th), r2 * math.sin(th)), "O4": (-d, 0.0),
-            "P": (-d - L * c, -L * s), "R": (-d, float(position(p, th)))}  # fmt: skip
+    c, s = _lever(p, th)
+    return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (-d, 0.0),
+            "P": (-d - L * c, -L * s), "R": (-d, position(p, th))}  # fmt: skip
 
 
 def facts(p):
