@@ -169,13 +169,23 @@ class SynthesizeRequest(Extras):
     mechanisms: list[TypeSpec] | None = Field(
         None, max_length=24, description="omitted: every quick-return type, nothing fixed"
     )
-    objective: Literal["max_transmission_angle", "min_size"] = Field(
-        "max_transmission_angle",
-        description="max_transmission_angle: the best minimum transmission angle, ties to the "
-        "smallest design; min_size: the smallest sum of link lengths meeting the bound (which "
-        "must then be > 0°)",
+    objective: Literal["pareto", "max_transmission_angle", "min_size"] = Field(
+        "pareto",
+        description="pareto: per type, the trade-off front between the smallest design that "
+        "meets the bound (min_size) and the best-transmitting one (max_transmission_angle), "
+        "points spread evenly in angle, each the smallest design with at least its angle "
+        "(size: the sum of link lengths; each candidate's front says where it sits); "
+        "max_transmission_angle: the best minimum transmission angle, ties to the smallest "
+        "design; min_size: the smallest sum of link lengths meeting the bound (which must "
+        "then be > 0°)",
     )
-    max_candidates: int = Field(5, ge=1, le=MAX_CANDIDATES)
+    max_candidates: int | None = Field(
+        None,
+        ge=1,
+        le=MAX_CANDIDATES,
+        description="in all; omitted: 5 (pareto: 5 per type of the request, at most "
+        f"{MAX_CANDIDATES}, a front of one point taking one)",
+    )
     time_budget_ms: float = Field(
         min(2000.0, get_settings().max_budget_ms), gt=0.0, le=get_settings().max_budget_ms
     )

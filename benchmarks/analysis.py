@@ -16,6 +16,7 @@ alternated; and how the cost depends on the number of candidates asked for.
 from __future__ import annotations
 
 import argparse
+import itertools
 import statistics
 import time
 from collections.abc import Callable
@@ -87,6 +88,35 @@ def synthesis_costs(repeats: int) -> list[dict]:
         fn()
         ms, ref = median_ms(fn, base, repeats)
         rows.append({"case": case, "ms": ms, "ratio": ms / ref, "candidates": len(fn().candidates)})
+    return rows
+
+
+def pareto_costs(repeats: int, quick: bool = False) -> list[dict]:
+    """The default answer (objective pareto, each type's front) against a max_transmission_angle
+    request on the same targets (everything free, stroke 1), calls alternated; per type (and
+    all five) the median and largest ratio over DEFAULT_TIME_RATIOS × DEFAULT_BOUNDS where the
+    type has designs, and the points its fronts had."""
+    ratios, bounds = ((1.6,), (20.0,)) if quick else (DEFAULT_TIME_RATIOS, DEFAULT_BOUNDS)
+    rows = []
+    for mtype in (*QUICK_RETURN, ALL):
+        kinds = None if mtype == ALL else [{"type": mtype}]
+        per = []
+        for tr, b in itertools.product(ratios, bounds):
+            front = partial(synth.synthesize, tr, 1.0, b, kinds)
+            best = partial(front, objective="max_transmission_angle")
+            r = front()
+            best()
+            if not r.candidates:
+                continue
+            ms, ref = median_ms(front, best, repeats)
+            per.append((ms, ref, len(r.candidates)))
+        if per:
+            rows.append({"type": mtype, "targets": len(per),
+                         "pareto_ms": statistics.median(p[0] for p in per),
+                         "max_transmission_ms": statistics.median(p[1] for p in per),
+                         "ratio": statistics.median(p[0] / p[1] for p in per),
+                         "ratio_max": max(p[0] / p[1] for p in per),
+                         "points": statistics.median(p[2] for p in per)})  # fmt: skip
     return rows
 
 
@@ -223,6 +253,7 @@ def main(argv: list[str] | None = None) -> dict:
         "analysis": analysis_costs(repeats, SAMPLES[:3] if a.quick else SAMPLES),
         "synthesis": synthesis_costs(2 if a.quick else 7),
         "default_requests": default_summary(cases),
+        "pareto": pareto_costs(3 if a.quick else 9, a.quick),
         "default_request_cases": cases,
     }
     print(table(results["analysis"], ("type", "case", "ms", "ratio")))
@@ -231,6 +262,8 @@ def main(argv: list[str] | None = None) -> dict:
                "default_ms_max", "default_analyses", "refusal_n", "refusal_answered",
                "refusal_ms", "refusal_ms_max", "refusal_analyses")  # fmt: skip
     print(table(results["default_requests"], columns))
+    print(table(results["pareto"], ("type", "targets", "pareto_ms", "max_transmission_ms",
+                                     "ratio", "ratio_max", "points")))  # fmt: skip
     for r in results["default_requests"]:
         for key in ("worse_than_generic", "min_size_refused_but_feasible"):
             if r[key]:

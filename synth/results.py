@@ -177,6 +177,34 @@ class Analysis:
 
 
 @dataclass(frozen=True)
+class FrontPoint:
+    """A candidate's place on its type's trade-off front (objective ``pareto``): the designs
+    of the type that no other design beats in both minimum transmission angle (up) and
+    ``measure`` (down, the sum of link lengths). ``index`` counts from the smallest (0) to the
+    best-transmitting (``points`` − 1); ``ends`` names the single-criterion optima the point
+    is (``min_size``, ``max_transmission_angle``; both for a front of one point)."""
+
+    measure: str
+    index: int
+    points: int
+    ends: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Family:
+    """Designs that are all equally good: every ``free`` parameter may take any value in its
+    ``range`` (the validity conditions and the request's bounds), the ``tied`` ones follow as
+    coefficient × the free one (``tied[name] = (free, coefficient)``), the rest stay as they
+    are; time ratio, stroke and every transmission angle do not change. The candidate is the
+    smallest member; fix the free parameter in the request to pick another."""
+
+    free: tuple[str, ...]
+    range: dict[str, tuple[float, float]]
+    tied: dict[str, tuple[str, float]]
+    relation: str
+
+
+@dataclass(frozen=True)
 class Candidate:
     """A verified design (POST /v1/synthesize): every parameter, fixed and found."""
 
@@ -199,6 +227,8 @@ class Candidate:
     motion: Motion | None = None
     sensitivities: Sensitivities | None = None
     envelope: Envelope | None = None
+    front: FrontPoint | None = None  # objective pareto: its place on the front
+    family: Family | None = None  # where the targets leave a family of equal designs
 
 
 @dataclass(frozen=True)

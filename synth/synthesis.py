@@ -11,21 +11,26 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from .diagnose import diagnose
 from .errors import InvalidParameters, SynthError
-from .formulation import OBJECTIVES
 from .kinematics import check_include
 from .mechanisms import Mechanism, all_types, get
-from .results import Candidate, SynthesisResult, Tolerance
+from .reduced import MAX_TRANSMISSION, MIN_SIZE
+from .results import Candidate, Family, FrontPoint, SynthesisResult, Tolerance
 from .search import Proposal, Searched, SolverNeeded, Spec, Targets, Variant, search
 from .verify import verify
 
-__all__ = ["MAX_CANDIDATES", "SolverNeeded", "Spec", "synthesize"]
+__all__ = ["MAX_CANDIDATES", "OBJECTIVES", "SolverNeeded", "Spec", "synthesize"]
 
+PARETO = "pareto"
+OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE)
 MAX_CANDIDATES = 50
+PER_TYPE = 5  # candidates per type when max_candidates is not given (pareto: per type's front)
+MEASURE = "link_length_sum"  # the size the front minimises
+FLAT = 1e-9  # relative: a front whose ends are this close in angle and size is one point
 
 
 def synthesize(
@@ -33,8 +38,8 @@ def synthesize(
     stroke: float,
     min_transmission_angle_deg: float = 0.0,
     mechanisms: Sequence[Spec | Mapping[str, Any]] | None = None,
-    objective: str = "max_transmission_angle",
-    max_candidates: int = 5,
+    objective: str = PARETO,
+    max_candidates: int | None = None,
     time_budget_ms: float = 2000.0,
     *,
     include: Collection[str] = (),
@@ -44,6 +49,11 @@ def synthesize(
 ) -> SynthesisResult:
     """Every good design for the targets, verified and ranked (POST /v1/synthesize).
 
+    ``objective``: ``pareto`` (each type's trade-off front between its smallest design that
+    meets the bound and its best-transmitting one, see ``_front``), or one criterion:
+    ``max_transmission_angle`` (ties to the smaller design) or ``min_size`` (the smallest sum
+    of link lengths meeting the bound). ``max_candidates`` counts in all; by default it is
+    ``PER_TYPE`` (pareto: per type of the request, at most ``MAX_CANDIDATES``).
     ``accelerators=False`` solves every type as one without a reduced solver would be, by
     cold multistart IPOPT on the formulation: the generic path, for cross-checks.
     ``ipopt=False`` answers only what the reduced solvers answer exactly (in milliseconds)
@@ -57,36 +67,147 @@ def synthesize(
     [120.0, 450.0]
     """
     t0 = time.monotonic()
+    if mechanisms is None:
+        specs = [Spec(t) for t in all_types() if get(t).quick_return]
+    else:
+        specs = [_spec(s, i) for i, s in enumerate(mechanisms)]
+    per_type = max_candidates or PER_TYPE  # the most one type's front takes
+    if max_candidates is None:
+        max_candidates = min(PER_TYPE * (len(specs) if objective == PARETO else 1), MAX_CANDIDATES)
     _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
     check_include(include)
     if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
         raise InvalidParameters(
             f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
         )
-    if mechanisms is None:
-        specs = [Spec(t) for t in all_types() if get(t).quick_return]
-    else:
-        specs = [_spec(s, i) for i, s in enumerate(mechanisms)]
     deadline = t0 + time_budget_ms / 1000
     targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline, ipopt)
-    searched = [
-        search(get(spec.type), spec, i, targets, accelerators) for i, spec in enumerate(specs)
-    ]
     extras = {"include": include, "tolerance": tolerance}
-    found, left = _verified(searched, targets, max_candidates, extras)
+    if objective == PARETO:
+        cands, infeasible = _pareto(specs, targets, max_candidates, per_type, extras, accelerators)
+    else:
+        cands, infeasible = _single(specs, targets, max_candidates, extras, accelerators)
+    return SynthesisResult(
+        candidates=tuple(cands),
+        infeasible=tuple(infeasible),
+        complete=time.monotonic() < targets.deadline,
+        elapsed_ms=(time.monotonic() - t0) * 1000,
+    )
+
+
+def _single(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accelerators: bool):
+    """One criterion: the best ``max_candidates`` designs of all types, ranked."""
+    searched = [search(get(spec.type), spec, i, t, accelerators) for i, spec in enumerate(specs)]
+    found, left = _verified(searched, t, max_candidates, extras)
     infeasible = [
-        diagnose(get(spec.type), spec, targets, s)
+        diagnose(get(spec.type), spec, t, s)
         for i, (spec, s) in enumerate(zip(specs, searched, strict=True))
         if not any(c.spec == i for c in found) and not left[i]
     ]
-    complete = time.monotonic() < targets.deadline
-    cands = sorted((c.candidate for c in found), key=_rank(objective))
-    return SynthesisResult(
-        candidates=tuple(cands[:max_candidates]),
-        infeasible=tuple(infeasible),
-        complete=complete,
-        elapsed_ms=(time.monotonic() - t0) * 1000,
+    return sorted((c.candidate for c in found), key=_rank(t.objective))[:max_candidates], infeasible
+
+
+def _pareto(specs, t: Targets, max_candidates: int, per_type: int, extras: dict[str, Any],
+            accelerators: bool):  # fmt: skip
+    """Each type's front, ``max_candidates`` points in all shared among the types (a front of
+    one point takes one, none more than ``per_type``), the types in the order of their best
+    angle."""
+    best_t = replace(t, objective=MAX_TRANSMISSION)
+    tops, infeasible = [], []
+    for i, spec in enumerate(specs):
+        m = get(spec.type)
+        s = search(m, spec, i, best_t, accelerators)
+        top = _first(m, s, best_t, t, extras)
+        if top is None:
+            infeasible.append(diagnose(m, spec, best_t, s))
+        else:
+            tops.append((i, top))
+    tops.sort(key=lambda it: _rank(MAX_TRANSMISSION)(it[1]))
+    out: list[Candidate] = []
+    lows: dict[int, Candidate | None] = dict.fromkeys((i for i, _ in tops), None)
+    if t.bound_deg > 0:  # without a bound there is no smallest design (it locks at 0°)
+        small_t = replace(t, objective=MIN_SIZE)
+        for i in lows:
+            m = get(specs[i].type)
+            lows[i] = _first(m, search(m, specs[i], i, small_t, accelerators), small_t, t, extras)
+    share = _share([_flat(lows[i], top) for i, top in tops], max_candidates, per_type)
+    for (i, top), n in zip(tops, share, strict=True):
+        if n:
+            out += _front(specs[i], i, top, lows[i], n, t, extras, accelerators)
+    return out, infeasible
+
+
+def _front(spec: Spec, i: int, top: Candidate, low: Candidate | None, n: int, t: Targets,
+           extras, accelerators: bool) -> list[Candidate]:  # fmt: skip
+    """n points of one type's front, spread evenly in angle from its smallest design that
+    meets the bound (``low``, the min_size optimum) to its best (``top``): the point at angle
+    μ is the smallest design whose minimum transmission angle is at least μ (the min_size
+    optimum with μ as the bound), so none beats another in both. Without a bound the points
+    sit at k/n of the best angle (k = 1 … n). Points found twice (a front that jumps) are
+    dropped, as are points past the budget."""
+    m = get(spec.type)
+    if n == 1 or _flat(low, top):
+        ends = (MIN_SIZE, MAX_TRANSMISSION) if _flat(low, top) else (MAX_TRANSMISSION,)
+        return [replace(top, front=FrontPoint(MEASURE, 0, 1, ends))]
+    b = top.min_transmission_angle_deg
+    if low is not None:
+        a = low.min_transmission_angle_deg
+        grid = [a + (b - a) * k / (n - 1) for k in range(1, n - 1)]
+        points = [low]
+    else:
+        grid = [b * k / n for k in range(1, n)]
+        points = []
+    points.insert(0, top)  # first: a point found again is kept as the end it is
+    for mu in grid:
+        if time.monotonic() >= t.deadline:
+            break
+        at = replace(t, objective=MIN_SIZE, bound_deg=mu)
+        c = _first(m, search(m, spec, i, at, accelerators), at, t, extras)
+        if c is not None:
+            points.append(c)
+    kept: list[Candidate] = []  # the non-dominated, best angle first
+    for c in sorted(points, key=lambda c: (-c.min_transmission_angle_deg, c.size)):
+        if all(c.size < k.size * (1 - FLAT) for k in kept):
+            kept.append(c)
+    kept.reverse()
+    out = []
+    for k, c in enumerate(kept):
+        ends = ((MIN_SIZE,) if c is low else ()) + ((MAX_TRANSMISSION,) if c is top else ())
+        out.append(replace(c, front=FrontPoint(MEASURE, k, len(kept), ends)))
+    return out[::-1]
+
+
+def _flat(low: Candidate | None, top: Candidate) -> bool:
+    """Whether a front is one point: its ends agree in angle and size."""
+    return low is not None and (
+        top.min_transmission_angle_deg - low.min_transmission_angle_deg
+        <= FLAT * top.min_transmission_angle_deg
+        and abs(top.size - low.size) <= FLAT * top.size
     )
+
+
+def _share(flat: list[bool], total: int, cap: int) -> list[int]:
+    """``total`` points among fronts in rank order: a front of one point (``flat``) takes
+    one, the others share the rest evenly up to ``cap`` each, the better-ranked first; with
+    fewer points than fronts, the better-ranked take one each."""
+    out = [1 if k < total else 0 for k in range(len(flat))]
+    grow = [k for k, f in enumerate(flat) if not f and out[k]]
+    while grow and sum(out) < total:
+        for k in grow[: total - sum(out)]:
+            out[k] += 1
+        grow = [k for k in grow if out[k] < cap]
+    return out
+
+
+def _first(m: Mechanism, s: Searched, t: Targets, asked: Targets, extras) -> Candidate | None:
+    """The best proposal of a search (by ``t``'s objective) that passes verification against
+    the request (``asked``)."""
+    variants = s.variants
+    for p in sorted(s.proposals, key=_predicted_rank(t.objective)):
+        c = _candidate(m, p, asked, variants, extras)
+        if c is not None:
+            return c
+    return None
 
 
 @dataclass(frozen=True)
@@ -118,13 +239,13 @@ def _verified(
 
 
 def _predicted_rank(objective: str):
-    if objective == "min_size":
+    if objective == MIN_SIZE:
         return lambda p: (p.size, -p.angle_deg, p.type)
     return lambda p: (-round(p.angle_deg, 9), p.size, p.type)
 
 
 def _rank(objective: str):
-    if objective == "min_size":
+    if objective == MIN_SIZE:
         return lambda c: (c.size, -c.min_transmission_angle_deg, c.type)
     # ties (e.g. slot drives, 90° for every design) go to the smaller mechanism
     return lambda c: (-round(c.min_transmission_angle_deg, 9), c.size, c.type)
@@ -153,7 +274,7 @@ def _candidate(
         time_ratio=a.time_ratio,
         stroke=a.stroke,
         min_transmission_angle_deg=mu,
-        objective_value=size if t.objective == "min_size" else mu,
+        objective_value=mu if t.objective == MAX_TRANSMISSION else size,
         method=p.method,
         residuals=residuals,
         verified=True,
@@ -164,6 +285,28 @@ def _candidate(
         motion=a.motion,
         sensitivities=a.sensitivities,
         envelope=a.envelope,
+        family=_family(m, params, limits),
+    )
+
+
+def _family(m: Mechanism, params: dict[str, float], limits: dict) -> Family | None:
+    """The type's free scale (``Mechanism.scale``) where the request leaves every length of
+    it free: its range within the bounds (and validity), the others tied to it."""
+    sc = m.scale
+    if sc is None or any(k not in limits for k in (sc.free, *sc.tied)):
+        return None
+    x = params[sc.free]
+    ratio = {k: params[k] / x for k in sc.tied}
+    lo = max([limits[sc.free][0]] + [limits[k][0] / r for k, r in ratio.items()])
+    hi = min([limits[sc.free][1]] + [limits[k][1] / r for k, r in ratio.items()])
+    if sc.reach is not None:
+        hi = min(hi, sc.reach(params))
+    ties = ", ".join(f"{k} = {r:.12g} × {sc.free}" for k, r in ratio.items())
+    return Family(
+        free=(sc.free,),
+        range={sc.free: (min(lo, x), max(hi, x))},
+        tied={k: (sc.free, r) for k, r in ratio.items()},
+        relation=f"{ties}; the other lengths as given ({sc.why})",
     )
 
 
@@ -202,7 +345,7 @@ def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
     for name, value, ok, what in checks:
         if not ok:
             raise InvalidParameters(f"{name} must be {what}, got {value!r}", (name,))
-    if objective == "min_size" and bound == 0:
+    if objective == MIN_SIZE and bound == 0:
         raise InvalidParameters(
             "min_transmission_angle_deg must be > 0 with the objective min_size: without a "
             "bound the smallest designs are linkages that lock (a 0° transmission angle)",

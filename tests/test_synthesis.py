@@ -72,8 +72,8 @@ def test_textbook_whitworth_inversion():
     assert_meets(best, 2.73524, 300.0, 0.0)
 
 
-def test_every_type_by_default_and_ranked():
-    r = synth.synthesize(1.5, 0.3, 20.0, max_candidates=50)
+def test_every_type_by_default_and_ranked_by_angle():
+    r = synth.synthesize(1.5, 0.3, 20.0, objective="max_transmission_angle", max_candidates=50)
     assert r.complete and r.candidates
     mus = [round(c.min_transmission_angle_deg, 9) for c in r.candidates]
     assert mus == sorted(mus, reverse=True)

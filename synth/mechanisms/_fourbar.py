@@ -11,7 +11,7 @@ from typing import Any
 import casadi as ca
 
 from ..geometry import cos_law, sqrt, where
-from ._registry import Condition
+from ._registry import Condition, Scale
 
 
 def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, Any]:
@@ -117,3 +117,14 @@ def grashof_class(ground: float, crank: float, coupler: float, rocker: float) ->
     if rocker == s:
         return "rocker-crank"
     return "double-rocker"
+
+
+def fourbar_scale(output: str) -> Scale:
+    """A four-bar's angles (its swing, time ratio and coupler transmission) do not change with
+    its scale, and the output's arm to the slider is a length of its own."""
+    return Scale(
+        "crank",
+        ("ground", "coupler", output),
+        f"the four-bar's angles do not depend on its scale; the {output}'s arm to the slider "
+        "is a length of its own",
+    )

@@ -61,6 +61,19 @@ class Condition:
 
 
 @dataclass(frozen=True)
+class Scale:
+    """A free scale the targets leave: ``free`` and the ``tied`` lengths may grow or shrink
+    together, in the ratios a design has, without changing the time ratio, the stroke or any
+    transmission angle (only the size). ``reach`` is the largest ``free`` that validity allows
+    with the other lengths held, ``why`` says in words why the scale is free."""
+
+    free: str
+    tied: tuple[str, ...]
+    why: str
+    reach: Callable[[Params], float] | None = None
+
+
+@dataclass(frozen=True)
 class Mechanism:
     """One mechanism type: parameters, validity, and its kinematics as functions of (p, θ)."""
 
@@ -94,6 +107,8 @@ class Mechanism:
     # the pin positions {name: (x, y)} at crank angle θ, named as in the module docstring, the
     # slider's pin last, in CasADi maths (for drawings, and the envelope the frame must hold)
     joints: Callable[[Params, Any], dict[str, tuple[Any, Any]]] | None = None
+    # a family of equal designs the targets leave (synthesis reports it, synth.results.Family)
+    scale: Scale | None = None
 
     @property
     def names(self) -> tuple[str, ...]:

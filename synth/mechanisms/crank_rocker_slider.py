@@ -35,9 +35,16 @@ from __future__ import annotations
 import casadi as ca
 
 from ..geometry import cos_law, leg, triangle_angle
-from ._fourbar import grashof_conditions, output_pin
+from ._fourbar import fourbar_scale, grashof_conditions, output_pin
 from ._fourbar_synthesis import FourBar, Roles
-from ._registry import Mechanism, Parameter, absent, one_way, reach_condition, register
+from ._registry import (
+    Mechanism,
+    Parameter,
+    absent,
+    one_way,
+    reach_condition,
+    register,
+)
 
 LINKS = ("ground", "crank", "coupler", "rocker")
 
@@ -165,6 +172,7 @@ register(
         fourbar=lambda p: tuple(p[n] for n in LINKS),
         facts=facts,
         reduced=lambda p: FourBar(p, ROLES).solve(),
+        scale=fourbar_scale("rocker"),
         joints=joints,
     )
 )

@@ -41,6 +41,7 @@ from ._registry import (
     Condition,
     Mechanism,
     Parameter,
+    Scale,
     absent,
     one_way,
     reach_condition,
@@ -205,6 +206,12 @@ register(
         defaults=defaults,
         facts=facts,
         reduced=reduced,
+        scale=Scale(
+            "crank",
+            ("pivot_distance",),
+            "the time ratio sets crank/pivot_distance and the stroke sets the lever alone",
+            reach=lambda p: p["lever"] / (1 + p["pivot_distance"] / p["crank"]),  # block on lever
+        ),
         joints=joints,
     )
 )

@@ -33,7 +33,7 @@ import numpy as np
 
 from ..geometry import ahead, cos_law, leg, triangle_angle
 from ..reduced import Problem, Reduced, agree, differ, rod, unreachable
-from ._fourbar import grashof_conditions, output_pin, output_pin_height
+from ._fourbar import fourbar_scale, grashof_conditions, output_pin, output_pin_height
 from ._fourbar_synthesis import FourBar, Roles, worst_cos
 from ._registry import Condition, Mechanism, Parameter, register
 
@@ -174,6 +174,7 @@ register(
         fourbar=lambda p: tuple(p[n] for n in LINKS),
         facts=facts,
         reduced=reduced,
+        scale=fourbar_scale("follower"),
         joints=joints,
     )
 )

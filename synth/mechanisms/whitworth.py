@@ -32,7 +32,7 @@ from ..geometry import ahead, leg, lever, sqrt, where
 from ..reduced import MIN_SIZE, STRICT, Problem, Reduced
 from ._inverse import check
 from ._inverse import scale as _scale
-from ._registry import Condition, Mechanism, Parameter, register
+from ._registry import Condition, Mechanism, Parameter, Scale, register
 
 
 def _lever(p, th):
@@ -156,6 +156,11 @@ register(
         transmission=transmission,
         facts=facts,
         reduced=reduced,
+        scale=Scale(
+            "crank",
+            ("pivot_distance",),
+            "the time ratio sets pivot_distance/crank and the stroke sets the lever alone",
+        ),
         joints=joints,
     )
 )
