@@ -60,8 +60,11 @@ class Bounds(BaseModel):
 
 def _bounds(m: Mechanism) -> type[BaseModel]:
     pair = Annotated[list[Finite], Field(min_length=2, max_length=2)] | None
-    fields = {q.name: (pair, Field(None, description=f"[lower, upper] for {q.name}"))
-              for q in m.parameters}  # fmt: skip
+    fields = {
+        q.name: (pair, Field(None, description=f"[lower, upper] for {q.name}; default "
+                 f"[{q.bounds[0]:g}, {q.bounds[1]:g}] × the stroke"))
+        for q in m.parameters
+    }  # fmt: skip
     return create_model(f"{_camel(m.type)}Bounds", __base__=Bounds, **fields)
 
 
@@ -94,7 +97,16 @@ def _spec(m: Mechanism) -> type[BaseModel]:
         __base__=Spec,
         type=(Literal[m.type], ...),  # type: ignore[valid-type]
         fixed=(fixed, Field(default_factory=fixed, description="parameters kept as they are")),
-        bounds=(_bounds(m), Field(default_factory=_bounds(m), description="limits on free ones")),
+        bounds=(
+            _bounds(m),
+            Field(
+                default_factory=_bounds(m),
+                description="limits on free ones, in the stroke's unit. The defaults (each "
+                "parameter's bounds in /v1/mechanisms, × the stroke; the upper × the largest "
+                "fixed length where that is larger) limit a search; where a candidate rests on "
+                "one (its active list), give a wider pair here to see past it",
+            ),
+        ),
     )
 
 

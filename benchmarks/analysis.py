@@ -129,9 +129,9 @@ DEFAULT_BOUNDS = (0.0, 20.0, 40.0)
 OBJECTIVES = ("max_transmission_angle", "min_size")
 REFUSALS = {  # (time ratio, bound°)
     "scotch_yoke": ((1.6, 20.0), (3.0, 0.0)),  # time ratio 1 for every design
-    "offset_slider_crank": ((1.6, 89.9), (3.5, 20.0)),  # μ ≤ 84.26° in the default bounds; TR < 3
+    "offset_slider_crank": ((1.6, 89.9), (3.5, 20.0)),  # μ ≤ 75.52° in the default bounds; TR < 3
     "crank_shaper": ((1.0, 20.0), (1.0, 0.0)),  # TR > 1 for every design
-    "whitworth": ((1.6, 89.9), (1.0, 20.0)),  # μ ≤ 84.26° (its rod); TR > 1
+    "whitworth": ((1.6, 89.9), (1.0, 20.0)),  # μ ≤ 75.52° (its rod ≤ 2 strokes); TR > 1
     "crank_rocker_slider": ((1.6, 89.9), (10.0, 20.0)),  # 28.5° at TR 1.6; 1.2° at TR 10
     "drag_link_slider": ((1.6, 89.9), (10.0, 20.0)),  # as the crank-rocker
 }

@@ -90,7 +90,7 @@ def _bound(lo: float, hi: float) -> Change:
     return lambda p, an, rng: (an.time_ratio, an.stroke, rng.uniform(lo, hi), {})
 
 
-ROD_LIMIT = "the rod's cos μ ≥ (stroke/2)/(5·stroke) = 0.1 within the default bounds: μ ≤ 84.26°"
+ROD_LIMIT = "the rod's cos μ ≥ (stroke/2)/(2·stroke) = 1/4 within the default bounds: μ ≤ 75.52°"
 INFEASIBLE: dict[str, list[tuple[str, str, Change]]] = {
     "scotch_yoke": [
         ("time_ratio", "time ratio 1 for every design", _ratio(1.05, 3.0)),
@@ -100,8 +100,8 @@ INFEASIBLE: dict[str, list[tuple[str, str, Change]]] = {
         ("time_ratio", "β < π/2, so TR < 3", _ratio(3.05, 6.0)),
         (
             "bound",
-            "cos μ = (crank + |e|)/coupler is least at e = 0, crank = stroke/2, coupler = 5·stroke "
-            "(the upper bound): μ ≤ 84.26°",
+            "cos μ = (crank + |e|)/coupler is least at e = 0, crank = stroke/2, coupler = 2·stroke "
+            "(the upper bound): μ ≤ 75.52°",
             _bound(85.0, 89.9),
         ),
         (

@@ -149,6 +149,26 @@ def test_synthesize_seed002(client):
     assert [c["params"]["coupler"] for c in out["candidates"]] == pytest.approx([0.2504], abs=1e-4)
 
 
+def test_the_default_answer_is_the_front_with_families(client):
+    body = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 40.0}
+    out = client.post("/v1/synthesize", json=body).json()
+    whitworth = [c for c in out["candidates"] if c["type"] == "whitworth"]
+    assert len(whitworth) >= 3
+    assert [c["front"]["index"] for c in whitworth] == list(range(len(whitworth)))[::-1]
+    assert whitworth[0]["front"]["ends"] == ["max_transmission_angle"]
+    assert whitworth[-1]["front"]["ends"] == ["min_size"]
+    assert {c["front"]["measure"] for c in out["candidates"]} == {"link_length_sum"}
+    (shaper,) = [c for c in out["candidates"] if c["type"] == "crank_shaper"]
+    assert shaper["family"]["free"] == ["crank"] and "pivot_distance" in shaper["family"]["tied"]
+    schema = client.get("/openapi.json").json()["components"]["schemas"]
+    request = schema["SynthesizeRequest"]["properties"]
+    assert request["objective"]["default"] == "pareto"
+    assert set(request["objective"]["enum"]) == {"pareto", "max_transmission_angle", "min_size"}
+    assert {"front", "family", "envelope", "motion", "sensitivities"} <= set(
+        schema["Candidate"]["properties"]
+    )
+
+
 def test_synthesize_infeasible_is_200_with_reasons(client):
     body = {"time_ratio": 3.0, "stroke": 100.0, "min_transmission_angle_deg": 30.0,
             "mechanisms": [{"type": "offset_slider_crank"}]}  # fmt: skip

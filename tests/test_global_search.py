@@ -61,7 +61,7 @@ QUICK = [
     ("crank_shaper", MAX, 1.1, 20.0),  # a lever 6.69 × stroke: the only one for TR 1.1
     ("whitworth", MAX, 1.8, 50.0),
     ("whitworth", SIZE, 1.8, 50.0),
-    ("whitworth", MAX, 2.4, 86.0),  # 84.26° at most (rod ≤ 5 × stroke)
+    ("whitworth", MAX, 2.4, 80.0),  # 75.52° at most (rod ≤ 2 × stroke)
     ("crank_rocker_slider", MAX, 1.4, 30.0),
     ("crank_rocker_slider", SIZE, 1.4, 30.0),
     ("crank_rocker_slider", MAX, 2.2, 25.0),

@@ -17,6 +17,15 @@ Params = Mapping[str, Any]  # parameter name -> float, DM, SX or MX
 ROUNDING = 1e-12  # relative slack of the non-strict validity conditions
 
 
+# Default synthesis bounds, × the stroke. A link from a tenth of the stroke (room for its pins
+# and bearings) to five strokes. A rod to the slider (a connecting rod, the slider-crank's
+# coupler, the crank shaper's ram link) transmits better the longer it is (its cos μ falls as
+# 1/length), so its upper bound decides the best design: two strokes keep the frame within
+# about three strokes and already give the Whitworth's rod 75.5° (cos μ = 1/4).
+LINK = (0.1, 5.0)
+ROD = (0.1, 2.0)
+
+
 @dataclass(frozen=True)
 class Parameter:
     """A link length or placement; a length unless ``signed``."""
@@ -28,7 +37,7 @@ class Parameter:
     default_rule: str | None = None  # words for a default derived from the others (optional too)
     signed: bool = False  # may be zero or negative (an offset)
     link: bool = True  # a link length (counts in the mechanism's size); False for placements
-    bounds: tuple[float, float] = (0.1, 5.0)  # default synthesis bounds, × the stroke
+    bounds: tuple[float, float] = LINK  # default synthesis bounds, × the stroke
     zero_means: str | None = None  # 0 is allowed and selects a variant (e.g. a slot drive)
 
     @property

@@ -38,6 +38,7 @@ from ..geometry import cos_law, leg, triangle_angle
 from ._fourbar import fourbar_scale, grashof_conditions, output_pin
 from ._fourbar_synthesis import FourBar, Roles
 from ._registry import (
+    ROD,
     Mechanism,
     Parameter,
     absent,
@@ -145,6 +146,7 @@ register(
                 "rod from C to the slider",
                 default=0.0,
                 zero_means="C drives the slider through a slot",
+                bounds=ROD,
             ),
             Parameter(
                 "slider_height",

@@ -38,6 +38,7 @@ from ..reduced import Problem, Reduced, rod
 from ._inverse import check
 from ._inverse import scale as _scale
 from ._registry import (
+    ROD,
     Condition,
     Mechanism,
     Parameter,
@@ -158,6 +159,7 @@ register(
                 "link PR from the lever tip to the ram",
                 default=0.0,
                 zero_means="the lever tip drives the ram through a block in a slot",
+                bounds=ROD,
             ),
             Parameter(
                 "ram_height",

@@ -35,7 +35,7 @@ from ..geometry import ahead, cos_law, leg, triangle_angle
 from ..reduced import Problem, Reduced, agree, differ, rod, unreachable
 from ._fourbar import fourbar_scale, grashof_conditions, output_pin, output_pin_height
 from ._fourbar_synthesis import FourBar, Roles, worst_cos
-from ._registry import Condition, Mechanism, Parameter, register
+from ._registry import ROD, Condition, Mechanism, Parameter, register
 
 LINKS = ("ground", "crank", "coupler", "follower")
 
@@ -151,7 +151,7 @@ register(
             Parameter("coupler", "r3", "coupler AB"),
             Parameter("follower", "r4", "follower O4B"),
             Parameter("follower_arm", "r5", "O4C: the pin on the follower line driving the rod"),
-            Parameter("connecting_rod", "r6", "rod CD from C to the piston"),
+            Parameter("connecting_rod", "r6", "rod CD from C to the piston", bounds=ROD),
         ),
         conditions=(
             *grashof_conditions(LINKS, "ground", "drag-link"),

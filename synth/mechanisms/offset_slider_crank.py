@@ -36,7 +36,7 @@ from ..reduced import (
     unreachable,
 )
 from ..results import TOL
-from ._registry import Condition, Mechanism, Parameter, register
+from ._registry import ROD, Condition, Mechanism, Parameter, register
 
 
 def position(p, th):
@@ -218,7 +218,7 @@ register(
         quick_return=True,
         parameters=(
             Parameter("crank", "r2", "crank O2B"),
-            Parameter("coupler", "r3", "connecting rod BC (crank pin to slider)"),
+            Parameter("coupler", "r3", "connecting rod BC (crank pin to slider)", bounds=ROD),
             Parameter(
                 "offset",
                 "e",

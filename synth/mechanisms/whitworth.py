@@ -32,7 +32,7 @@ from ..geometry import ahead, leg, lever, sqrt, where
 from ..reduced import MIN_SIZE, STRICT, Problem, Reduced
 from ._inverse import check
 from ._inverse import scale as _scale
-from ._registry import Condition, Mechanism, Parameter, Scale, register
+from ._registry import ROD, Condition, Mechanism, Parameter, Scale, register
 
 
 def _lever(p, th):
@@ -126,7 +126,7 @@ register(
             Parameter("crank", "r2", "crank O2B"),
             Parameter("pivot_distance", "d", "lever pivot to crank pivot, O2O4"),
             Parameter("lever", "L", "output arm O4P of the slotted lever"),
-            Parameter("connecting_rod", "l", "rod PR from the arm to the ram"),
+            Parameter("connecting_rod", "l", "rod PR from the arm to the ram", bounds=ROD),
         ),
         conditions=(
             Condition(
