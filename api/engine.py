@@ -69,7 +69,8 @@ class Engine:
 
         A synthesis runs here too as far as the reduced solvers take it (no IPOPT: 1–5 ms for
         most requests, up to ~15 ms for a four-bar near time ratio 1); where it needs IPOPT
-        the whole request goes to the pool with what is left of its budget."""
+        (or SLSQP: the motion objectives) the whole request goes to the pool with what is
+        left of its budget."""
         if inline:
             return _call(op, kwargs)
         if op == "synthesize":

@@ -181,7 +181,13 @@ class SynthesizeRequest(Extras):
     mechanisms: list[TypeSpec] | None = Field(
         None, max_length=24, description="omitted: every quick-return type, nothing fixed"
     )
-    objective: Literal["pareto", "max_transmission_angle", "min_size"] = Field(
+    objective: Literal[
+        "pareto",
+        "max_transmission_angle",
+        "min_size",
+        "uniform_cutting_speed",
+        "min_peak_acceleration",
+    ] = Field(
         "pareto",
         description="pareto: per type, the trade-off front between the smallest design that "
         "meets the bound (min_size) and the best-transmitting one (max_transmission_angle), "
@@ -189,7 +195,19 @@ class SynthesizeRequest(Extras):
         "(size: the sum of link lengths; each candidate's front says where it sits); "
         "max_transmission_angle: the best minimum transmission angle, ties to the smallest "
         "design; min_size: the smallest sum of link lengths meeting the bound (which must "
-        "then be > 0°)",
+        "then be > 0°); uniform_cutting_speed: the least speed fluctuation (largest speed over "
+        "mean speed) over the middle 80% of the working stroke, where a tool cuts; "
+        "min_peak_acceleration: the least peak acceleration over both strokes, in ω²·stroke. "
+        "The last two are local optima from many starts (method slsqp), each candidate "
+        "carrying its motion",
+    )
+    max_working_speed_fluctuation: float | None = Field(
+        None,
+        ge=1.0,
+        le=1e3,
+        description="a limit on the speed fluctuation over the middle 80% of the working stroke "
+        "(≥ 1: 1 is a uniform speed), with the objectives uniform_cutting_speed and "
+        "min_peak_acceleration",
     )
     max_candidates: int | None = Field(
         None,

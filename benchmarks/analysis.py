@@ -120,6 +120,28 @@ def pareto_costs(repeats: int, quick: bool = False) -> list[dict]:
     return rows
 
 
+def motion_costs(repeats: int) -> list[dict]:
+    """The motion objectives (SLSQP from many starts, ``synth.motion_search``) against a
+    max_transmission_angle request on the same targets (time ratio 1.6, stroke 1, bound 20°,
+    everything free), per quick-return type, calls alternated; with the measure reached."""
+    rows = []
+    for mtype in QUICK_RETURN:
+        request = partial(synth.synthesize, 1.6, 1.0, 20.0, [{"type": mtype}],
+                          time_budget_ms=30_000)  # fmt: skip
+        best = partial(request, objective="max_transmission_angle")
+        for objective in ("uniform_cutting_speed", "min_peak_acceleration"):
+            fn = partial(request, objective=objective)
+            r = fn()
+            if not r.candidates:
+                continue
+            ms, ref = median_ms(fn, best, repeats)
+            rows.append({"type": mtype, "objective": objective, "ms": ms,
+                         "max_transmission_ms": ref, "ratio": ms / ref,
+                         "measure": r.candidates[0].objective_value,
+                         "complete": r.complete})  # fmt: skip
+    return rows
+
+
 # The default request: everything free, each objective, these ratios and bounds (the scotch
 # yoke has time ratio 1 only; min_size needs a bound > 0, synth refuses it without one); and
 # per type, requests it cannot meet: a bound above the best it reaches (its slot drive gives
@@ -254,6 +276,7 @@ def main(argv: list[str] | None = None) -> dict:
         "synthesis": synthesis_costs(2 if a.quick else 7),
         "default_requests": default_summary(cases),
         "pareto": pareto_costs(3 if a.quick else 9, a.quick),
+        "motion_objectives": motion_costs(1 if a.quick else 3),
         "default_request_cases": cases,
     }
     print(table(results["analysis"], ("type", "case", "ms", "ratio")))
@@ -264,6 +287,8 @@ def main(argv: list[str] | None = None) -> dict:
     print(table(results["default_requests"], columns))
     print(table(results["pareto"], ("type", "targets", "pareto_ms", "max_transmission_ms",
                                      "ratio", "ratio_max", "points")))  # fmt: skip
+    print(table(results["motion_objectives"], ("type", "objective", "ms", "max_transmission_ms",
+                                                "ratio", "measure", "complete")))  # fmt: skip
     for r in results["default_requests"]:
         for key in ("worse_than_generic", "min_size_refused_but_feasible"):
             if r[key]:

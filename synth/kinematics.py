@@ -85,6 +85,21 @@ def analyze(
     return Analysis(**summary)
 
 
+def motion_terms(mechanism: str, params: Mapping[str, float]) -> quality.MotionTerms:
+    """The values whose maxima are the motion measures (``quality.MotionTerms``), for an
+    optimiser that bounds each; raises SynthError for a design that does not run."""
+    m = get(mechanism)
+    p = m.complete(params)
+    variant = m.variant(p)
+    f = model(m, variant)
+    pv = np.array([p[n] for n in m.names], dtype=float)
+    rows, theta, values = stationary_points(f, pv)
+    if np.count_nonzero(rows == 0) != 2:
+        msg = "the slider does not run one working and one return stroke"
+        raise InvalidDesign(msg, (), "stroke")
+    return quality.motion_terms(m, variant, f, pv, quality.Strokes(*_ends(rows, theta, values)))
+
+
 def check_include(include: Collection[str]) -> None:
     """Raise InvalidParameters for anything ``include`` names that an analysis cannot add."""
     unknown = sorted(set(include) - set(INCLUDE))

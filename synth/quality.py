@@ -20,6 +20,7 @@ Everything is exact to rounding, with no sampling and no finite differences:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -56,8 +57,22 @@ def _inside(x: np.ndarray, start: float, length: float) -> np.ndarray:
     return (x - start) % TWO_PI < length
 
 
-def motion(m: Mechanism, variant: frozenset[str], f: Model, pv: np.ndarray, st: Strokes) -> Motion:
-    """Speed fluctuation over the working stroke and peak accelerations, at constant ω."""
+@dataclass(frozen=True)
+class MotionTerms:
+    """The values whose largest is each motion measure: the speed fluctuation over the whole
+    working stroke and over its middle (each |s′| that may peak there, scaled by the window's
+    crank travel over its travel), and the acceleration over each stroke (each |s″| that may
+    peak there, over the stroke). The measures are their maxima; an optimiser bounds each."""
+
+    whole: np.ndarray
+    middle: np.ndarray
+    working: np.ndarray
+    returning: np.ndarray
+
+
+def motion_terms(
+    m: Mechanism, variant: frozenset[str], f: Model, pv: np.ndarray, st: Strokes
+) -> MotionTerms:
     fm = model(m, variant, "motion")
     rows, x, values = stationary_points(fm, pv)
     v_at, a_at = x[rows == 0], x[rows == 1]  # where |s′| and |s″| may peak
@@ -71,26 +86,25 @@ def motion(m: Mechanism, variant: frozenset[str], f: Model, pv: np.ndarray, st: 
     lo, hi = np.full(2, st.start), np.full(2, st.start + st.working)
     ends = _rtsafe(fd, lo, hi, st.s0 - levels, st.s1 - levels, np.full(2, abs(st.stroke)))
     middle = ends[1] - ends[0]
-
-    def v_max(start: float, length: float, at_ends: np.ndarray) -> float:
-        inside = _inside(v_at, start, length)
-        return float(max(np.max(v_peak[inside], initial=0.0), *at_ends))
-
     ds_ends = np.abs(f(ends, pv)[1][0])
-    whole = v_max(st.start, st.working, (0.0,)) * st.working / st.stroke
-    cut = v_max(ends[0], middle, ds_ends) * middle / ((1 - 2 * CUT) * st.stroke)
-
     dd_dead = np.abs(fm(np.array([st.start, st.start + st.working]), pv)[0][1])
+    returning = (st.start + st.working, TWO_PI - st.working)
+    return MotionTerms(
+        whole=np.append(v_peak[_inside(v_at, st.start, st.working)], 0.0)
+        * (st.working / st.stroke),
+        middle=np.concatenate([v_peak[_inside(v_at, ends[0], middle)], ds_ends])
+        * (middle / ((1 - 2 * CUT) * st.stroke)),
+        working=np.concatenate([a_peak[_inside(a_at, st.start, st.working)], dd_dead]) / st.stroke,
+        returning=np.concatenate([a_peak[_inside(a_at, *returning)], dd_dead]) / st.stroke,
+    )
 
-    def a_max(start: float, length: float) -> float:
-        inside = _inside(a_at, start, length)
-        return float(max(np.max(a_peak[inside], initial=0.0), *dd_dead)) / st.stroke
 
+def motion(m: Mechanism, variant: frozenset[str], f: Model, pv: np.ndarray, st: Strokes) -> Motion:
+    """Speed fluctuation over the working stroke and peak accelerations, at constant ω."""
+    t = motion_terms(m, variant, f, pv, st)
     return Motion(
-        SpeedFluctuation(whole, float(cut)),
-        PeakAcceleration(
-            a_max(st.start, st.working), a_max(st.start + st.working, TWO_PI - st.working)
-        ),
+        SpeedFluctuation(float(t.whole.max()), float(t.middle.max())),
+        PeakAcceleration(float(t.working.max()), float(t.returning.max())),
     )
 
 

@@ -18,15 +18,26 @@ from .diagnose import diagnose
 from .errors import InvalidParameters, SynthError
 from .kinematics import check_include
 from .mechanisms import Mechanism, all_types, get
+from .motion_search import MOTION_OBJECTIVES, UNIFORM, fluctuation, local_optima, measure
 from .reduced import MAX_TRANSMISSION, MIN_SIZE
-from .results import Candidate, Family, FrontPoint, SynthesisResult, Tolerance
-from .search import Proposal, Searched, SolverNeeded, Spec, Targets, Variant, search
+from .results import TOL, Candidate, Family, FrontPoint, Infeasible, SynthesisResult, Tolerance
+from .search import (
+    Proposal,
+    Searched,
+    SolverNeeded,
+    Spec,
+    Targets,
+    Variant,
+    proposal,
+    same,
+    search,
+)
 from .verify import verify
 
 __all__ = ["MAX_CANDIDATES", "OBJECTIVES", "SolverNeeded", "Spec", "synthesize"]
 
 PARETO = "pareto"
-OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE)
+OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE, *MOTION_OBJECTIVES)
 MAX_CANDIDATES = 50
 PER_TYPE = 5  # candidates per type when max_candidates is not given (pareto: per type's front)
 MEASURE = "link_length_sum"  # the size the front minimises
@@ -44,6 +55,7 @@ def synthesize(
     *,
     include: Collection[str] = (),
     tolerance: Tolerance | None = None,
+    max_working_speed_fluctuation: float | None = None,
     accelerators: bool = True,
     ipopt: bool = True,
 ) -> SynthesisResult:
@@ -52,7 +64,11 @@ def synthesize(
     ``objective``: ``pareto`` (each type's trade-off front between its smallest design that
     meets the bound and its best-transmitting one, see ``_front``), or one criterion:
     ``max_transmission_angle`` (ties to the smaller design) or ``min_size`` (the smallest sum
-    of link lengths meeting the bound). ``max_candidates`` counts in all; by default it is
+    of link lengths meeting the bound); or one of how the slider moves (``motion_search``):
+    ``uniform_cutting_speed`` (the least speed fluctuation over the middle 80% of the working
+    stroke, where a tool cuts) or ``min_peak_acceleration`` (the least peak acceleration over
+    both strokes, in ω²·stroke). ``max_working_speed_fluctuation`` (≥ 1) limits that
+    fluctuation (with the motion objectives). ``max_candidates`` counts in all; by default it is
     ``PER_TYPE`` (pareto: per type of the request, at most ``MAX_CANDIDATES``).
     ``accelerators=False`` solves every type as one without a reduced solver would be, by
     cold multistart IPOPT on the formulation: the generic path, for cross-checks.
@@ -75,6 +91,7 @@ def synthesize(
     if max_candidates is None:
         max_candidates = min(PER_TYPE * (len(specs) if objective == PARETO else 1), MAX_CANDIDATES)
     _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
+    _check_limit(max_working_speed_fluctuation, objective)
     check_include(include)
     if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
         raise InvalidParameters(
@@ -85,6 +102,11 @@ def synthesize(
     extras = {"include": include, "tolerance": tolerance}
     if objective == PARETO:
         cands, infeasible = _pareto(specs, targets, max_candidates, per_type, extras, accelerators)
+    elif objective in MOTION_OBJECTIVES:
+        extras["include"] = sorted({*include, "motion"})  # what the objective measures
+        cands, infeasible = _motion(
+            specs, targets, max_candidates, extras, accelerators, max_working_speed_fluctuation
+        )
     else:
         cands, infeasible = _single(specs, targets, max_candidates, extras, accelerators)
     return SynthesisResult(
@@ -105,6 +127,89 @@ def _single(specs, t: Targets, max_candidates: int, extras: dict[str, Any], acce
         if not any(c.spec == i for c in found) and not left[i]
     ]
     return sorted((c.candidate for c in found), key=_rank(t.objective))[:max_candidates], infeasible
+
+
+def _motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accelerators: bool,
+            limit: float | None):  # fmt: skip
+    """A motion objective: per type and variant, SLSQP (``motion_search``) from the designs the
+    exact solvers give for the request (best-transmitting and smallest), the most promising
+    first; the optima and those designs, verified, ranked by the measure (the limit met)."""
+    if not t.ipopt:  # a numerical solver, as IPOPT is: not for a caller that must not block
+        raise SolverNeeded(t.objective)
+    found: list[Candidate] = []
+    infeasible = []
+    for i, spec in enumerate(specs):
+        m = get(spec.type)
+        best_t = replace(t, objective=MAX_TRANSMISSION)
+        s = search(m, spec, i, best_t, accelerators)
+        pool = list(s.proposals)
+        if t.bound_deg > 0:
+            pool += search(m, spec, i, replace(t, objective=MIN_SIZE), accelerators).proposals
+        mine = []
+        for p in pool:
+            c = _candidate(m, p, t, s.variants, extras)
+            if c is not None:
+                mine.append(c)
+        for v in s.variants:
+            starts = [
+                {k: x / t.stroke for k, x in c.params.items()}
+                for c in sorted(mine, key=lambda c: c.objective_value)
+                if m.variant(c.params) == v.parts
+            ]
+            if not starts or not v.free:
+                continue
+            cos_bound = math.cos(math.radians(t.bound_deg))
+            optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
+                                  v.problem.explicit, (t.time_ratio, cos_bound), t.objective,
+                                  starts, limit, t.deadline)  # fmt: skip
+            for d in optima:
+                p = proposal(m, i, {k: x * t.stroke for k, x in d.items()}, "slsqp", t)
+                c = None if p is None else _candidate(m, p, t, s.variants, extras)
+                if c is not None:
+                    mine.append(_smallest_member(m, i, c, t, s.variants, extras))
+        kept = [c for c in mine if limit is None or fluctuation(c.motion) <= limit * (1 + TOL)]
+        if not kept and not mine:
+            infeasible.append(diagnose(m, spec, best_t, s))
+        elif not kept:
+            least = min(fluctuation(c.motion) for c in mine)
+            if t.objective != UNIFORM:  # how uniform it can be: that objective's optimum
+                alone = _motion([spec], replace(t, objective=UNIFORM), 1, extras, accelerators,
+                                None)[0]  # fmt: skip
+                least = min([least] + [c.objective_value for c in alone])
+            infeasible.append(Infeasible(
+                m.type, "FLUCTUATION_UNREACHABLE",
+                f"{m.type}'s speed fluctuation over the middle 80% of the working stroke is at "
+                f"least {least:.6g} (the least the search finds) at time ratio "
+                f"{t.time_ratio:g}, stroke {t.stroke:g} and bound {t.bound_deg:g}°, above the "
+                f"limit {limit:g}",
+            ))  # fmt: skip
+        found += _distinct(kept, t.stroke)
+    found.sort(key=lambda c: (round(c.objective_value, 12), c.size, c.type))
+    return found[:max_candidates], infeasible
+
+
+def _smallest_member(m: Mechanism, i: int, c: Candidate, t: Targets, variants, extras):
+    """The smallest member of a candidate's family (the same motion and angles), verified."""
+    f = c.family
+    if f is None:
+        return c
+    (free,) = f.free
+    lo = f.range[free][0]
+    if lo >= c.params[free]:
+        return c
+    params = {**c.params, free: lo, **{k: r * lo for k, (_, r) in f.tied.items()}}
+    p = proposal(m, i, params, c.method, t)
+    smaller = None if p is None else _candidate(m, p, t, variants, extras)
+    return smaller or c
+
+
+def _distinct(cands: list[Candidate], stroke: float) -> list[Candidate]:
+    """One candidate per design (the first of those within ``SAME`` × stroke of each other)."""
+    out: list[Candidate] = []
+    for c in sorted(cands, key=lambda c: c.objective_value):
+        if not any(same(c.params, o.params, stroke) for o in out):
+            out.append(c)
+    return out
 
 
 def _pareto(specs, t: Targets, max_candidates: int, per_type: int, extras: dict[str, Any],
@@ -274,7 +379,13 @@ def _candidate(
         time_ratio=a.time_ratio,
         stroke=a.stroke,
         min_transmission_angle_deg=mu,
-        objective_value=mu if t.objective == MAX_TRANSMISSION else size,
+        objective_value=(
+            measure(a.motion, t.objective)
+            if t.objective in MOTION_OBJECTIVES
+            else mu
+            if t.objective == MAX_TRANSMISSION
+            else size
+        ),
         method=p.method,
         residuals=residuals,
         verified=True,
@@ -350,6 +461,23 @@ def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
             "min_transmission_angle_deg must be > 0 with the objective min_size: without a "
             "bound the smallest designs are linkages that lock (a 0° transmission angle)",
             ("min_transmission_angle_deg",),
+        )
+
+
+def _check_limit(limit: float | None, objective: str) -> None:
+    if limit is None:
+        return
+    if not (math.isfinite(limit) and limit >= 1):
+        raise InvalidParameters(
+            f"max_working_speed_fluctuation must be a finite number ≥ 1 (the largest speed "
+            f"against the mean: 1 is a uniform speed), got {limit!r}",
+            ("max_working_speed_fluctuation",),
+        )
+    if objective not in MOTION_OBJECTIVES:
+        raise InvalidParameters(
+            f"max_working_speed_fluctuation is taken with the objectives "
+            f"{' and '.join(MOTION_OBJECTIVES)}, not {objective}",
+            ("max_working_speed_fluctuation",),
         )
 
 

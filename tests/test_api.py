@@ -163,10 +163,27 @@ def test_the_default_answer_is_the_front_with_families(client):
     schema = client.get("/openapi.json").json()["components"]["schemas"]
     request = schema["SynthesizeRequest"]["properties"]
     assert request["objective"]["default"] == "pareto"
-    assert set(request["objective"]["enum"]) == {"pareto", "max_transmission_angle", "min_size"}
+    assert set(request["objective"]["enum"]) == {
+        "pareto",
+        "max_transmission_angle",
+        "min_size",
+        "uniform_cutting_speed",
+        "min_peak_acceleration",
+    }
+    assert request["max_working_speed_fluctuation"]["anyOf"][0]["minimum"] == 1
     assert {"front", "family", "envelope", "motion", "sensitivities"} <= set(
         schema["Candidate"]["properties"]
     )
+
+
+def test_a_motion_objective_answers_with_each_candidates_motion(client):
+    body = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0,
+            "objective": "uniform_cutting_speed",
+            "mechanisms": [{"type": "whitworth"}]}  # fmt: skip
+    out = client.post("/v1/synthesize", json=body).json()
+    c = out["candidates"][0]
+    assert c["objective_value"] == c["motion"]["working_speed_fluctuation"]["middle"]
+    assert out["complete"] and c["verified"]
 
 
 def test_synthesize_infeasible_is_200_with_reasons(client):
@@ -239,6 +256,12 @@ BAD = [
     ("/v1/synthesize", {**SYNTH, "max_candidates": 51}, "max_candidates"),
     ("/v1/synthesize", {**SYNTH, "time_budget_ms": 0}, "time_budget_ms"),
     ("/v1/synthesize", {**SYNTH, "objective": "cheapest"}, "objective"),
+    ("/v1/synthesize", {**SYNTH, "objective": "uniform_cutting_speed",
+                        "max_working_speed_fluctuation": 0.9}, "max_working_speed_fluctuation"),
+    ("/v1/synthesize", {**SYNTH, "max_working_speed_fluctuation": 1.5},
+     "max_working_speed_fluctuation"),
+    ("/v1/synthesize", {**SYNTH, "max_working_speed_fluctuation": "NaN",
+                        "objective": "min_peak_acceleration"}, "max_working_speed_fluctuation"),
     ("/v1/synthesize", {**SYNTH, "include": ["colour"]}, "include"),
     ("/v1/synthesize", {**SYNTH, "tolerance": {"relative": -1e-3}}, "tolerance"),
     ("/v1/synthesize", {**SYNTH, "stroke_mm": 1.0}, "stroke_mm"),

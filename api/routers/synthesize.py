@@ -39,6 +39,7 @@ async def synthesize(
         max_candidates=body.max_candidates,
         time_budget_ms=body.time_budget_ms,
         include=body.include,
+        max_working_speed_fluctuation=body.max_working_speed_fluctuation,
         tolerance=tolerance(body),
     )
     return r

@@ -1,0 +1,242 @@
+"""How the slider moves, as an objective or a limit: ``uniform_cutting_speed`` (the least speed
+fluctuation over the middle 80% of the working stroke, where a tool cuts),
+``min_peak_acceleration`` (the least peak |acceleration| over both strokes, in ω²·stroke) and
+``max_working_speed_fluctuation`` (a limit on that fluctuation, with those objectives).
+
+No closed form gives these measures: they are extremes over the crank's turn, found by root
+finding (``synth.quality``). So the designs come from a local NLP over each structural
+variant's free parameters (stroke units), solved by SLSQP:
+
+- the time ratio, stroke, transmission bound, validity conditions and the closed forms' domain
+  are the type's formulation (``synth.formulation``: CasADi, exact derivatives), the bounds
+  the request's;
+- the motion measures come from the analysis (exact values by root finding): each is the
+  largest of a few terms (the speed or acceleration at each place along the turn where it
+  may peak), so the NLP takes it in epigraph form, with forward differences of the terms;
+- it starts from the designs the exact solvers found for the same request (every variant's
+  best-transmitting and smallest designs: each meets the targets), the most promising first,
+  until the request's deadline, at most ``STARTS`` per variant, ``MAX_ITER`` iterations and
+  ``RUN_S`` seconds each.
+
+The answer is a local optimum, verified like every candidate; ``tests/test_motion_search.py``
+checks it against an independent global search.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import minimize
+
+from .errors import SynthError
+from .formulation import TIE, Formulation, formulate
+from .kinematics import motion_terms
+from .mechanisms import Mechanism
+from .quality import MotionTerms
+from .results import Motion
+from .solve import starts as halton
+
+UNIFORM, PEAK = "uniform_cutting_speed", "min_peak_acceleration"
+MOTION_OBJECTIVES = (UNIFORM, PEAK)
+STARTS = 4  # SLSQP runs per variant, from the best measured starts
+MAX_ITER = 100
+RUN_S = 0.4  # wall time of one SLSQP run (the request's deadline bounds them all)
+STEP = 1e-5  # central-difference step (stroke units) for the motion measures
+TERMS = 4  # the largest terms of a measure that its epigraph bounds
+SAMPLES = 64  # Halton points in the box, projected onto the equalities: starts beside the
+PROJECT = 12  # exact solvers' designs (Newton steps each)
+FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
+_local = threading.local()
+
+
+def fluctuation(motion: Motion | None) -> float:
+    """The speed fluctuation a limit and ``uniform_cutting_speed`` mean: over the middle 80%."""
+    assert motion is not None
+    return motion.working_speed_fluctuation.middle
+
+
+def measure(motion: Motion | None, objective: str) -> float:
+    """The value a motion objective minimises."""
+    if objective == UNIFORM:
+        return fluctuation(motion)
+    assert motion is not None
+    p = motion.peak_acceleration
+    return max(p.working_stroke, p.return_stroke)
+
+
+@dataclass(frozen=True)
+class Functions:
+    form: Formulation
+    g: ca.Function  # (x, p) -> (g, ∂g/∂x)
+
+
+def functions(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Functions:
+    """The formulation's constraints with their derivatives, once per thread and structure
+    (CasADi functions are not shared between threads here, as the solvers are not)."""
+    cache: dict = _local.__dict__.setdefault("functions", {})
+    key = (m.type, variant, free)
+    if key not in cache:
+        form = formulate(m, variant, free, "min_size")  # its constraints; the objective unused
+        x, p, g = (form.nlp[k] for k in ("x", "p", "g"))
+        cache[key] = Functions(form, ca.Function("g", [x, p], [g, ca.jacobian(g, x)]))
+    return cache[key]
+
+
+def local_optima(
+    m: Mechanism,
+    variant: frozenset[str],
+    free: tuple[str, ...],
+    fixed: dict[str, float],
+    bounds: dict[str, tuple[float, float]],
+    explicit: frozenset[str],
+    targets: tuple[float, float],
+    objective: str,
+    starts: list[dict[str, float]],
+    limit: float | None,
+    deadline: float,
+) -> list[dict[str, float]]:
+    """Local optima of a motion ``objective`` over one variant, from ``starts`` (designs,
+    stroke units); ``targets`` is (time ratio, cos of the transmission bound). The measure is
+    a maximum of terms (``quality.MotionTerms``), so it is minimised in epigraph form: t, with
+    t ≥ each of the ``TERMS`` largest terms (a peak that moves to another place along the
+    turn is then one constraint handing over to another, not a kink); the ``limit`` bounds the
+    fluctuation's terms alike. Designs in stroke units. A default bound (not in ``explicit``)
+    gives way to a start beyond it, as the exact solvers' does to a length the targets set on
+    their own."""
+    fn = functions(m, variant, free)
+    form = fn.form
+    pv = np.concatenate([[fixed[k] for k in form.fixed], targets])
+    n = len(free)
+
+    def design(y: np.ndarray) -> dict[str, float]:
+        return {**fixed, **dict(zip(free, y[:n], strict=True)), **dict.fromkeys(variant, 0.0)}
+
+    memo: dict[bytes, MotionTerms | None] = {}
+
+    def terms(y: np.ndarray) -> MotionTerms | None:
+        key = y[:n].tobytes()
+        if key not in memo:
+            if len(memo) > 256:
+                memo.clear()
+            try:
+                memo[key] = motion_terms(m.type, design(y))
+            except SynthError:
+                memo[key] = None
+        return memo[key]
+
+    def largest(y: np.ndarray, pick: Callable[[MotionTerms], np.ndarray]) -> np.ndarray:
+        got = terms(y)
+        if got is None:
+            return np.full(TERMS, FAIL)
+        v = np.sort(pick(got))[::-1][:TERMS]
+        return np.concatenate([v, np.full(TERMS - v.size, v[-1])])
+
+    def bounded(pick: Callable[[MotionTerms], np.ndarray], cap: float | None):
+        """The constraint cap − each of the largest terms ≥ 0 (cap None: the epigraph's t),
+        with central differences in x."""
+
+        def fun(y):
+            return (y[n] if cap is None else cap) - largest(y, pick)
+
+        def jac(y):
+            out = np.zeros((TERMS, y.size))
+            for i in range(n):
+                step = np.zeros_like(y)
+                step[i] = STEP * max(1.0, abs(y[i]))
+                out[:, i] = -(largest(y + step, pick) - largest(y - step, pick)) / (2 * step[i])
+            out[:, n] = 1.0 if cap is None else 0.0
+            return out
+
+        return {"type": "ineq", "fun": fun, "jac": jac}
+
+    lbg, ubg = form.lbg, form.ubg
+    eq = lbg == ubg
+    below, above = np.isfinite(lbg) & ~eq, np.isfinite(ubg) & ~eq
+
+    def rows(y):  # y: x, or x and t
+        g, jac = fn.g(y[:n], pv)
+        jac = np.hstack([np.asarray(jac), np.zeros((jac.shape[0], 1))])  # t appears in none
+        return np.asarray(g).ravel(), jac
+
+    def inequalities(y):
+        g = rows(y)[0]
+        return np.concatenate([g[below] - lbg[below], ubg[above] - g[above]])
+
+    def inequalities_jac(y):
+        j = rows(y)[1]
+        return np.vstack([j[below], -j[above]])
+
+    def project(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
+        """Minimum-norm Newton steps from x onto the time-ratio and stroke equalities."""
+        for _ in range(PROJECT):
+            r = rows(x)
+            res = r[0][eq] - lbg[eq]
+            if np.max(np.abs(res), initial=0.0) <= 1e-12:
+                return x
+            step, *_ = np.linalg.lstsq(r[1][eq][:, :n], res, rcond=None)
+            x = np.clip(x - step, lo, hi)
+            if not np.all(np.isfinite(x)):
+                return None
+        return None
+
+    # ties (a free scale that leaves the motion as it is) to the smaller design, as the
+    # formulation's max_transmission_angle does: the scale is then no flat direction
+    links = np.array([float(m.parameter(k).link) for k in free] + [0.0])
+    pick = _PICK[objective]
+    constraints = [
+        {"type": "eq", "fun": lambda y: rows(y)[0][eq] - lbg[eq], "jac": lambda y: rows(y)[1][eq]},
+        {"type": "ineq", "fun": inequalities, "jac": inequalities_jac},
+        bounded(pick, None),
+    ]
+    if limit is not None:
+        constraints.append(bounded(_PICK[UNIFORM], limit))
+
+    def box_of(s: dict[str, float]) -> list[tuple[float, float]]:
+        return [bounds[k] if k in explicit else (min(bounds[k][0], s[k]), max(bounds[k][1], s[k]))
+                for k in free]  # fmt: skip
+
+    # the starts: the exact solvers' designs and projected Halton points, the best measured first
+    wide = box_of(starts[0]) if starts else [bounds[k] for k in free]
+    lo, hi = (np.array([b[i] for b in wide]) for i in (0, 1))
+    points = [np.clip([s[k] for k in free], lo, hi) for s in starts]
+    for x in halton(lo, hi, lo > 0, SAMPLES):
+        x = project(x, lo, hi)
+        if x is not None and np.all(inequalities(x) >= -1e-9):
+            points.append(x)
+    measured = sorted(
+        ((float(pick(got).max()), x) for x in points if (got := terms(x)) is not None),
+        key=lambda vx: vx[0],
+    )
+    out = []
+    for first, x0 in measured[:STARTS]:
+        if time.monotonic() >= deadline:
+            break
+        stop = min(deadline, time.monotonic() + RUN_S)
+
+        def cap(_, stop=stop):
+            if time.monotonic() >= stop:
+                raise StopIteration  # SLSQP ends with its last iterate (projected below)
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # SLSQP's notes on clipping to the bounds
+            res = minimize(lambda y: y[n] + TIE * (links @ y), np.append(x0, first),
+                           jac=lambda y: np.eye(n + 1)[n] + TIE * links, method="SLSQP",
+                           bounds=[*zip(lo, hi, strict=True), (0.0, None)],
+                           constraints=constraints, callback=cap,
+                           options={"maxiter": MAX_ITER, "ftol": 1e-12})  # fmt: skip
+        x = project(res.x[:n], lo, hi)  # SLSQP meets equalities to ~1e-8; verification: 1e-9
+        if x is not None:
+            out.append(design(x))
+    return out
+
+
+_PICK: dict[str, Callable[[MotionTerms], np.ndarray]] = {
+    UNIFORM: lambda t: t.middle,
+    PEAK: lambda t: np.concatenate([t.working, t.returning]),
+}
