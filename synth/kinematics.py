@@ -61,12 +61,7 @@ def analyze(
     (2.73524, 300.0)
     """
     check_include(include)
-    m = get(mechanism)
-    p = m.complete(params)
-    variant = m.variant(p)
-    f = model(m, variant)
-    pv = np.array([p[n] for n in m.names], dtype=float)
-    rows, theta, values = stationary_points(f, pv)
+    m, p, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)
     summary = _summary(m, p, f, rows, theta, values)
     if crank_angles_deg is not None or samples is not None:
         summary["curves"] = _curves(f, pv, crank_speed, crank_acceleration, crank_angles_deg,
@@ -88,16 +83,22 @@ def analyze(
 def motion_terms(mechanism: str, params: Mapping[str, float]) -> quality.MotionTerms:
     """The values whose maxima are the motion measures (``quality.MotionTerms``), for an
     optimiser that bounds each; raises SynthError for a design that does not run."""
+    m, _, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)
+    if np.count_nonzero(rows == 0) != 2:
+        msg = "the slider does not run one working and one return stroke"
+        raise InvalidDesign(msg, (), "stroke")
+    return quality.motion_terms(m, variant, f, pv, quality.Strokes(*_ends(rows, theta, values)))
+
+
+def _prepared(mechanism: str, params: Mapping[str, float]):
+    """The completed design, its variant's compiled model, its parameter vector, and the
+    stationary points of its rows (the dead centres and transmission extremes)."""
     m = get(mechanism)
     p = m.complete(params)
     variant = m.variant(p)
     f = model(m, variant)
     pv = np.array([p[n] for n in m.names], dtype=float)
-    rows, theta, values = stationary_points(f, pv)
-    if np.count_nonzero(rows == 0) != 2:
-        msg = "the slider does not run one working and one return stroke"
-        raise InvalidDesign(msg, (), "stroke")
-    return quality.motion_terms(m, variant, f, pv, quality.Strokes(*_ends(rows, theta, values)))
+    return m, p, variant, f, pv, stationary_points(f, pv)
 
 
 def check_include(include: Collection[str]) -> None:

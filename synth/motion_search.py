@@ -24,26 +24,30 @@ checks it against an independent global search.
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import Any
 
 import casadi as ca
 import numpy as np
 from scipy.optimize import minimize
 
+from .candidate import candidate
+from .diagnose import diagnose
 from .errors import SynthError
 from .formulation import TIE, Formulation, formulate
 from .kinematics import motion_terms
-from .mechanisms import Mechanism
-from .quality import MotionTerms
-from .results import Motion
+from .mechanisms import Mechanism, get
+from .quality import PEAK, UNIFORM, MotionTerms, fluctuation
+from .reduced import MAX_TRANSMISSION, MIN_SIZE
+from .results import TOL, Candidate, Infeasible
+from .search import SolverNeeded, Targets, proposal, same, search
 from .solve import starts as halton
 
-UNIFORM, PEAK = "uniform_cutting_speed", "min_peak_acceleration"
-MOTION_OBJECTIVES = (UNIFORM, PEAK)
 STARTS = 4  # SLSQP runs per variant, from the best measured starts
 MAX_ITER = 100
 RUN_S = 0.4  # wall time of one SLSQP run (the request's deadline bounds them all)
@@ -53,21 +57,6 @@ SAMPLES = 64  # Halton points in the box, projected onto the equalities: starts 
 PROJECT = 12  # exact solvers' designs (Newton steps each)
 FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
 _local = threading.local()
-
-
-def fluctuation(motion: Motion | None) -> float:
-    """The speed fluctuation a limit and ``uniform_cutting_speed`` mean: over the middle 80%."""
-    assert motion is not None
-    return motion.working_speed_fluctuation.middle
-
-
-def measure(motion: Motion | None, objective: str) -> float:
-    """The value a motion objective minimises."""
-    if objective == UNIFORM:
-        return fluctuation(motion)
-    assert motion is not None
-    p = motion.peak_acceleration
-    return max(p.working_stroke, p.return_stroke)
 
 
 @dataclass(frozen=True)
@@ -240,3 +229,86 @@ _PICK: dict[str, Callable[[MotionTerms], np.ndarray]] = {
     UNIFORM: lambda t: t.middle,
     PEAK: lambda t: np.concatenate([t.working, t.returning]),
 }
+
+
+def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accelerators: bool,
+            limit: float | None):  # fmt: skip
+    """A motion objective: per type and variant, SLSQP (``motion_search``) from the designs the
+    exact solvers give for the request (best-transmitting and smallest), the most promising
+    first; the optima and those designs, verified, ranked by the measure (the limit met)."""
+    if not t.ipopt:  # a numerical solver, as IPOPT is: not for a caller that must not block
+        raise SolverNeeded(t.objective)
+    found: list[Candidate] = []
+    infeasible = []
+    for i, spec in enumerate(specs):
+        m = get(spec.type)
+        best_t = replace(t, objective=MAX_TRANSMISSION)
+        s = search(m, spec, i, best_t, accelerators)
+        pool = list(s.proposals)
+        if t.bound_deg > 0:
+            pool += search(m, spec, i, replace(t, objective=MIN_SIZE), accelerators).proposals
+        mine = []
+        for p in pool:
+            c = candidate(m, p, t, s.variants, extras)
+            if c is not None:
+                mine.append(c)
+        for v in s.variants:
+            starts = [
+                {k: x / t.stroke for k, x in c.params.items()}
+                for c in sorted(mine, key=lambda c: c.objective_value)
+                if m.variant(c.params) == v.parts
+            ]
+            if not starts or not v.free:
+                continue
+            cos_bound = math.cos(math.radians(t.bound_deg))
+            optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
+                                  v.problem.explicit, (t.time_ratio, cos_bound), t.objective,
+                                  starts, limit, t.deadline)  # fmt: skip
+            for d in optima:
+                p = proposal(m, i, {k: x * t.stroke for k, x in d.items()}, "slsqp", t)
+                c = None if p is None else candidate(m, p, t, s.variants, extras)
+                if c is not None:
+                    mine.append(_smallest_member(m, i, c, t, s.variants, extras))
+        kept = [c for c in mine if limit is None or fluctuation(c.motion) <= limit * (1 + TOL)]
+        if not kept and not mine:
+            infeasible.append(diagnose(m, spec, best_t, s))
+        elif not kept:
+            least = min(fluctuation(c.motion) for c in mine)
+            if t.objective != UNIFORM:  # how uniform it can be: that objective's optimum
+                alone = motion([spec], replace(t, objective=UNIFORM), 1, extras, accelerators,
+                                None)[0]  # fmt: skip
+                least = min([least] + [c.objective_value for c in alone])
+            infeasible.append(Infeasible(
+                m.type, "FLUCTUATION_UNREACHABLE",
+                f"{m.type}'s speed fluctuation over the middle 80% of the working stroke is at "
+                f"least {least:.6g} (the least the search finds) at time ratio "
+                f"{t.time_ratio:g}, stroke {t.stroke:g} and bound {t.bound_deg:g}°, above the "
+                f"limit {limit:g}",
+            ))  # fmt: skip
+        found += _distinct(kept, t.stroke)
+    found.sort(key=lambda c: (round(c.objective_value, 12), c.size, c.type))
+    return found[:max_candidates], infeasible
+
+
+def _smallest_member(m: Mechanism, i: int, c: Candidate, t: Targets, variants, extras):
+    """The smallest member of a candidate's family (the same motion and angles), verified."""
+    f = c.family
+    if f is None:
+        return c
+    (free,) = f.free
+    lo = f.range[free][0]
+    if lo >= c.params[free]:
+        return c
+    params = {**c.params, free: lo, **{k: r * lo for k, (_, r) in f.tied.items()}}
+    p = proposal(m, i, params, c.method, t)
+    smaller = None if p is None else candidate(m, p, t, variants, extras)
+    return smaller or c
+
+
+def _distinct(cands: list[Candidate], stroke: float) -> list[Candidate]:
+    """One candidate per design (the first of those within ``SAME`` × stroke of each other)."""
+    out: list[Candidate] = []
+    for c in sorted(cands, key=lambda c: c.objective_value):
+        if not any(same(c.params, o.params, stroke) for o in out):
+            out.append(c)
+    return out

@@ -37,6 +37,24 @@ from .results import (
 from .roots import TWO_PI, _rtsafe, stationary_points
 
 CUT = 0.1  # a tool cuts over the middle 80% of the working stroke: 10% run-in, 10% run-out
+# the objectives on how the slider moves (synth.motion_search), and what each minimises
+UNIFORM, PEAK = "uniform_cutting_speed", "min_peak_acceleration"
+MOTION_OBJECTIVES = (UNIFORM, PEAK)
+
+
+def fluctuation(motion: Motion | None) -> float:
+    """The speed fluctuation a limit and ``uniform_cutting_speed`` mean: over the middle 80%."""
+    assert motion is not None
+    return motion.working_speed_fluctuation.middle
+
+
+def measure(motion: Motion | None, objective: str) -> float:
+    """The value a motion objective minimises."""
+    if objective == UNIFORM:
+        return fluctuation(motion)
+    assert motion is not None
+    p = motion.peak_acceleration
+    return max(p.working_stroke, p.return_stroke)
 
 
 class Strokes:
