@@ -33,10 +33,11 @@ test: $(VENV)/.dev
 
 # the numerical-stability suite at full length (≥ 10 000 hypothesis cases per type and property)
 # and the full global-search cross-check of the synthesis optima (≥ 20 targets per type), and
-# the envelope against dense pin paths on more designs
+# the envelope against dense pin paths on more designs, and the motion objectives' referee
+# for the crank-rocker
 stress: $(VENV)/.dev
 	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q tests/test_stress.py tests/test_global_search.py \
-		tests/test_quality.py
+		tests/test_quality.py tests/test_motion_search.py
 
 # run time against error, analysis cost, service latency: tables, benchmarks/results/*.json, plots
 bench: $(VENV)/.dev

@@ -80,14 +80,18 @@ def analyze(
     return Analysis(**summary)
 
 
-def motion_terms(mechanism: str, params: Mapping[str, float]) -> quality.MotionTerms:
-    """The values whose maxima are the motion measures (``quality.MotionTerms``), for an
-    optimiser that bounds each; raises SynthError for a design that does not run."""
+def motion_terms(
+    mechanism: str, params: Mapping[str, float], gradient: bool = False
+) -> quality.MotionTerms:
+    """The values whose maxima are the motion measures (``quality.MotionTerms``), with their
+    derivatives in the parameters when ``gradient``, for an optimiser that bounds each;
+    raises SynthError for a design that does not run."""
     m, _, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)
     if np.count_nonzero(rows == 0) != 2:
         msg = "the slider does not run one working and one return stroke"
         raise InvalidDesign(msg, (), "stroke")
-    return quality.motion_terms(m, variant, f, pv, quality.Strokes(*_ends(rows, theta, values)))
+    st = quality.Strokes(*_ends(rows, theta, values))
+    return quality.motion_terms(m, variant, f, pv, st, gradient)
 
 
 def _prepared(mechanism: str, params: Mapping[str, float]):

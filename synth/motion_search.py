@@ -12,7 +12,9 @@ variant's free parameters (stroke units), solved by SLSQP:
   the request's;
 - the motion measures come from the analysis (exact values by root finding): each is the
   largest of a few terms (the speed or acceleration at each place along the turn where it
-  may peak), so the NLP takes it in epigraph form, with forward differences of the terms;
+  may peak), so the NLP takes it in epigraph form; the terms' derivatives are exact too
+  (``quality.motion_terms``: the envelope theorem at a peak, the implicit function theorem
+  at a dead centre or a window's end);
 - it starts from the designs the exact solvers found for the same request (every variant's
   best-transmitting and smallest designs: each meets the targets), the most promising first,
   until the request's deadline, at most ``STARTS`` per variant, ``MAX_ITER`` iterations and
@@ -49,10 +51,11 @@ from .search import SolverNeeded, Targets, proposal, same, search
 from .solve import starts as halton
 
 STARTS = 4  # SLSQP runs per variant, from the best measured starts
-MAX_ITER = 100
-RUN_S = 0.4  # wall time of one SLSQP run (the request's deadline bounds them all)
-STEP = 1e-5  # central-difference step (stroke units) for the motion measures
+MAX_ITER = 300
+RUN_S = 1.0  # wall time of one SLSQP run (the request's deadline bounds them all)
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
+# a measure's terms and their derivatives in the type's parameters (quality.MotionTerms)
+Pick = Callable[[MotionTerms], tuple[np.ndarray, np.ndarray]]
 SAMPLES = 64  # Halton points in the box, projected onto the equalities: starts beside the
 PROJECT = 12  # exact solvers' designs (Newton steps each)
 FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
@@ -94,8 +97,8 @@ def local_optima(
     stroke units); ``targets`` is (time ratio, cos of the transmission bound). The measure is
     a maximum of terms (``quality.MotionTerms``), so it is minimised in epigraph form: t, with
     t ≥ each of the ``TERMS`` largest terms (a peak that moves to another place along the
-    turn is then one constraint handing over to another, not a kink); the ``limit`` bounds the
-    fluctuation's terms alike. Designs in stroke units. A default bound (not in ``explicit``)
+    turn is then one constraint handing over to another, not a kink), with the terms' exact
+    derivatives; the ``limit`` bounds the fluctuation's terms alike. Designs in stroke units. A default bound (not in ``explicit``)
     gives way to a start beyond it, as the exact solvers' does to a length the targets set on
     their own."""
     fn = functions(m, variant, free)
@@ -107,6 +110,7 @@ def local_optima(
         return {**fixed, **dict(zip(free, y[:n], strict=True)), **dict.fromkeys(variant, 0.0)}
 
     memo: dict[bytes, MotionTerms | None] = {}
+    columns = [m.names.index(k) for k in free]  # the free parameters among the type's
 
     def terms(y: np.ndarray) -> MotionTerms | None:
         key = y[:n].tobytes()
@@ -114,31 +118,31 @@ def local_optima(
             if len(memo) > 256:
                 memo.clear()
             try:
-                memo[key] = motion_terms(m.type, design(y))
+                memo[key] = motion_terms(m.type, design(y), gradient=True)
             except SynthError:
                 memo[key] = None
         return memo[key]
 
-    def largest(y: np.ndarray, pick: Callable[[MotionTerms], np.ndarray]) -> np.ndarray:
+    def largest(y: np.ndarray, pick: Pick) -> tuple[np.ndarray, np.ndarray]:
+        """The ``TERMS`` largest terms (the last repeated where there are fewer), and their
+        derivatives in the free parameters."""
         got = terms(y)
         if got is None:
-            return np.full(TERMS, FAIL)
-        v = np.sort(pick(got))[::-1][:TERMS]
-        return np.concatenate([v, np.full(TERMS - v.size, v[-1])])
+            return np.full(TERMS, FAIL), np.zeros((TERMS, n))
+        values, dp = pick(got)
+        order = np.argsort(values)[::-1][:TERMS]
+        order = np.concatenate([order, np.full(TERMS - order.size, order[-1])])
+        return values[order], dp[order][:, columns]
 
-    def bounded(pick: Callable[[MotionTerms], np.ndarray], cap: float | None):
-        """The constraint cap − each of the largest terms ≥ 0 (cap None: the epigraph's t),
-        with central differences in x."""
+    def bounded(pick: Pick, cap: float | None):
+        """The constraint cap − each of the largest terms ≥ 0 (cap None: the epigraph's t)."""
 
         def fun(y):
-            return (y[n] if cap is None else cap) - largest(y, pick)
+            return (y[n] if cap is None else cap) - largest(y, pick)[0]
 
         def jac(y):
             out = np.zeros((TERMS, y.size))
-            for i in range(n):
-                step = np.zeros_like(y)
-                step[i] = STEP * max(1.0, abs(y[i]))
-                out[:, i] = -(largest(y + step, pick) - largest(y - step, pick)) / (2 * step[i])
+            out[:, :n] = -largest(y, pick)[1]
             out[:, n] = 1.0 if cap is None else 0.0
             return out
 
@@ -199,7 +203,7 @@ def local_optima(
         if x is not None and np.all(inequalities(x) >= -1e-9):
             points.append(x)
     measured = sorted(
-        ((float(pick(got).max()), x) for x in points if (got := terms(x)) is not None),
+        ((float(pick(got)[0].max()), x) for x in points if (got := terms(x)) is not None),
         key=lambda vx: vx[0],
     )
     out = []
@@ -225,9 +229,12 @@ def local_optima(
     return out
 
 
-_PICK: dict[str, Callable[[MotionTerms], np.ndarray]] = {
-    UNIFORM: lambda t: t.middle,
-    PEAK: lambda t: np.concatenate([t.working, t.returning]),
+_PICK: dict[str, Pick] = {
+    UNIFORM: lambda t: (t.middle, t.middle_dp),
+    PEAK: lambda t: (
+        np.concatenate([t.working, t.returning]),
+        np.vstack([t.working_dp, t.returning_dp]),
+    ),
 }
 
 

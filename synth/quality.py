@@ -80,21 +80,31 @@ class MotionTerms:
     """The values whose largest is each motion measure: the speed fluctuation over the whole
     working stroke and over its middle (each |s′| that may peak there, scaled by the window's
     crank travel over its travel), and the acceleration over each stroke (each |s″| that may
-    peak there, over the stroke). The measures are their maxima; an optimiser bounds each."""
+    peak there, over the stroke). The measures are their maxima; an optimiser bounds each.
+    With ``gradient``, ``*_dp`` hold each term's derivatives in the parameters (rows: terms,
+    columns: the type's parameters), exact as the sensitivities are: the envelope theorem at a
+    stationary point, the implicit function theorem for a dead centre or a window's end."""
 
     whole: np.ndarray
     middle: np.ndarray
     working: np.ndarray
     returning: np.ndarray
+    middle_dp: np.ndarray | None = None
+    working_dp: np.ndarray | None = None
+    returning_dp: np.ndarray | None = None
 
 
 def motion_terms(
-    m: Mechanism, variant: frozenset[str], f: Model, pv: np.ndarray, st: Strokes
+    m: Mechanism,
+    variant: frozenset[str],
+    f: Model,
+    pv: np.ndarray,
+    st: Strokes,
+    gradient: bool = False,
 ) -> MotionTerms:
     fm = model(m, variant, "motion")
     rows, x, values = stationary_points(fm, pv)
     v_at, a_at = x[rows == 0], x[rows == 1]  # where |s′| and |s″| may peak
-    v_peak, a_peak = np.abs(values[rows == 0]), np.abs(values[rows == 1])
 
     def fd(t):  # s − level and s′, for the ends of the middle of the working stroke
         g, g1, _ = f(t, pv)
@@ -104,17 +114,54 @@ def motion_terms(
     lo, hi = np.full(2, st.start), np.full(2, st.start + st.working)
     ends = _rtsafe(fd, lo, hi, st.s0 - levels, st.s1 - levels, np.full(2, abs(st.stroke)))
     middle = ends[1] - ends[0]
-    ds_ends = np.abs(f(ends, pv)[1][0])
-    dd_dead = np.abs(fm(np.array([st.start, st.start + st.working]), pv)[0][1])
-    returning = (st.start + st.working, TWO_PI - st.working)
-    return MotionTerms(
-        whole=np.append(v_peak[_inside(v_at, st.start, st.working)], 0.0)
+    dead = np.array([st.start, st.start + st.working])  # the working stroke's dead centres
+    v_in = v_at[_inside(v_at, ends[0], middle)]
+    a_work = a_at[_inside(a_at, st.start, st.working)]
+    a_ret = a_at[_inside(a_at, st.start + st.working, TWO_PI - st.working)]
+    # s′ at the window's peaks and ends; s″ at the strokes' peaks and the dead centres
+    v = np.concatenate([fm(v_in, pv)[0][0], f(ends, pv)[1][0]])
+    a_w, a_r, a_d = (fm(t, pv)[0][1] for t in (a_work, a_ret, dead))
+    window = middle / ((1 - 2 * CUT) * st.stroke)
+    out = MotionTerms(
+        whole=np.append(np.abs(values[rows == 0][_inside(v_at, st.start, st.working)]), 0.0)
         * (st.working / st.stroke),
-        middle=np.concatenate([v_peak[_inside(v_at, ends[0], middle)], ds_ends])
-        * (middle / ((1 - 2 * CUT) * st.stroke)),
-        working=np.concatenate([a_peak[_inside(a_at, st.start, st.working)], dd_dead]) / st.stroke,
-        returning=np.concatenate([a_peak[_inside(a_at, *returning)], dd_dead]) / st.stroke,
+        middle=np.abs(v) * window,
+        working=np.abs(np.concatenate([a_w, a_d])) / st.stroke,
+        returning=np.abs(np.concatenate([a_r, a_d])) / st.stroke,
     )
+    if not gradient:
+        return out
+    # the dead centres: s′(θd, p) = 0, so dθd/dp = −∂s′/∂p / s″; s there moves by ∂s/∂p
+    nr = f(dead[:1], pv)[0].shape[0]
+    kd = f.dp(np.concatenate([dead, ends]), pv)  # (angle, [rows; θ-derivatives], parameter)
+    s2_dead = f(dead, pv)[2][0]
+    dt_dead = -kd[:2, nr] / s2_dead[:, None]
+    ds0, ds1 = kd[0, 0], kd[1, 0]  # s at the working stroke's start and end
+    d_stroke = (ds1 - ds0) * np.sign(st.s1 - st.s0)
+    # the window's ends: s(θe, p) = s0 + c (s1 − s0), so dθe/dp = (dlevel − ∂s/∂p) / s′
+    d_level = ds0[None, :] + np.array([CUT, 1 - CUT])[:, None] * (ds1 - ds0)[None, :]
+    s1_ends, s2_ends = f(ends, pv)[1][0], f(ends, pv)[2][0]
+    dt_ends = (d_level - kd[2:, 0]) / s1_ends[:, None]
+    d_window = (dt_ends[1] - dt_ends[0]) / (
+        (1 - 2 * CUT) * st.stroke
+    ) - window * d_stroke / st.stroke
+    md = fm.dp(v_in, pv)[:, 0] if v_in.size else np.zeros((0, pv.size))
+    dv = np.concatenate([md, kd[2:, nr] + s2_ends[:, None] * dt_ends])
+    middle_dp = np.sign(v)[:, None] * dv * window + np.abs(v)[:, None] * d_window[None, :]
+
+    def accel_dp(at: np.ndarray, a_at_: np.ndarray) -> np.ndarray:
+        """d(|s″| / stroke) at the stroke's peaks ``at`` and at the dead centres."""
+        da_in = fm.dp(at, pv)[:, 1] if at.size else np.zeros((0, pv.size))
+        s3_dead = fm(dead, pv)[1][1]
+        da_dead = fm.dp(dead, pv)[:, 1] + s3_dead[:, None] * dt_dead
+        a = np.concatenate([a_at_, a_d])
+        da = np.concatenate([da_in, da_dead])
+        return (
+            np.sign(a)[:, None] * da - np.abs(a)[:, None] * d_stroke[None, :] / st.stroke
+        ) / st.stroke
+
+    return MotionTerms(out.whole, out.middle, out.working, out.returning, middle_dp,
+                       accel_dp(a_work, a_w), accel_dp(a_ret, a_r))  # fmt: skip
 
 
 def motion(m: Mechanism, variant: frozenset[str], f: Model, pv: np.ndarray, st: Strokes) -> Motion:

@@ -169,9 +169,11 @@ def test_analysis_agrees_with_brute_force_at_the_edges(mtype, data):
 
 def same_angle(a_deg: float, b_deg: float, tol_deg: float) -> bool:
     """Within tol_deg, or as near as acos lets a transmission angle be: near μ = 0 a cosine
-    is 1 − μ²/2, so a rounding of 1e-15 in it moves μ by up to sqrt(2e-15) rad (2.6e-6°)."""
+    is 1 − μ²/2, so a rounding of 1e-15 in it moves μ by up to sqrt(2e-15) rad (2.6e-6°).
+    Symmetric: the slope of cos at the larger angle (one side may be exactly 0° on a limit)."""
     a, b = math.radians(a_deg), math.radians(b_deg)
-    return abs(math.cos(a) - math.cos(b)) <= 1e-15 + math.sin(a) * math.radians(tol_deg)
+    slope = max(math.sin(a), math.sin(b))
+    return abs(math.cos(a) - math.cos(b)) <= 1e-15 + slope * math.radians(tol_deg)
 
 
 def close(a, ref, tol: float) -> bool:
