@@ -98,9 +98,9 @@ def local_optima(
     a maximum of terms (``quality.MotionTerms``), so it is minimised in epigraph form: t, with
     t ≥ each of the ``TERMS`` largest terms (a peak that moves to another place along the
     turn is then one constraint handing over to another, not a kink), with the terms' exact
-    derivatives; the ``limit`` bounds the fluctuation's terms alike. Designs in stroke units. A default bound (not in ``explicit``)
-    gives way to a start beyond it, as the exact solvers' does to a length the targets set on
-    their own."""
+    derivatives; the ``limit`` bounds the fluctuation's terms alike. Designs in stroke units.
+    A default bound (not in ``explicit``) gives way to a start beyond it, as the exact
+    solvers' does to a length the targets set on their own."""
     fn = functions(m, variant, free)
     form = fn.form
     pv = np.concatenate([[fixed[k] for k in form.fixed], targets])
