@@ -240,7 +240,7 @@ _PICK: dict[str, Pick] = {
 
 def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accelerators: bool,
             limit: float | None):  # fmt: skip
-    """A motion objective: per type and variant, SLSQP (``motion_search``) from the designs the
+    """A motion objective: per type and variant, SLSQP (``local_optima``) from the designs the
     exact solvers give for the request (best-transmitting and smallest), the most promising
     first; the optima and those designs, verified, ranked by the measure (the limit met)."""
     if not t.ipopt:  # a numerical solver, as IPOPT is: not for a caller that must not block
