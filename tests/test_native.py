@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from synth.mechanisms import all_types, get
-from synth.model import GRID, Model
+from synth.model import GRID, KINDS, Model
 from synth.native import FLAGS
 
 from .designs import random_designs
@@ -25,18 +25,21 @@ MODELS = [
 ]
 
 
-def model(mtype, variant, monkeypatch, on: bool) -> Model:
+def model(mtype, variant, kind, monkeypatch, on: bool) -> Model:
     monkeypatch.setenv("SYNTH_NATIVE", "1" if on else "0")
-    return Model(get(mtype), variant)
+    return Model(get(mtype), variant, kind)
 
 
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler: the virtual machine runs")
-@pytest.mark.parametrize("mtype, variant", MODELS, ids=lambda x: "+".join(sorted(x)) or "-")
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("mtype, variant", MODELS, ids=str)
 def test_compiled_kinematics_match_the_virtual_machine_to_the_bit(
-    mtype, variant, monkeypatch, tmp_path
+    mtype, variant, kind, monkeypatch, tmp_path
 ):
+    """Every kind (the analysis, the motion, the pins, the envelope), its parameter
+    derivatives (sensitivities, the motion objectives' gradients) and the dead centres."""
     monkeypatch.setenv("SYNTH_CACHE", str(tmp_path))
-    vm, compiled = (model(mtype, variant, monkeypatch, on) for on in (False, True))
+    vm, compiled = (model(mtype, variant, kind, monkeypatch, on) for on in (False, True))
     assert "External" in compiled.fn.fn.class_name(), FLAGS
     assert vm.fn.fn.class_name() != compiled.fn.fn.class_name()
     rng = np.random.default_rng(len(MODELS))
@@ -51,6 +54,7 @@ def test_compiled_kinematics_match_the_virtual_machine_to_the_bit(
             a, b = vm(theta, pv), compiled(theta, pv)
             for x, y in zip(a, b, strict=True):
                 np.testing.assert_array_equal(x, y)
+            np.testing.assert_array_equal(vm.dp(theta, pv), compiled.dp(theta, pv))
             if vm.dead is not None:
                 np.testing.assert_array_equal(vm.dead(theta, pv), compiled.dead(theta, pv))
 
@@ -60,13 +64,13 @@ def test_without_a_compiler_or_a_cache_the_virtual_machine_runs(monkeypatch, tmp
 
     monkeypatch.setattr(native, "_compiler", lambda: None)
     monkeypatch.setenv("SYNTH_CACHE", str(tmp_path / "empty"))
-    assert model("drag_link_slider", frozenset(), monkeypatch, True).fn.fn.class_name() != (
-        "External"
-    )
+    assert model(
+        "drag_link_slider", frozenset(), "kinematics", monkeypatch, True
+    ).fn.fn.class_name() != ("External")
     blocked = tmp_path / "file"
     blocked.write_text("a file where the cache folder should be")
     monkeypatch.setattr(native, "_compiler", lambda: shutil.which("cc") or "cc")
     monkeypatch.setenv("SYNTH_CACHE", str(blocked / "synth"))
-    assert model("offset_slider_crank", frozenset(), monkeypatch, True).fn.fn.class_name() != (
-        "External"
-    )
+    assert model(
+        "offset_slider_crank", frozenset(), "kinematics", monkeypatch, True
+    ).fn.fn.class_name() != ("External")
