@@ -1,4 +1,4 @@
-"""Worked examples for /docs, from the seeds' reference cases (shared/design/mechanisms.md)."""
+"""Worked examples for /docs, from the sources' reference cases (docs/references.md)."""
 
 from fastapi.openapi.models import Example
 
@@ -12,16 +12,16 @@ DRAG_LINK = {
 }
 
 ANALYZE = {
-    "seed002": Example(
-        summary="Seed 002: the drag-link project at θ2 = 60°, ω2 = 10 rad/s",
+    "podhorodeski": Example(
+        summary="Podhorodeski et al. (2005): the drag-link project at θ2 = 60°, ω2 = 10 rad/s",
         value={
             "mechanism": {"type": "drag_link_slider", "params": DRAG_LINK},
             "crank_speed": 10.0,
             "crank_angles_deg": [60.0],
         },
     ),
-    "seed000": Example(
-        summary="Seed 000: the lab's crank and slotted lever, every 10°",
+    "lab_rig": Example(
+        summary="the slotted-lever lab handout: the lab's crank and slotted lever, every 10°",
         value={
             "mechanism": {
                 "type": "crank_shaper",
@@ -30,8 +30,8 @@ ANALYZE = {
             "samples": 36,
         },
     ),
-    "seed004": Example(
-        summary="Seed 004, Example 3: Whitworth (with a rod longer than the lever)",
+    "textbook": Example(
+        summary="the textbook chapter, Example 3: Whitworth (with a rod longer than the lever)",
         value={
             "mechanism": {
                 "type": "whitworth",
@@ -42,8 +42,8 @@ ANALYZE = {
 }
 
 SYNTHESIZE = {
-    "seed002": Example(
-        summary="Seed 002: a new coupler for the existing drag-link (two solutions)",
+    "podhorodeski": Example(
+        summary="Podhorodeski et al. (2005): a new coupler for the drag-link (two solutions)",
         value={
             "time_ratio": 1.5,
             "stroke": 0.3,
@@ -62,7 +62,7 @@ SYNTHESIZE = {
         },
     ),
     "textbook": Example(
-        summary="Seed 004, Example 2 inverted: TR 2, stroke 450, pivot distance 240",
+        summary="the textbook chapter, Example 2 inverted: TR 2, stroke 450, pivot distance 240",
         value={
             "time_ratio": 2,
             "stroke": 450,
@@ -77,7 +77,7 @@ SYNTHESIZE = {
 
 SWEEP = {
     "seed002_fig5": Example(
-        summary="Seed 002, Fig. 5: the adjustable coupler's range",
+        summary="Podhorodeski et al. (2005), Fig. 5: the adjustable coupler's range",
         value={
             "mechanism": {"type": "drag_link_slider", "params": DRAG_LINK},
             "vary": "coupler",

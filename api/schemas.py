@@ -277,7 +277,10 @@ class MechanismInfo(BaseModel):
     parameters: list[ParameterInfo]
     validity: list[str] = Field(description="the validity conditions, in words")
     quick_return: bool
-    seeds: list[str] = Field(description="the source documents (shared/seeds)")
+    sources: list[str] = Field(
+        description="where the type comes from: short citations, in full "
+        "in the project's docs/references.md"
+    )
 
     @classmethod
     def of(cls, m: Mechanism) -> MechanismInfo:
@@ -301,7 +304,7 @@ class MechanismInfo(BaseModel):
             ],
             validity=[c.text for c in m.conditions],
             quick_return=m.quick_return,
-            seeds=list(m.seeds),
+            sources=list(m.sources),
         )
 
 

@@ -3,7 +3,7 @@
 Everything here is written with ``casadi`` maths only, so the same function runs on floats
 (analysis), on ``SX``/``MX`` (the IPOPT formulation) and inside root finders. Formulas are chosen
 to keep precision near dead points: products of sums and differences instead of differences of
-squares, ``atan2`` instead of ``acos`` (see ``shared/design/numerics.md``).
+squares, ``atan2`` instead of ``acos`` (the README, *Numerical stability*).
 """
 
 from __future__ import annotations

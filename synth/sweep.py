@@ -1,4 +1,4 @@
-"""sweep(): vary one parameter of a design, the rest held (seed 002, Fig. 5).
+"""sweep(): vary one parameter of a design, the rest held (Podhorodeski et al. (2005), Fig. 5).
 
 Each point is analysed; the exact valid interval(s) come from bisection on the validity of the
 design (each boundary located to one ulp: for the Grashof limits, where a margin is exactly 0),

@@ -1,9 +1,9 @@
-"""Reference values from the seeds, with provenance. Printed slips are noted where they occur.
+"""Reference values from the sources, with provenance. Printed slips are noted where they occur.
 
-Seed files live in ``shared/seeds`` (see shared/design/mechanisms.md for the map).
+The sources are listed in docs/references.md.
 """
 
-# seed 000 (000_0f0be32169ba29b8.txt), Table 1, "Theoretical Slider Position, x" at 0°, 10°, …, 360°
+# the slotted-lever lab handout, Table 1, "Theoretical Slider Position, x" at 0°, 10°, …, 360°
 # for crank 40, pivot_distance 160, lever 240, ram_link 0; the apparatus scale reads x = 70 + s.
 SEED000_PARAMS = {"crank": 40.0, "pivot_distance": 160.0, "lever": 240.0, "ram_link": 0.0}
 SEED000_SCALE_ZERO = 70.0
@@ -14,7 +14,7 @@ SEED000_THEORY = [
     24.64, 30.93, 37.92, 45.47, 53.42, 61.64, 70.00,
 ]  # fmt: skip
 
-# seed 003 (003_7e0bfa42a11f01fb.txt): r = 35 mm, ω = 1; x = r(1 − cos θ) measured from one
+# the slotted-link lab handout: r = 35 mm, ω = 1; x = r(1 − cos θ) measured from one
 # extreme (x = r − s), Table 1 "Theoretical displacement" and Table 2 velocity / acceleration.
 SEED003_CRANK = 35.0
 SEED003_DISPLACEMENT = [
@@ -36,7 +36,7 @@ SEED003_ACCELERATION = [
     6.08, 11.97, 17.50, 22.50, 26.81, 30.31, 32.89, 34.47, 35.00,
 ]  # fmt: skip
 
-# seed 002 (002_9eb3d3dc2e472629.txt): the drag-link project.
+# Podhorodeski et al. (2005): the drag-link project.
 DRAG_LINK_FIXED = {"ground": 0.1, "crank": 0.225, "follower": 0.275}
 DRAG_LINK_PROJECT = {**DRAG_LINK_FIXED, "follower_arm": 0.15, "connecting_rod": 0.3}
 DRAG_LINK_TR = 1.5

@@ -40,7 +40,7 @@ def test_mechanisms_listing_comes_from_the_registry(client):
         assert [q["name"] for q in m["parameters"]] == list(reg.names)
         assert m["validity"] == [c.text for c in reg.conditions]
         assert m["quick_return"] == (m["type"] != "scotch_yoke")
-        assert m["seeds"]
+        assert m["sources"]
         for q in m["parameters"]:
             assert q["symbol"] and q["description"]
 

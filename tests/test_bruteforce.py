@@ -25,7 +25,7 @@ def rel(a, b):
 
 
 # ------------------------------------------------------------------ reference cases
-# seed 000, Table 1, theory column (X = 70 + s), crank angle 0, 10, ..., 360 deg
+# the slotted-lever lab handout, Table 1, theory column (X = 70 + s), crank angle 0, 10, …, 360°
 SEED000 = [
     70.00,
     78.36,
@@ -85,10 +85,10 @@ def test_seed000_table_and_extremes():
 @pytest.mark.parametrize(
     "params, tr, stroke",
     [
-        (dict(crank=120, pivot_distance=300, lever=420), 1.70995, None),  # seed 004 Ex. 1
+        (dict(crank=120, pivot_distance=300, lever=420), 1.70995, None),  # textbook Ex. 1
         (dict(crank=120, pivot_distance=300, lever=600), 1.70995, None),  # any lever >= 420
-        (dict(crank=120, pivot_distance=240, lever=450), 2.0, 450.0),  # seed 004 Ex. 2
-        (dict(crank=100, pivot_distance=250, lever=650), 1.70995, 520.0),  # seed 001
+        (dict(crank=120, pivot_distance=240, lever=450), 2.0, 450.0),  # textbook Ex. 2
+        (dict(crank=100, pivot_distance=250, lever=650), 1.70995, 520.0),  # Shelare et al. (2012)
     ],
 )
 def test_crank_shaper_book_cases(params, tr, stroke):
@@ -129,7 +129,7 @@ def test_scotch_yoke_seed003():
 
 
 def drag_link_coupler(r1, r2, r4, tr):
-    """seed 002 eqs. (7)-(13), for the self-test only."""
+    """Podhorodeski et al. (2005) eqs. (7)-(13), for the self-test only."""
     f = (tr - 1) * math.pi / (tr + 1)
     a, b, c = (r4 + r1) - (r4 - r1) * math.cos(f), (r4 - r1) * math.sin(f), 2 * r4 * r1 / r2
     out = []

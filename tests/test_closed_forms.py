@@ -28,7 +28,7 @@ def test_closed_forms_match_root_found_extremes(mtype):
         assert a.stroke == pytest.approx(float(facts["stroke"]), rel=1e-9), p
         worst = max((abs(float(c)) for c in facts["transmission_cos"]), default=0.0)
         assert a.transmission.min_deg == pytest.approx(math.degrees(math.acos(worst)), abs=1e-7), p
-        if "theta2a" in facts:  # seed 002 eq. (3a): TDC, the piston farthest out
+        if "theta2a" in facts:  # Podhorodeski et al. (2005) eq. (3a): TDC, the piston farthest out
             assert math.radians(a.extremes["max"].crank_angle_deg) == pytest.approx(
                 float(facts["theta2a"]), abs=1e-9
             )

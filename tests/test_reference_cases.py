@@ -1,4 +1,4 @@
-"""Every reference case of shared/design/mechanisms.md, against the seeds' numbers.
+"""Every reference case of docs/model.md, against the sources' numbers.
 
 Values come from tests/reference_cases.py (with provenance). Where a seed's printed number and
 its own equations disagree, the equations win and the comment says so.
@@ -96,7 +96,8 @@ def test_seed004_example3_book_rod_cannot_run():
 
 
 def seed002_couplers(tr: float) -> list[float]:
-    """Seed 002 eqs. (7)–(13), written out here from the paper: the couplers giving ``tr``."""
+    """Podhorodeski et al. (2005), eqs. (7)–(13), written out here from the paper: the couplers
+    giving ``tr``."""
     r1, r2, r4 = (ref.DRAG_LINK_FIXED[k] for k in ("ground", "crank", "follower"))
     f = (tr - 1) * math.pi / (tr + 1)
     a = (r4 + r1) - (r4 - r1) * math.cos(f)

@@ -1,6 +1,7 @@
 """Registry-wide contract: every type is defined once and the same code runs on floats, SX, MX."""
 
 import math
+from pathlib import Path
 
 import casadi as ca
 import numpy as np
@@ -10,6 +11,13 @@ import synth
 from synth.mechanisms import all_types, get
 
 from .designs import TYPES, random_designs
+
+# the short names of docs/references.md: the first column of its table
+REFERENCES = {
+    line.split("|")[1].strip()
+    for line in (Path(__file__).parents[1] / "docs" / "references.md").read_text().splitlines()
+    if line.startswith("| ") and not line.startswith("| short name")
+}
 
 
 def test_the_six_types_in_contract_order():
@@ -22,7 +30,7 @@ def test_module_documents_its_maths(mtype):
     doc = __import__(m.position.__module__, fromlist=["_"]).__doc__
     for q in m.parameters:
         assert q.name in doc and q.symbol in doc
-    assert m.seeds and all(s.endswith(".txt") for s in m.seeds)
+    assert m.sources and all(s in REFERENCES for s in m.sources)
     names = [c.name for c in m.conditions]
     assert len(names) == len(set(names))
 

@@ -1,4 +1,4 @@
-"""synth.sweep: seed 002 Fig. 5, the adjustable coupler's range."""
+"""synth.sweep: Podhorodeski et al. (2005) Fig. 5, the adjustable coupler's range."""
 
 import pytest
 

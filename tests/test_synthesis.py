@@ -1,4 +1,5 @@
-"""synth.synthesize: the seed 002 project, textbook inversions, infeasible requests, determinism.
+"""synth.synthesize: the project of Podhorodeski et al. (2005), textbook inversions, infeasible
+requests, determinism.
 
 Every candidate is re-checked here against the brute-force simulator (tests/bruteforce.py),
 which shares no code with synth.

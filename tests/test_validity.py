@@ -73,8 +73,8 @@ def test_every_condition_has_a_breaking_case():
 
 
 def test_boundary_designs_are_valid():
-    """Non-strict conditions hold at equality (seed 002's couplers 0.15 and 0.40 are in range);
-    the strict ones' equality cases are in BROKEN."""
+    """Non-strict conditions hold at equality (the drag-link project's couplers 0.15 and 0.40
+    are in range); the strict ones' equality cases are in BROKEN."""
     synth.analyze("offset_slider_crank", {"crank": 1.0, "coupler": 2.5, "offset": 1.5})
     synth.analyze("crank_shaper", {"crank": 40.0, "pivot_distance": 160.0, "lever": 200.0})
     for r3 in (0.15, 0.40):
@@ -124,7 +124,8 @@ def test_unknown_type_lists_the_known_ones():
 
 
 def test_conditioning_flags_a_change_point_and_a_dead_point():
-    """Seed 002's coupler 0.40 is on the Grashof limit: the linkage folds flat (μ = 0°)."""
+    """The drag-link project's coupler 0.40 is on the Grashof limit: the linkage folds flat
+    (μ = 0°)."""
     p = {"ground": 0.1, "crank": 0.225, "coupler": 0.40, "follower": 0.275,
          "follower_arm": 0.15, "connecting_rod": 0.3}  # fmt: skip
     c = synth.analyze("drag_link_slider", p).conditioning

@@ -15,7 +15,7 @@ router = APIRouter(tags=["analysis"])
 async def sweep(
     request: Request, body: Annotated[SweepRequest, Body(openapi_examples=SWEEP)]
 ) -> SweepResponse:
-    """What range must an adjustable part cover (seed 002, Fig. 5)."""
+    """What range must an adjustable part cover (Podhorodeski et al. (2005), Fig. 5)."""
     r = await run_design(
         request,
         "sweep",

@@ -89,7 +89,7 @@ class Mechanism:
     type: str
     title: str
     description: str
-    seeds: tuple[str, ...]
+    sources: tuple[str, ...]  # short citations (docs/references.md)
     quick_return: bool
     parameters: tuple[Parameter, ...]
     conditions: tuple[Condition, ...]

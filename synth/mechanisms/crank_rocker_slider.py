@@ -1,4 +1,4 @@
-"""Crank-rocker four-bar driving a slider (piston) — seed 002, Fig. 2a.
+"""Crank-rocker four-bar driving a slider (piston) — Podhorodeski et al. (2005), Fig. 2a.
 
 O2 at the origin, O4 = (r1, 0), crank pin A = r2(cos θ, sin θ); the rocker pin D is the
 intersection of circle(A, r3) and circle(O4, r4) left of A→O4, ψ the angle of O4→D. The rocker
@@ -132,7 +132,7 @@ register(
         title="Crank-rocker driven slider",
         description="A crank-rocker four-bar whose rocker drives a slider (piston) through a "
         "connecting rod or a slot; the rocker's unequal swing times give the quick return.",
-        seeds=("002_9eb3d3dc2e472629.txt",),
+        sources=("Podhorodeski et al. (2005)",),
         quick_return=True,
         parameters=(
             Parameter("ground", "r1", "crank pivot to rocker pivot, O2O4"),

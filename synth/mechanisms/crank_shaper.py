@@ -1,4 +1,5 @@
-"""Crank and slotted lever (crank shaper) — seeds 000, 001, 004 (Ex. 1, 2) and 002 Fig. 1b.
+"""Crank and slotted lever (crank shaper): the slotted-lever lab handout, Shelare et al. (2012),
+the textbook chapter (Ex. 1, 2) and Podhorodeski et al. (2005), Fig. 1b.
 
 The crank pin B = r2(cos θ, sin θ) carries a block that slides in the lever pivoted at
 O4 = (−d, 0); the lever angle ψ = atan2(B_y, B_x + d) oscillates (r2 < d) and its tip is
@@ -142,11 +143,11 @@ register(
         description="A crank drives a block in an oscillating slotted lever whose tip drives the "
         "ram, directly through a block in a slot or through a short ram link: the classic "
         "shaper drive.",
-        seeds=(
-            "000_0f0be32169ba29b8.txt",
-            "001_40ca53381776f4dd.txt",
-            "002_9eb3d3dc2e472629.txt",
-            "004_127788c29ec9efe4.txt",
+        sources=(
+            "the slotted-lever lab handout",
+            "Shelare et al. (2012)",
+            "Podhorodeski et al. (2005)",
+            "the textbook chapter",
         ),
         quick_return=True,
         parameters=(

@@ -1,4 +1,5 @@
-"""Drag-link (crank-crank) four-bar driving a piston — seed 002, Fig. 2b, Fig. 3, eqs. 2–13.
+"""Drag-link (crank-crank) four-bar driving a piston — Podhorodeski et al. (2005), Fig. 2b,
+Fig. 3, eqs. 2–13.
 
 O2 at the origin, O4 = (r1, 0), crank pin A = r2(cos θ, sin θ); the follower pin B is the
 intersection of circle(A, r3) and circle(O4, r4) left of A→O4, and the follower turns fully.
@@ -17,7 +18,8 @@ follower_arm    r5      O4C, on the follower line, same side as B
 connecting_rod  r6      rod CD to the piston
 ==============  ======  ===============================================
 
-Valid: Grashof with the ground the shortest link (a drag-link); r6 > r5. Closed forms (seed 002):
+Valid: Grashof with the ground the shortest link (a drag-link); r6 > r5. Closed forms
+(Podhorodeski et al. 2005):
 TDC/BDC with the follower on the ground line, O2B = r4 ± r1; θ2a, θ2b from eqs. (3a)/(3b);
 TR = (π − θ2a + θ2b)/(π + θ2a − θ2b); stroke = 2 r5; rod → piston μ_min = acos(r5/r6).
 Coupler → follower: cos μ = (r3² + r4² − |AO4|²)/(2 r3 r4), extremes with the *crank* on the
@@ -143,7 +145,7 @@ register(
         title="Drag-link driven slider",
         description="A drag-link (crank-crank) four-bar whose follower drives a piston on the "
         "ground line; the follower's non-uniform rotation gives the quick return.",
-        seeds=("002_9eb3d3dc2e472629.txt",),
+        sources=("Podhorodeski et al. (2005)",),
         quick_return=True,
         parameters=(
             Parameter("ground", "r1", "crank pivot to follower pivot, O2O4"),

@@ -1,4 +1,4 @@
-"""Offset slider-crank — seed 002, Fig. 1a.
+"""Offset slider-crank — Podhorodeski et al. (2005), Fig. 1a.
 
 Crank pin B = r2(cos θ, sin θ); the slider C runs on the line y = e, ahead of B along +x:
 
@@ -214,7 +214,7 @@ register(
         title="Offset slider-crank",
         description="A slider-crank whose slider path is offset from the crank pivot; the offset "
         "makes the two strokes take different crank angles.",
-        seeds=("002_9eb3d3dc2e472629.txt",),
+        sources=("Podhorodeski et al. (2005)",),
         quick_return=True,
         parameters=(
             Parameter("crank", "r2", "crank O2B"),

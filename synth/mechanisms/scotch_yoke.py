@@ -1,4 +1,4 @@
-"""Scotch yoke (slotted link) — seed 003.
+"""Scotch yoke (slotted link) — the slotted-link lab handout.
 
 The crank pin B = r(cos θ, sin θ) slides in a slot of the yoke, which moves along x:
 
@@ -64,7 +64,7 @@ register(
         title="Scotch yoke (slotted link)",
         description="A crank pin sliding in a slotted yoke: simple harmonic motion, time ratio 1. "
         "The baseline every quick-return mechanism is compared with.",
-        seeds=("003_7e0bfa42a11f01fb.txt",),
+        sources=("the slotted-link lab handout",),
         quick_return=False,
         parameters=(Parameter("crank", "r", "crank radius O2B"),),
         conditions=(),

@@ -1,4 +1,4 @@
-"""Whitworth quick return — seed 002 Fig. 1c, seed 004 Example 3.
+"""Whitworth quick return — Podhorodeski et al. (2005) Fig. 1c, the textbook chapter Example 3.
 
 The crank pin B = r2(cos θ, sin θ) slides in a lever pivoted at O4 = (−d, 0) with d < r2, so
 the lever angle ψ = atan2(B_y, B_x + d) turns a full revolution. The output arm points the
@@ -120,7 +120,7 @@ register(
         title="Whitworth quick return",
         description="The inversion of the crank shaper with the crank longer than the pivot "
         "distance: the slotted lever turns fully and drives the ram through a connecting rod.",
-        seeds=("002_9eb3d3dc2e472629.txt", "004_127788c29ec9efe4.txt"),
+        sources=("Podhorodeski et al. (2005)", "the textbook chapter"),
         quick_return=True,
         parameters=(
             Parameter("crank", "r2", "crank O2B"),
