@@ -115,12 +115,16 @@ def motion_terms(
     ends = _rtsafe(fd, lo, hi, st.s0 - levels, st.s1 - levels, np.full(2, abs(st.stroke)))
     middle = ends[1] - ends[0]
     dead = np.array([st.start, st.start + st.working])  # the working stroke's dead centres
-    v_in = v_at[_inside(v_at, ends[0], middle)]
-    a_work = a_at[_inside(a_at, st.start, st.working)]
-    a_ret = a_at[_inside(a_at, st.start + st.working, TWO_PI - st.working)]
+    v_in, a_work, a_ret = (
+        _inside(v_at, ends[0], middle),
+        _inside(a_at, st.start, st.working),
+        _inside(a_at, st.start + st.working, TWO_PI - st.working),
+    )
     # s′ at the window's peaks and ends; s″ at the strokes' peaks and the dead centres
-    v = np.concatenate([fm(v_in, pv)[0][0], f(ends, pv)[1][0]])
-    a_w, a_r, a_d = (fm(t, pv)[0][1] for t in (a_work, a_ret, dead))
+    _, s1_ends, s2_ends = (g[0] for g in f(ends, pv))
+    (_, a_d), (_, s3_dead), _ = fm(dead, pv)
+    v = np.concatenate([values[rows == 0][v_in], s1_ends])
+    a_w, a_r = values[rows == 1][a_work], values[rows == 1][a_ret]
     window = middle / ((1 - 2 * CUT) * st.stroke)
     out = MotionTerms(
         whole=np.append(np.abs(values[rows == 0][_inside(v_at, st.start, st.working)]), 0.0)
@@ -132,36 +136,38 @@ def motion_terms(
     if not gradient:
         return out
     # the dead centres: s′(θd, p) = 0, so dθd/dp = −∂s′/∂p / s″; s there moves by ∂s/∂p
-    nr = f(dead[:1], pv)[0].shape[0]
+    g_dead, _, g2_dead = f(dead, pv)
+    nr = g_dead.shape[0]
     kd = f.dp(np.concatenate([dead, ends]), pv)  # (angle, [rows; θ-derivatives], parameter)
-    s2_dead = f(dead, pv)[2][0]
-    dt_dead = -kd[:2, nr] / s2_dead[:, None]
+    dt_dead = -kd[:2, nr] / g2_dead[0][:, None]
     ds0, ds1 = kd[0, 0], kd[1, 0]  # s at the working stroke's start and end
     d_stroke = (ds1 - ds0) * np.sign(st.s1 - st.s0)
     # the window's ends: s(θe, p) = s0 + c (s1 − s0), so dθe/dp = (dlevel − ∂s/∂p) / s′
     d_level = ds0[None, :] + np.array([CUT, 1 - CUT])[:, None] * (ds1 - ds0)[None, :]
-    s1_ends, s2_ends = f(ends, pv)[1][0], f(ends, pv)[2][0]
     dt_ends = (d_level - kd[2:, 0]) / s1_ends[:, None]
     d_window = (dt_ends[1] - dt_ends[0]) / (
         (1 - 2 * CUT) * st.stroke
     ) - window * d_stroke / st.stroke
-    md = fm.dp(v_in, pv)[:, 0] if v_in.size else np.zeros((0, pv.size))
-    dv = np.concatenate([md, kd[2:, nr] + s2_ends[:, None] * dt_ends])
+    # ∂s′/∂p and ∂s″/∂p at the peaks (the envelope theorem) and at the dead centres
+    peaks = np.concatenate([v_at[v_in], a_at[a_work], a_at[a_ret], dead])
+    mp = fm.dp(peaks, pv)
+    n_v, n_w, n_r = (int(np.count_nonzero(k)) for k in (v_in, a_work, a_ret))
+    dv = np.concatenate([mp[:n_v, 0], kd[2:, nr] + s2_ends[:, None] * dt_ends])
     middle_dp = np.sign(v)[:, None] * dv * window + np.abs(v)[:, None] * d_window[None, :]
+    da_dead = mp[-2:, 1] + s3_dead[:, None] * dt_dead
 
-    def accel_dp(at: np.ndarray, a_at_: np.ndarray) -> np.ndarray:
-        """d(|s″| / stroke) at the stroke's peaks ``at`` and at the dead centres."""
-        da_in = fm.dp(at, pv)[:, 1] if at.size else np.zeros((0, pv.size))
-        s3_dead = fm(dead, pv)[1][1]
-        da_dead = fm.dp(dead, pv)[:, 1] + s3_dead[:, None] * dt_dead
-        a = np.concatenate([a_at_, a_d])
+    def accel_dp(da_in: np.ndarray, a_in: np.ndarray) -> np.ndarray:
+        """d(|s″| / stroke) at the stroke's peaks and at the dead centres."""
+        a = np.concatenate([a_in, a_d])
         da = np.concatenate([da_in, da_dead])
         return (
             np.sign(a)[:, None] * da - np.abs(a)[:, None] * d_stroke[None, :] / st.stroke
         ) / st.stroke
 
-    return MotionTerms(out.whole, out.middle, out.working, out.returning, middle_dp,
-                       accel_dp(a_work, a_w), accel_dp(a_ret, a_r))  # fmt: skip
+    working_dp = accel_dp(mp[n_v : n_v + n_w, 1], a_w)
+    returning_dp = accel_dp(mp[n_v + n_w : n_v + n_w + n_r, 1], a_r)
+    return MotionTerms(out.whole, out.middle, out.working, out.returning, middle_dp, working_dp,
+                       returning_dp)  # fmt: skip
 
 
 def motion(m: Mechanism, variant: frozenset[str], f: Model, pv: np.ndarray, st: Strokes) -> Motion:
