@@ -26,7 +26,6 @@ checks it against an independent global search.
 
 from __future__ import annotations
 
-import math
 import threading
 import time
 import warnings
@@ -267,9 +266,8 @@ def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accel
             ]
             if not starts or not v.free:
                 continue
-            cos_bound = math.cos(math.radians(t.bound_deg))
             optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
-                                  v.problem.explicit, (t.time_ratio, cos_bound), t.objective,
+                                  v.problem.explicit, (t.time_ratio, t.cos_bound), t.objective,
                                   starts, limit, t.deadline)  # fmt: skip
             for d in optima:
                 p = proposal(m, i, {k: x * t.stroke for k, x in d.items()}, "slsqp", t)
