@@ -25,11 +25,16 @@ class Settings(BaseSettings):
     # solvers) or "process" (a pool of worker processes). Threads when several server
     # processes already use the cores; a process pool when one server process must.
     executor: Literal["process", "thread"] = "thread" if SERVER_PROCESSES > 1 else "process"
-    # solves at once in this server process: every core, also with several server processes,
-    # since keep-alive connections need not spread evenly over them (63 against 42 req/s)
-    workers: int = CORES
+    # solves at once in this server process: its share of the cores (solver threads share
+    # one interpreter, so more threads would only take turns: each solve slower, and a
+    # budget that binds under load changes the answer); a process pool: every core
+    workers: int = max(1, CORES // SERVER_PROCESSES)
     warm: bool = True  # build the common solvers in the workers at start, in the background
     max_budget_ms: float = 60_000.0  # the largest time_budget_ms a request may ask for
+    # how long a request may wait for a solver slot before a 503: this share of what is left
+    # of its budget (a synthesis), at most max_queue_ms (also for sweeps and long curves)
+    queue_share: float = 0.5
+    max_queue_ms: float = 1000.0
 
 
 @lru_cache

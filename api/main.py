@@ -5,13 +5,16 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI, Request
 from fastapi.exception_handlers import http_exception_handler
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
+from fastapi_offline import FastAPIOffline
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 import synth
 from synth.errors import InvalidDesign, SynthError, UnknownMechanism
 
-from .engine import Engine
+from .engine import Busy, Engine
+from .guard import Gate, error_item, too_large
 from .routers import analyze, mechanisms, sweep, synthesize
 from .schemas import Health
 
@@ -26,15 +29,17 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     del app.state.engine
 
 
-app = FastAPI(
+app = FastAPIOffline(  # /docs and /redoc load their scripts from this service, not a CDN
     title="Quick-return mechanism synthesis",
     version=synth.__version__,
     description="Dimensional synthesis and analysis of quick-return mechanisms: time ratio, "
     "stroke and minimum transmission angle to verified link lengths.",
     lifespan=lifespan,
+    swagger_ui_parameters={"validatorUrl": None},  # no badge from validator.swagger.io
 )
 for module in (mechanisms, analyze, synthesize, sweep):
     app.include_router(module.router)
+app.add_middleware(Gate)
 
 
 @app.get("/health", response_model=Health, tags=["service"])
@@ -42,13 +47,45 @@ def health() -> Health:
     return Health(version=synth.__version__)
 
 
+@app.head("/health", include_in_schema=False)
+def health_head() -> Response:
+    return Response()
+
+
 @app.exception_handler(StarletteHTTPException)
 async def http_error(request: Request, exc: StarletteHTTPException) -> Response:
     """A body that is not JSON at all is malformed input too: 422 in FastAPI's shape."""
     if exc.status_code == 400:
-        detail = [{"loc": ["body"], "msg": str(exc.detail), "type": "json_invalid"}]
+        detail = [error_item(["body"], str(exc.detail), "json_invalid")]
         return JSONResponse({"detail": detail}, status_code=422)
+    if exc.status_code == 413:
+        return too_large(str(exc.detail))
     return await http_exception_handler(request, exc)
+
+
+@app.exception_handler(RequestValidationError)
+async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
+    """FastAPI's 422, made safe to encode whatever the input held (``guard.safe``), echoing
+    only short inputs."""
+    detail = []
+    for e in exc.errors():
+        if e["type"] == "json_invalid":  # FastAPI locates it at a character: the msg says where
+            e = {"loc": ["body"], "msg": e["ctx"]["error"], "type": e["type"]}
+        more = {"input": e["input"]} if "input" in e else {}
+        ctx = {k: v for k, v in (e.get("ctx") or {}).items() if k != "error"}
+        detail.append(
+            error_item(e["loc"], e["msg"], e["type"], **more, **({"ctx": ctx} if ctx else {}))
+        )
+    return JSONResponse({"detail": detail}, status_code=422)
+
+
+@app.exception_handler(Busy)
+def busy(request: Request, exc: Busy) -> JSONResponse:
+    """Every solver slot stayed taken for as long as the request could wait: 503, with when to
+    try again."""
+    detail = [error_item([], str(exc), "busy")]
+    headers = {"Retry-After": str(exc.retry_after_s)}
+    return JSONResponse({"detail": detail}, status_code=503, headers=headers)
 
 
 @app.exception_handler(SynthError)
@@ -61,6 +98,6 @@ def synth_error(request: Request, exc: SynthError) -> JSONResponse:
         locs = [[*root, name] for name in exc.loc] or [root]
     else:
         locs = [[*root, *exc.loc]]
-    detail = [{"loc": loc, "msg": exc.msg, "type": exc.kind} for loc in locs]
+    detail = [error_item(loc, exc.msg, exc.kind) for loc in locs]
     not_found = isinstance(exc, UnknownMechanism) and request.method == "GET"
     return JSONResponse({"detail": detail}, status_code=404 if not_found else 422)

@@ -9,7 +9,16 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Field, create_model, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationInfo,
+    create_model,
+    field_validator,
+    model_validator,
+)
 
 from synth import results
 from synth.kinematics import INCLUDE, MAX_CURVE_POINTS
@@ -47,25 +56,20 @@ def _params(m: Mechanism, suffix: str, all_optional: bool) -> type[BaseModel]:
     return create_model(f"{_camel(m.type)}{suffix}", __config__=STRICT, **fields)
 
 
-class Bounds(BaseModel):
-    model_config = STRICT
-
-    @model_validator(mode="after")
-    def _ordered(self) -> Bounds:
-        for name, b in self:
-            if b is not None and b[0] > b[1]:
-                raise ValueError(f"{name}: lower bound {b[0]:g} > upper bound {b[1]:g}")
-        return self
+def _ordered(b: list[float]) -> list[float]:
+    if b[0] > b[1]:
+        raise ValueError(f"lower bound {b[0]:g} > upper bound {b[1]:g}")
+    return b
 
 
 def _bounds(m: Mechanism) -> type[BaseModel]:
-    pair = Annotated[list[Finite], Field(min_length=2, max_length=2)] | None
+    pair = Annotated[list[Finite], Field(min_length=2, max_length=2), AfterValidator(_ordered)]
     fields = {
         q.name: (pair, Field(None, description=f"[lower, upper] for {q.name}; default "
                  f"[{q.bounds[0]:g}, {q.bounds[1]:g}] × the stroke"))
         for q in m.parameters
     }  # fmt: skip
-    return create_model(f"{_camel(m.type)}Bounds", __base__=Bounds, **fields)
+    return create_model(f"{_camel(m.type)}Bounds", __config__=STRICT, **fields)
 
 
 def _design(m: Mechanism) -> type[BaseModel]:
@@ -81,13 +85,14 @@ def _design(m: Mechanism) -> type[BaseModel]:
 class Spec(BaseModel):
     model_config = STRICT
 
-    @model_validator(mode="after")
-    def _fixed_or_bounded(self) -> Spec:
-        fixed = {k for k, v in self.fixed if v is not None}
-        both = sorted(fixed & {k for k, v in self.bounds if v is not None})
+    @field_validator("bounds", check_fields=False)
+    @classmethod
+    def _fixed_or_bounded(cls, bounds: BaseModel, info: ValidationInfo) -> BaseModel:
+        fixed = {k for k, v in info.data.get("fixed") or () if v is not None}
+        both = sorted(fixed & {k for k, v in bounds if v is not None})
         if both:
             raise ValueError(f"{', '.join(both)}: both fixed and bounded; give one")
-        return self
+        return bounds
 
 
 def _spec(m: Mechanism) -> type[BaseModel]:
@@ -167,11 +172,12 @@ class AnalyzeRequest(Extras):
         None, ge=1, le=MAX_CURVE_POINTS, description="curves at evenly spaced angles"
     )
 
-    @model_validator(mode="after")
-    def _one_curve_kind(self) -> AnalyzeRequest:
-        if self.crank_angles_deg is not None and self.samples is not None:
+    @field_validator("samples")
+    @classmethod
+    def _one_curve_kind(cls, samples: int | None, info: ValidationInfo) -> int | None:
+        if samples is not None and info.data.get("crank_angles_deg") is not None:
             raise ValueError("give crank_angles_deg or samples, not both")
-        return self
+        return samples
 
 
 class SynthesizeRequest(Extras):
@@ -179,7 +185,10 @@ class SynthesizeRequest(Extras):
     stroke: float = Field(..., ge=LENGTH_MIN, le=LENGTH_MAX)
     min_transmission_angle_deg: float = Field(0.0, ge=0.0, lt=90.0)
     mechanisms: list[TypeSpec] | None = Field(
-        None, max_length=24, description="omitted: every quick-return type, nothing fixed"
+        None,
+        min_length=1,
+        max_length=24,
+        description="omitted: every quick-return type, nothing fixed",
     )
     objective: Literal[
         "pareto",
@@ -229,15 +238,23 @@ class SweepRequest(BaseModel):
     stop: float = Field(..., ge=-LENGTH_MAX, le=LENGTH_MAX)
     points: int = Field(101, ge=1, le=MAX_POINTS)
 
-    @model_validator(mode="after")
-    def _range(self) -> SweepRequest:
-        if self.start > self.stop:
-            raise ValueError(f"start {self.start:g} > stop {self.stop:g}")
-        names = get(self.mechanism.type).names
-        if self.vary not in names:
-            raise ValueError(f"vary: {self.vary!r} is not a parameter of {self.mechanism.type}"
+    @field_validator("vary")
+    @classmethod
+    def _known(cls, vary: str, info: ValidationInfo) -> str:
+        mechanism = info.data.get("mechanism")
+        names = get(mechanism.type).names if mechanism else ()
+        if mechanism and vary not in names:
+            raise ValueError(f"{vary!r} is not a parameter of {mechanism.type}"
                              f" ({', '.join(names)})")  # fmt: skip
-        return self
+        return vary
+
+    @field_validator("stop")
+    @classmethod
+    def _range(cls, stop: float, info: ValidationInfo) -> float:
+        start = info.data.get("start")
+        if start is not None and start > stop:
+            raise ValueError(f"start {start:g} > stop {stop:g}")
+        return stop
 
 
 # --- responses ---------------------------------------------------------------------------

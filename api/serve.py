@@ -23,6 +23,10 @@ from uvicorn.supervisors import Multiprocess
 from .config import CORES
 
 APP = "api.main:app"
+# on SIGTERM: stop accepting at once, give requests in flight this long, then cancel them and
+# exit (uvicorn ends the process by the signal, solver threads and all): every process is gone
+# within 10 s (tests/test_faults.py)
+SHUTDOWN_S = 5
 
 
 def listener(host: str, port: int) -> socket.socket:
@@ -41,7 +45,8 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--port", type=int, default=int(os.environ.get("PORT", "8000")))
     a = ap.parse_args(argv)
     workers = int(os.environ.setdefault("WEB_CONCURRENCY", str(CORES)))  # the processes read it
-    config = uvicorn.Config(APP, host=a.host, port=a.port, workers=workers)
+    config = uvicorn.Config(APP, host=a.host, port=a.port, workers=workers,
+                            timeout_graceful_shutdown=SHUTDOWN_S)  # fmt: skip
     if workers == 1:
         uvicorn.Server(config).run()  # binds by host and port: proto is set
         return

@@ -10,7 +10,9 @@ from __future__ import annotations
 class SynthError(ValueError):
     """Base of every error this library raises on purpose."""
 
-    def __init__(self, msg: str, loc: tuple[str, ...] = (), kind: str = "value_error") -> None:
+    def __init__(
+        self, msg: str, loc: tuple[str | int, ...] = (), kind: str = "value_error"
+    ) -> None:
         super().__init__(msg)
         self.msg = msg
         self.loc = tuple(loc)
@@ -43,7 +45,7 @@ class UnknownMechanism(SynthError):
 class InvalidParameters(SynthError):
     """Parameter names or values that are malformed (unknown, missing, non-finite, non-positive)."""
 
-    def __init__(self, msg: str, loc: tuple[str, ...]) -> None:
+    def __init__(self, msg: str, loc: tuple[str | int, ...]) -> None:
         super().__init__(msg, loc, "invalid_parameters")
 
 

@@ -17,8 +17,9 @@ variant's free parameters (stroke units), solved by SLSQP:
   at a dead centre or a window's end);
 - it starts from the designs the exact solvers found for the same request (every variant's
   best-transmitting and smallest designs: each meets the targets), the most promising first,
-  until the request's deadline, at most ``STARTS`` per variant, ``MAX_ITER`` iterations and
-  ``RUN_S`` seconds each.
+  until the request's deadline, at most ``STARTS`` per variant and ``MAX_ITER`` iterations
+  each. No other clock decides anything: the answer does not depend on the machine's load
+  unless the deadline cuts it short (and then the answer says so).
 
 The answer is a local optimum, verified like every candidate; ``tests/test_motion_search.py``
 checks it against an independent global search.
@@ -51,7 +52,6 @@ from .solve import starts as halton
 
 STARTS = 4  # SLSQP runs per variant, from the best measured starts
 MAX_ITER = 300
-RUN_S = 1.0  # wall time of one SLSQP run (the request's deadline bounds them all)
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
 # a measure's terms and their derivatives in the type's parameters (quality.MotionTerms)
 Pick = Callable[[MotionTerms], tuple[np.ndarray, np.ndarray]]
@@ -209,10 +209,9 @@ def local_optima(
     for first, x0 in measured[:STARTS]:
         if time.monotonic() >= deadline:
             break
-        stop = min(deadline, time.monotonic() + RUN_S)
 
-        def cap(_, stop=stop):
-            if time.monotonic() >= stop:
+        def cap(_):
+            if time.monotonic() >= deadline:
                 raise StopIteration  # SLSQP ends with its last iterate (projected below)
 
         with warnings.catch_warnings():

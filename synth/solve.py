@@ -1,8 +1,10 @@
 """IPOPT on a formulation: per-thread solver cache, deterministic multistart, polishing.
 
-A CasADi ``nlpsol`` is never shared between threads (numerics.md: that crashes the process):
-each thread builds its own, once per (type, variant, free set, objective). Every solve is
-bounded in iterations and wall time. Starts come from a Halton sequence over the bounds (no
+A CasADi ``nlpsol`` is never shared between threads (that crashes the process): each thread
+builds its own, once per (type, variant, free set, objective). Every solve is bounded in
+iterations and by the request's deadline, which an iteration callback checks: no other clock
+decides anything, so a request gets the same answer however loaded the machine is, unless its
+budget runs out (and then says so). Starts come from a Halton sequence over the bounds (no
 clock, no random seed: the same request gives the same starts), lengths spread in log scale.
 """
 
@@ -21,7 +23,8 @@ from .formulation import Formulation, formulate
 from .mechanisms import Mechanism
 
 MAX_ITER = 200
-MAX_WALL_S = 0.5  # one solve; the request's budget is checked between solves
+MAX_WALL_S = 60.0  # one solve, a last resort: the request's deadline stops it (``_Deadline``)
+DEADLINE_STEP = 20  # iterations between two looks at the deadline (a few ms; 3% of the time)
 IPOPT = {
     "print_time": False,
     "show_eval_warnings": False,  # NaN in a line search is handled by IPOPT (it cuts the step)
@@ -39,6 +42,7 @@ _local = threading.local()
 class Built:
     form: Formulation
     solver: ca.Function
+    deadline: _Deadline  # the solver's iteration callback (it must outlive the solver)
 
 
 def built(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], objective: str) -> Built:
@@ -47,8 +51,42 @@ def built(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], objectiv
     key = (m.type, variant, free, objective)
     if key not in cache:
         form = formulate(m, variant, free, objective)
-        cache[key] = Built(form, ca.nlpsol(f"{m.type}_{objective}", "ipopt", form.nlp, IPOPT))
+        name = f"{m.type}_{objective}"
+        stop = _Deadline(f"{name}_deadline", form.nlp)
+        options = {**IPOPT, "iteration_callback": stop, "iteration_callback_step": DEADLINE_STEP}
+        cache[key] = Built(form, ca.nlpsol(name, "ipopt", form.nlp, options), stop)
     return cache[key]
+
+
+class _Deadline(ca.Callback):
+    """IPOPT's iteration callback: a nonzero answer stops the solve, once ``at`` (monotonic
+    seconds, set before each solve) has passed."""
+
+    def __init__(self, name: str, nlp: dict) -> None:
+        ca.Callback.__init__(self)
+        self.nx, self.ng, self.np = (nlp[k].numel() for k in ("x", "g", "p"))
+        self.at = float("inf")
+        self.construct(name, {})
+
+    def get_n_in(self) -> int:
+        return ca.nlpsol_n_out()
+
+    def get_n_out(self) -> int:
+        return 1
+
+    def get_name_in(self, i: int) -> str:
+        return ca.nlpsol_out(i)
+
+    def get_name_out(self, i: int) -> str:
+        return "stop"
+
+    def get_sparsity_in(self, i: int) -> ca.Sparsity:
+        size = {"x": self.nx, "lam_x": self.nx, "g": self.ng, "lam_g": self.ng, "f": 1,
+                "lam_p": self.np}[ca.nlpsol_out(i)]  # fmt: skip
+        return ca.Sparsity.dense(size, 1)
+
+    def eval(self, arg):
+        return [1 if time.monotonic() >= self.at else 0]
 
 
 def starts(lo: np.ndarray, hi: np.ndarray, log: np.ndarray, n: int) -> np.ndarray:
@@ -83,6 +121,7 @@ def multistart(
         if time.monotonic() >= deadline:
             return
         x0 = np.concatenate([x0, [1.0] * form.n_extra])
+        b.deadline.at = deadline
         sol = b.solver(x0=x0, p=pv, lbx=lbx, ubx=ubx, lbg=form.lbg, ubg=form.ubg)
         status = b.solver.stats()["return_status"]
         if status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):

@@ -208,19 +208,19 @@ def _spec(s: Spec | Mapping[str, Any], i: int) -> Spec:
     if both:
         raise InvalidParameters(
             f"{s.type}: {', '.join(sorted(both))} both fixed and bounded; give one",
-            ("mechanisms", str(i), "bounds", sorted(both)[0]),
+            ("mechanisms", i, s.type, "bounds", sorted(both)[0]),
         )
     for k, v in s.fixed.items():
         try:
             m.value(k, v)
         except InvalidParameters as e:
-            raise InvalidParameters(e.msg, ("mechanisms", str(i), "fixed", k)) from None
+            raise InvalidParameters(e.msg, ("mechanisms", i, s.type, "fixed", k)) from None
     for k, (lo, hi) in s.bounds.items():
         q = m.parameter(k)
         if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi and (q.signed or lo >= 0)):
             raise InvalidParameters(
                 f"{s.type}.{k} bounds [{lo!r}, {hi!r}]: need finite lower ≤ upper"
                 + ("" if q.signed else ", lower ≥ 0"),
-                ("mechanisms", str(i), "bounds", k),
+                ("mechanisms", i, s.type, "bounds", k),
             )
     return Spec(s.type, dict(s.fixed), {k: (float(a), float(b)) for k, (a, b) in s.bounds.items()})

@@ -6,6 +6,9 @@ from hypothesis import HealthCheck, settings
 
 # schemathesis generates requests up to the schema's limits: keep each synthesis short here
 os.environ.setdefault("SYNTH_MAX_BUDGET_MS", "1000")
+# no background warm-up competing for the two cores with the test that runs meanwhile (a
+# motion objective's 1 s budget ran out under it); the servers the tests start warm up
+os.environ.setdefault("SYNTH_WARM", "0")
 
 # `make test`: a bounded, reproducible subset; `make stress`: the long run (HYPOTHESIS_PROFILE)
 common = {"deadline": None, "suppress_health_check": list(HealthCheck)}

@@ -18,21 +18,15 @@ import socket
 import subprocess
 import sys
 import time
-import urllib.request
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
 
 from . import reference_cases as ref
+from .server import alive, call, descendants, free_port, wait_for_health
 
 ROOT = Path(__file__).resolve().parent.parent
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def fresh_checkout(dest: Path) -> Path:
@@ -46,30 +40,6 @@ def fresh_checkout(dest: Path) -> Path:
             (dest / f).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(ROOT / f, dest / f)
     return dest
-
-
-def call(port: int, path: str, body: dict | None = None) -> tuple[int, dict]:
-    data = None if body is None else json.dumps(body).encode()
-    req = urllib.request.Request(
-        f"http://127.0.0.1:{port}{path}", data=data, headers={"Content-Type": "application/json"}
-    )
-    try:
-        with urllib.request.urlopen(req, timeout=120) as r:
-            return r.status, json.loads(r.read())
-    except urllib.error.HTTPError as e:
-        return e.code, json.loads(e.read())
-
-
-def wait_for_health(port: int, proc: subprocess.Popen, timeout: float) -> dict:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if proc.poll() is not None:
-            raise AssertionError(f"make serve exited with {proc.returncode}")
-        try:
-            return call(port, "/health")[1]
-        except OSError:
-            time.sleep(0.2)
-    raise AssertionError(f"no /health on port {port} within {timeout} s")
 
 
 def test_readme_starts_with_the_two_commands():
@@ -89,7 +59,8 @@ def served(tmp_path_factory):
     proc = subprocess.Popen(
         ["make", "serve", f"PORT={port}"], cwd=work, start_new_session=True,
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        env={k: v for k, v in os.environ.items() if not k.startswith("VIRTUAL_ENV")},
+        env={k: v for k, v in os.environ.items()
+             if not k.startswith("VIRTUAL_ENV") and k != "SYNTH_WARM"},  # as shipped
     )  # fmt: skip
     try:
         assert wait_for_health(port, proc, timeout=600)["status"] == "ok"
@@ -173,30 +144,6 @@ def test_the_listener_gives_connections_tcp_nodelay():
             server.close()
 
     assert asyncio.run(accepted()) == 1
-
-
-def descendants(pid: int) -> set[int]:
-    """Every process below ``pid`` (from /proc)."""
-    children = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        children.setdefault(int(fields[1]), set()).add(int(stat.parent.name))
-    found, todo = set(), [pid]
-    while todo:
-        for child in children.get(todo.pop(), ()):
-            found.add(child)
-            todo.append(child)
-    return found
-
-
-def alive(pid: int) -> bool:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
 
 
 def test_sigterm_to_the_server_stops_every_process_it_started():

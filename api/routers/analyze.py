@@ -5,10 +5,11 @@ from typing import Annotated
 from fastapi import APIRouter, Body, Request
 
 from ..examples import ANALYZE
+from ..guard import Route
 from ..schemas import AnalyzeRequest, AnalyzeResponse
 from .common import run_design, tolerance
 
-router = APIRouter(tags=["analysis"])
+router = APIRouter(tags=["analysis"], route_class=Route)
 # an analysis with at most this many curve points runs in the request's own thread: it costs
 # ~1 ms, less than a round trip to a worker process (benchmarks/results/service.json)
 INLINE_CURVE_POINTS = 1000

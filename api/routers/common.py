@@ -12,12 +12,17 @@ from ..schemas import Extras
 
 
 async def run(
-    request: Request, params_loc: tuple[str, ...], op: str, inline: bool = False, **kwargs: Any
+    request: Request,
+    params_loc: tuple[str, ...],
+    op: str,
+    inline: bool = False,
+    deadline: float | None = None,
+    **kwargs: Any,
 ) -> Any:
-    """Run ``op`` on the engine (see ``Engine.run`` for ``inline``); an error about the
-    design's parameters is placed at ``params_loc`` in the request body."""
+    """Run ``op`` on the engine (see ``Engine.run`` for ``inline`` and ``deadline``); an error
+    about the design's parameters is placed at ``params_loc`` in the request body."""
     try:
-        return await Engine.of(request.app).run(op, inline, **kwargs)
+        return await Engine.of(request.app).run(op, inline, deadline, **kwargs)
     except SynthError as e:
         params = kwargs.get("params", ())
         if isinstance(e, InvalidDesign) or (e.loc and e.loc[0] in params):

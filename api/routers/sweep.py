@@ -5,10 +5,11 @@ from typing import Annotated
 from fastapi import APIRouter, Body, Request
 
 from ..examples import SWEEP
+from ..guard import Route
 from ..schemas import SweepRequest, SweepResponse
 from .common import run_design
 
-router = APIRouter(tags=["analysis"])
+router = APIRouter(tags=["analysis"], route_class=Route)
 
 
 @router.post("/v1/sweep", response_model=SweepResponse)

@@ -5,10 +5,11 @@ from typing import Annotated
 from fastapi import APIRouter, Body, Request
 
 from ..examples import SYNTHESIZE
+from ..guard import Route, arrival
 from ..schemas import SynthesizeRequest, SynthesizeResponse
 from .common import run, tolerance
 
-router = APIRouter(tags=["synthesis"])
+router = APIRouter(tags=["synthesis"], route_class=Route)
 
 
 @router.post("/v1/synthesize", response_model=SynthesizeResponse)
@@ -16,7 +17,9 @@ async def synthesize(
     request: Request, body: Annotated[SynthesizeRequest, Body(openapi_examples=SYNTHESIZE)]
 ) -> SynthesizeResponse:
     """Every good design for the time ratio, stroke and transmission bound, each verified by
-    the forward analysis; an impossible request gives no candidates and a reason per type."""
+    the forward analysis; an impossible request gives no candidates and a reason per type.
+    The budget counts from the request's arrival; a request that cannot get a solver within
+    half of it gets a 503 with Retry-After instead of waiting."""
     specs = None
     if body.mechanisms is not None:
         specs = [
@@ -31,6 +34,7 @@ async def synthesize(
         request,
         (),
         "synthesize",
+        deadline=arrival(request) + body.time_budget_ms / 1000,  # the budget bounds the wait
         time_ratio=body.time_ratio,
         stroke=body.stroke,
         min_transmission_angle_deg=body.min_transmission_angle_deg,
