@@ -47,7 +47,7 @@ from .mechanisms import Mechanism, get
 from .quality import PEAK, UNIFORM, MotionTerms, fluctuation
 from .reduced import MAX_TRANSMISSION, MIN_SIZE
 from .results import TOL, Candidate, Infeasible
-from .search import SolverNeeded, Targets, proposal, same, search
+from .search import Targets, proposal, same, search
 from .solve import starts as halton
 
 STARTS = 4  # SLSQP runs per variant, from the best measured starts
@@ -241,8 +241,6 @@ def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accel
     """A motion objective: per type and variant, SLSQP (``local_optima``) from the designs the
     exact solvers give for the request (best-transmitting and smallest), the most promising
     first; the optima and those designs, verified, ranked by the measure (the limit met)."""
-    if not t.ipopt:  # a numerical solver, as IPOPT is: not for a caller that must not block
-        raise SolverNeeded(t.objective)
     found: list[Candidate] = []
     infeasible = []
     for i, spec in enumerate(specs):

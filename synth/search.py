@@ -41,11 +41,6 @@ class Spec:
     bounds: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
-class SolverNeeded(Exception):
-    """Raised by ``synthesize(..., ipopt=False)`` where the request needs IPOPT: the reduced
-    solvers could not answer it exactly (a caller that must not block runs it elsewhere)."""
-
-
 @dataclass(frozen=True)
 class Targets:
     time_ratio: float
@@ -53,7 +48,6 @@ class Targets:
     bound_deg: float
     objective: str
     deadline: float
-    ipopt: bool = True  # False: raise SolverNeeded rather than run IPOPT
 
     @property
     def cos_bound(self) -> float:
@@ -207,8 +201,6 @@ def ipopt(
 ) -> Iterable[tuple[dict[str, float], str]]:
     """Local optima of the formulation (caller's units) from the warm starts and valid cold
     ones, each with how it was found."""
-    if not t.ipopt:
-        raise SolverNeeded(m.type)
     free, fixed = v.free, v.fixed
     if not free:
         return []

@@ -28,13 +28,12 @@ from .reduced import MAX_TRANSMISSION, MIN_SIZE
 from .results import Candidate, SynthesisResult, Tolerance
 from .search import (
     Searched,
-    SolverNeeded,
     Spec,
     Targets,
     search,
 )
 
-__all__ = ["MAX_CANDIDATES", "OBJECTIVES", "SolverNeeded", "Spec", "synthesize"]
+__all__ = ["MAX_CANDIDATES", "OBJECTIVES", "Spec", "synthesize"]
 
 OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE, *MOTION_OBJECTIVES)
 MAX_CANDIDATES = 50
@@ -54,7 +53,6 @@ def synthesize(
     tolerance: Tolerance | None = None,
     max_working_speed_fluctuation: float | None = None,
     accelerators: bool = True,
-    ipopt: bool = True,
 ) -> SynthesisResult:
     """Every good design for the targets, verified and ranked (POST /v1/synthesize).
 
@@ -69,8 +67,6 @@ def synthesize(
     ``PER_TYPE`` (pareto: per type of the request, at most ``MAX_CANDIDATES``).
     ``accelerators=False`` solves every type as one without a reduced solver would be, by
     cold multistart IPOPT on the formulation: the generic path, for cross-checks.
-    ``ipopt=False`` answers only what the reduced solvers answer exactly (in milliseconds)
-    and raises ``SolverNeeded`` for the rest.
     ``include`` and ``tolerance`` add to each candidate what they add to an analysis
     (``synth.analyze``): motion quality, sensitivities, the envelope.
 
@@ -95,7 +91,7 @@ def synthesize(
             f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
         )
     deadline = t0 + time_budget_ms / 1000
-    targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline, ipopt)
+    targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline)
     extras = {"include": include, "tolerance": tolerance}
     if objective == PARETO:
         cands, infeasible = pareto(specs, targets, max_candidates, per_type, extras, accelerators)
