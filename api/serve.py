@@ -16,6 +16,7 @@ import argparse
 import logging
 import os
 import socket
+import sys
 
 import uvicorn
 from uvicorn.supervisors import Multiprocess
@@ -27,6 +28,10 @@ APP = "api.main:app"
 # exit (uvicorn ends the process by the signal, solver threads and all): every process is gone
 # within 10 s (tests/test_faults.py)
 SHUTDOWN_S = 5
+# how long a thread holds the interpreter before another may take it (Python's default: 5 ms):
+# the event loop waits that long behind a solver thread at each step, so /health under load
+# took 230 ms at p99 with the default and 1 ms here (benchmarks/overload.py)
+SWITCH_S = 0.001
 
 
 def listener(host: str, port: int) -> socket.socket:
@@ -40,6 +45,7 @@ def listener(host: str, port: int) -> socket.socket:
 
 
 def main(argv: list[str] | None = None) -> None:
+    sys.setswitchinterval(SWITCH_S)
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--host", default=os.environ.get("HOST", "127.0.0.1"))
     ap.add_argument("--port", type=int, default=int(os.environ.get("PORT", "8000")))
