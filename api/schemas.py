@@ -270,6 +270,24 @@ class NotFound(BaseModel):
     detail: list[ErrorItem]
 
 
+class Refused(BaseModel):
+    """A request the service would not take: its body too large, or no solver free in time."""
+
+    detail: list[ErrorItem]
+
+
+# what every POST may answer besides 200 and 422 (README, "What a client can rely on")
+REFUSALS: dict[int | str, dict[str, Any]] = {
+    413: {"model": Refused, "description": "the body is over 4 MiB (the connection is closed)"},
+    503: {
+        "model": Refused,
+        "description": "no solver was free within the wait the budget allows (half of it, at "
+        "most 1 s): try again after Retry-After seconds",
+        "headers": {"Retry-After": {"description": "seconds", "schema": {"type": "integer"}}},
+    },
+}
+
+
 class Health(BaseModel):
     status: str = "ok"
     version: str

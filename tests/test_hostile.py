@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import http.client
 import json
+import re
 
 import pytest
 
@@ -159,3 +160,22 @@ def test_a_chunked_body_past_the_limit_is_refused_without_reading_it_all(port):
     except (BrokenPipeError, ConnectionResetError):
         pass  # the server answered and closed while the client still sent: also a refusal
     assert sent < 200 * 65536
+
+
+def test_the_contract_states_the_refusals_and_the_docs_load_nothing_from_elsewhere(port):
+    from api.main import app
+
+    for path in ("/v1/analyze", "/v1/synthesize", "/v1/sweep"):
+        responses = app.openapi()["paths"][path]["post"]["responses"]
+        assert {"413", "422", "503"} <= set(responses), path
+        assert "Retry-After" in responses["503"]["headers"]
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+    for page in ("/docs", "/redoc"):
+        r, html = send(conn, "GET", page, None)
+        assert r.status == 200
+        refs = re.findall(rb'(?:src|href)="([^"]*)"', html)
+        assert refs and all(ref.startswith(b"/") for ref in refs), refs
+        assert not re.search(rb"https?://", html), page  # no host: works without a network
+        for ref in refs:  # each script, style and icon comes from the service itself
+            got, body = send(conn, "GET", ref.decode(), None)
+            assert got.status == 200 and body, ref

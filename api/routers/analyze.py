@@ -6,7 +6,7 @@ from fastapi import APIRouter, Body, Request
 
 from ..examples import ANALYZE
 from ..guard import Route
-from ..schemas import AnalyzeRequest, AnalyzeResponse
+from ..schemas import REFUSALS, AnalyzeRequest, AnalyzeResponse
 from .common import run_design, tolerance
 
 router = APIRouter(tags=["analysis"], route_class=Route)
@@ -15,7 +15,12 @@ router = APIRouter(tags=["analysis"], route_class=Route)
 INLINE_CURVE_POINTS = 1000
 
 
-@router.post("/v1/analyze", response_model=AnalyzeResponse, response_model_exclude_unset=True)
+@router.post(
+    "/v1/analyze",
+    response_model=AnalyzeResponse,
+    response_model_exclude_unset=True,
+    responses=REFUSALS,
+)
 async def analyze(
     request: Request, body: Annotated[AnalyzeRequest, Body(openapi_examples=ANALYZE)]
 ) -> AnalyzeResponse:

@@ -6,13 +6,13 @@ from fastapi import APIRouter, Body, Request
 
 from ..examples import SWEEP
 from ..guard import Route
-from ..schemas import SweepRequest, SweepResponse
+from ..schemas import REFUSALS, SweepRequest, SweepResponse
 from .common import run_design
 
 router = APIRouter(tags=["analysis"], route_class=Route)
 
 
-@router.post("/v1/sweep", response_model=SweepResponse)
+@router.post("/v1/sweep", response_model=SweepResponse, responses=REFUSALS)
 async def sweep(
     request: Request, body: Annotated[SweepRequest, Body(openapi_examples=SWEEP)]
 ) -> SweepResponse:

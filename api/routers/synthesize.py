@@ -6,13 +6,13 @@ from fastapi import APIRouter, Body, Request
 
 from ..examples import SYNTHESIZE
 from ..guard import Route, arrival
-from ..schemas import SynthesizeRequest, SynthesizeResponse
+from ..schemas import REFUSALS, SynthesizeRequest, SynthesizeResponse
 from .common import run, tolerance
 
 router = APIRouter(tags=["synthesis"], route_class=Route)
 
 
-@router.post("/v1/synthesize", response_model=SynthesizeResponse)
+@router.post("/v1/synthesize", response_model=SynthesizeResponse, responses=REFUSALS)
 async def synthesize(
     request: Request, body: Annotated[SynthesizeRequest, Body(openapi_examples=SYNTHESIZE)]
 ) -> SynthesizeResponse:
