@@ -5,10 +5,10 @@ python -m benchmarks [--quick]
 
 import sys
 
-from . import analysis, service, synthesis
+from . import analysis, overload, service, synthesis
 
 if __name__ == "__main__":
     quick = ["--quick"] if "--quick" in sys.argv[1:] else []
-    for bench in (analysis, synthesis, service):
+    for bench in (analysis, synthesis, service, overload):
         print(f"\n## {bench.__name__}\n", flush=True)
         bench.main(quick)

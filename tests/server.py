@@ -1,5 +1,5 @@
 """The real server for tests that go over a socket: started as `make serve` starts it, its
-processes found from /proc."""
+processes found from /proc (``descendants``, which the benchmarks use too)."""
 
 from __future__ import annotations
 
@@ -14,6 +14,8 @@ import time
 import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
+
+from benchmarks.common import descendants
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -72,23 +74,6 @@ def serving(**env: str) -> Iterator[tuple[int, subprocess.Popen]]:
             for pid in {proc.pid, *started}:
                 with contextlib.suppress(OSError):
                     os.kill(pid, signal.SIGKILL)
-
-
-def descendants(pid: int) -> set[int]:
-    """Every process below ``pid`` (from /proc)."""
-    children: dict[int, set[int]] = {}
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        children.setdefault(int(fields[1]), set()).add(int(stat.parent.name))
-    found, todo = set(), [pid]
-    while todo:
-        for child in children.get(todo.pop(), ()):
-            found.add(child)
-            todo.append(child)
-    return found
 
 
 def alive(pid: int) -> bool:

@@ -3,7 +3,7 @@ what they report holds (ours solves every feasible target it is given and refuse
 infeasible one, to 1e-12, never worse than the generic multistart; the service answers every
 request). Timings are printed, never asserted."""
 
-from benchmarks import analysis, service, synthesis
+from benchmarks import analysis, overload, service, synthesis
 
 
 def test_synthesis_benchmark_quick():
@@ -49,3 +49,14 @@ def test_service_benchmark_quick():
     assert {p["type"] for p in out["paired"]} == set(analysis.DESIGNS)
     for p in out["paired"]:
         assert p["statuses"] == {"synthesize": {200: 5}, "analyze": {200: 5}}, p
+
+
+def test_overload_benchmark_quick():
+    """Overloaded, the server refuses (503) rather than fails: no 5xx else, no dropped
+    connection, every synthesis and /health answered (their times are the benchmark's)."""
+    out = overload.main(["--quick"])
+    assert [r["clients"] for r in out["rows"]] == list(overload.CLIENTS)
+    for r in [*out["rows"], out["memory"]]:
+        assert r["errors"] == 0, r
+    for r in out["rows"]:
+        assert r["synthesis_wall_ms"]["max"] is not None and r["health_ms"]["max"] is not None
