@@ -35,7 +35,8 @@ def answer(body: dict) -> dict:
 
 
 def test_32_concurrent_copies_get_the_answer_the_request_gets_alone():
-    with serving(SYNTH_MAX_BUDGET_MS="60000") as (port, _):  # as shipped: the default 2 s
+    # the cap as shipped (conftest lowers it to 1 s), so the default 2 s budget applies
+    with serving(SYNTH_MAX_BUDGET_MS="60000") as (port, _):
         status, alone, _ = ask(port)
         assert status == 200 and alone["complete"]
         first: list = [None] * COPIES
