@@ -28,20 +28,20 @@ import threading
 import time
 from pathlib import Path
 
+from api.examples import DRAG_LINK
+
 from .common import descendants, report, table
 from .service import default_body, free_port, serve
 
 BUDGET_MS = 1000.0
 CLIENTS = (16, 64)
-_DRAG = {"ground": 0.1, "crank": 0.225, "coupler": 0.2504, "follower": 0.275,
-         "follower_arm": 0.15, "connecting_rod": 0.3}  # fmt: skip
 
 
 def mix() -> list[tuple[str, dict]]:
     """Twenty requests: analyses, syntheses (default, per type and all types; near time ratio
     1, where the four-bars need IPOPT), a sweep, and invalid ones."""
     budget = {"time_budget_ms": BUDGET_MS}
-    analyze = {"mechanism": {"type": "drag_link_slider", "params": _DRAG}}
+    analyze = {"mechanism": {"type": "drag_link_slider", "params": DRAG_LINK}}
     synth = [
         {**default_body(t), **budget}
         for t in ("offset_slider_crank", "crank_shaper", "whitworth", "crank_rocker_slider")

@@ -18,6 +18,8 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
+from api.examples import DRAG_LINK
+
 from .server import alive, descendants, serving
 
 SYNTH = {
@@ -29,17 +31,7 @@ SYNTH = {
     "time_budget_ms": 1000,
 }  # fmt: skip — ~0.3 s of SLSQP in a solver
 SWEEP = {
-    "mechanism": {
-        "type": "drag_link_slider",
-        "params": {
-            "ground": 0.1,
-            "crank": 0.225,
-            "coupler": 0.2504,
-            "follower": 0.275,
-            "follower_arm": 0.15,
-            "connecting_rod": 0.3,
-        },
-    },
+    "mechanism": {"type": "drag_link_slider", "params": DRAG_LINK},
     "vary": "coupler",
     "start": 0.14,
     "stop": 0.5,
