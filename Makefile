@@ -1,7 +1,11 @@
-# Two commands on a fresh machine (only Python 3.11 and make needed):
+# Two commands on a fresh machine (Python 3.11, 3.12 or 3.13, and make):
 #   make serve   - create .venv from the lock file if missing, run the service on $(HOST):$(PORT)
 #   make test    - create .venv (with test tools) if missing, run the whole suite
-PYTHON ?= python3.11
+# The interpreter: the newest supported one on the PATH (PYTHON=... overrides; `make python`
+# says which it is)
+PYTHON ?= $(shell for p in python3.13 python3.12 python3.11 python3; do \
+	$$p -c 'import sys; sys.exit(not (3, 11) <= sys.version_info < (3, 14))' 2>/dev/null \
+	&& { echo $$p; break; }; done)
 VENV   ?= .venv
 HOST   ?= 127.0.0.1
 PORT   ?= 8000
@@ -9,21 +13,39 @@ BIN    := $(VENV)/bin
 export OMP_NUM_THREADS ?= 1
 export OPENBLAS_NUM_THREADS ?= 1
 
-.PHONY: serve test stress bench lint lock clean
+# the project itself, editable, built by the setuptools the lock pinned
+INSTALL_SELF := $(BIN)/python -m pip install -qq --no-deps --no-build-isolation -e .
+
+.PHONY: serve test stress bench lint lock lock-check notebook python clean
+
+python:
+	@test -n "$(PYTHON)" || { echo "make: no Python 3.11, 3.12 or 3.13 found (tried python3.13," \
+		"python3.12, python3.11, python3): install one, or give its path as PYTHON=..." >&2; exit 1; }
+	@echo $(PYTHON)
 
 $(BIN)/python:
+	@$(MAKE) --no-print-directory python >/dev/null
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade "pip>=24"
-	# make the repository importable (synth, api) without building a package
-	echo "$(CURDIR)" > "$$($(BIN)/python -c 'import sysconfig; print(sysconfig.get_path("purelib"))')/quickreturn-synth.pth"
 
-$(VENV)/.runtime: requirements.lock | $(BIN)/python
+$(VENV)/.runtime: requirements.lock pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet --require-hashes -r requirements.lock
+	$(INSTALL_SELF)
 	touch $@
 
-$(VENV)/.dev: requirements-dev.lock | $(BIN)/python
+$(VENV)/.dev: requirements-dev.lock pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet --require-hashes -r requirements-dev.lock
+	$(INSTALL_SELF)
 	touch $@ $(VENV)/.runtime
+
+# JupyterLab on notebooks/, with a kernel of this environment (JUPYTER_ARGS: more options, e.g.
+# --no-browser, or --allow-root where Jupyter runs as root)
+JUPYTER_ARGS ?=
+notebook: $(VENV)/.dev
+	$(BIN)/python -m pip install --quiet --require-hashes -r requirements-notebook.lock
+	$(BIN)/python -m ipykernel install --sys-prefix --name quickreturn-synth \
+		--display-name "quickreturn-synth (.venv)"
+	$(BIN)/jupyter lab $(JUPYTER_ARGS) notebooks/
 
 serve: $(VENV)/.runtime
 	$(BIN)/python -m api.serve --host $(HOST) --port $(PORT)
@@ -46,10 +68,26 @@ bench: $(VENV)/.dev
 lint: $(VENV)/.dev
 	$(BIN)/ruff check .
 
-# Regenerate the lock files after changing pyproject.toml (needs uv: pip install uv).
+# Regenerate the lock files after changing pyproject.toml (needs uv: pip install uv): one lock
+# for every supported Python (markers where they differ), with the setuptools that builds the
+# project; the notebook lock is the dev lock's pins and JupyterLab's.
+UV_COMPILE := uv pip compile --universal --python-version 3.11 --generate-hashes
 lock:
-	uv pip compile pyproject.toml --python-version 3.11 --generate-hashes -o requirements.lock
-	uv pip compile pyproject.toml --extra dev --python-version 3.11 --generate-hashes -o requirements-dev.lock
+	echo "setuptools>=77" | $(UV_COMPILE) pyproject.toml - -o requirements.lock
+	echo "setuptools>=77" | $(UV_COMPILE) pyproject.toml - --extra dev -o requirements-dev.lock
+	echo "setuptools>=77" | $(UV_COMPILE) pyproject.toml - --extra dev --extra notebook \
+		-c requirements-dev.lock -o requirements-notebook.lock
+
+# Whether each lock installs on each supported Python (Linux x86-64, wheels only): pip resolves
+# it without installing (downloads what it has not cached)
+LOCK_PYTHONS := 3.11 3.12 3.13
+lock-check:
+	for v in $(LOCK_PYTHONS); do for f in requirements*.lock; do \
+		echo "Python $$v: $$f"; \
+		$(PYTHON) -m pip install --quiet --dry-run --ignore-installed --only-binary=:all: \
+			--implementation cp --python-version $$v --platform manylinux_2_28_x86_64 \
+			--platform manylinux_2_17_x86_64 --platform manylinux2014_x86_64 \
+			--target "$$(mktemp -d)" --require-hashes -r $$f || exit 1; done; done
 
 clean:
 	rm -rf $(VENV) .pytest_cache .hypothesis

@@ -48,6 +48,56 @@ def test_readme_starts_with_the_two_commands():
     assert any(line.startswith("make test") for line in head)
 
 
+def chosen_python(tmp_path: Path, versions: dict[str, str], *args: str):
+    """What `make python` says with only these interpreters on the PATH: each name runs this
+    Python with ``sys.version_info`` set to its version, so the Makefile's own check runs."""
+    bin_dir = tmp_path / "bin"
+    bin_dir.mkdir()
+    for name, version in versions.items():
+        fake = bin_dir / name
+        info = tuple(int(x) for x in version.split("."))
+        # `name -c CODE`: CODE runs as in that Python (only the version differs)
+        code = f"import sys; sys.version_info = {info}; exec(sys.argv[1])"
+        fake.write_text(f'#!/bin/sh\nexec {sys.executable} -c "{code}" "$2"\n')
+        fake.chmod(0o755)
+    (bin_dir / "echo").symlink_to(shutil.which("echo"))  # make runs `@echo …` without a shell
+    make = shutil.which("make")
+    env = {"PATH": str(bin_dir), "HOME": str(tmp_path)}
+    return subprocess.run([make, "-s", "-C", str(ROOT), "python", *args],
+                          env=env, capture_output=True, text=True)  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("versions", "want"),
+    [
+        ({"python3.13": "3.13.1", "python3.12": "3.12.3", "python3.11": "3.11.7"}, "python3.13"),
+        ({"python3.12": "3.12.3", "python3.11": "3.11.7"}, "python3.12"),
+        ({"python3.11": "3.11.7", "python3": "3.11.7"}, "python3.11"),
+        ({"python3": "3.12.8"}, "python3"),  # only the unversioned name, and it fits
+        ({"python3.13": "3.10.0", "python3": "3.13.0"}, "python3"),  # a name that lies
+        ({"python3": "3.10.12"}, None),  # too old
+        ({"python3": "3.14.0"}, None),  # too new for the lock
+        ({}, None),
+    ],
+)
+def test_make_picks_the_newest_supported_python(tmp_path, versions, want):
+    if shutil.which("make") is None:
+        pytest.skip("needs make")
+    r = chosen_python(tmp_path, versions)
+    if want is None:
+        assert r.returncode != 0 and r.stdout == ""
+        assert "no Python 3.11, 3.12 or 3.13 found" in r.stderr and "PYTHON=" in r.stderr
+    else:
+        assert (r.returncode, r.stdout.strip()) == (0, want), r.stderr
+
+
+def test_make_takes_the_python_it_is_given(tmp_path):
+    if shutil.which("make") is None:
+        pytest.skip("needs make")
+    r = chosen_python(tmp_path, {"python3.12": "3.12.3"}, "PYTHON=/opt/py/bin/python3")
+    assert (r.returncode, r.stdout.strip()) == (0, "/opt/py/bin/python3")
+
+
 @pytest.fixture(scope="module")
 def served(tmp_path_factory):
     """`make serve` on a fresh checkout: (its port, the checkout with the .venv it built)."""
