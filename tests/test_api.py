@@ -128,9 +128,9 @@ def test_invalid_design_names_each_parameter(client):
     r = client.post("/v1/analyze", json=body)
     assert r.status_code == 422
     detail = r.json()["detail"]
-    assert [d["loc"] for d in detail] == [
-        ["body", "mechanism", "params", "connecting_rod"],
+    assert [d["loc"] for d in detail] == [  # in the type's order of its parameters
         ["body", "mechanism", "params", "lever"],
+        ["body", "mechanism", "params", "connecting_rod"],
     ]
     assert detail[0]["msg"].startswith("connecting_rod 135 ≤ lever 150")
     assert detail[0]["type"] == "invalid_design"

@@ -91,7 +91,6 @@ def grashof_conditions(
                 name=f"grashof_{x}",
                 text=f"{shortest} + {x} ≤ {a} + {b} (Grashof with the {shortest} the shortest "
                 f"link: a {kind})",
-                params=(shortest, x, a, b),
                 margin=lambda p, x=x, a=a, b=b: (p[a] + p[b] - p[shortest] - p[x],),
                 explain=lambda p, x=x, a=a, b=b: (
                     f"{shortest} {p[shortest]:g} + {x} {p[x]:g} = {p[shortest] + p[x]:g} > "

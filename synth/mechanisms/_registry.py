@@ -8,8 +8,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
+
+import casadi as ca
 
 from ..errors import InvalidDesign, InvalidParameters, UnknownMechanism
 
@@ -53,16 +55,18 @@ class Condition:
     constraint in the formulation; ``explain`` states a violation with its numbers, e.g.
     "coupler 2 < crank 1 + |offset| 1.5: the crank cannot turn fully". ``needs`` names the
     optional part the condition is about (it holds only in the variants that have it, e.g. a
-    ram link's reach).
+    ram link's reach). ``params``, the parameters the margin depends on (where an error
+    points, and the lengths its rounding tolerance scales with), is derived when the type is
+    registered, never declared.
     """
 
     name: str
     text: str
-    params: tuple[str, ...]
     margin: Callable[[Params], tuple[Any, ...]]
     explain: Callable[[Params], str]
     strict: bool = False
     needs: str | None = None
+    params: tuple[str, ...] = ()
 
     def applies(self, variant: frozenset[str]) -> bool:
         """Whether the condition holds in a variant (the set of optional parts left out)."""
@@ -230,7 +234,6 @@ def reach_condition(
         name=name,
         text=f"{link} ≥ the largest distance from {pin} to the {output} path over the swing "
         f"(when {link} > 0)",
-        params=(link, height, arm),
         margin=lambda p: tuple(p[link] + sg * t for t in offsets(p) for sg in (1, -1)),
         needs=link,
         explain=lambda p: (
@@ -245,6 +248,15 @@ _REGISTRY: dict[str, Mechanism] = {}
 
 
 def register(m: Mechanism) -> Mechanism:
+    """Add a type, each condition's ``params`` derived from what its margin depends on (its
+    full variant: every optional part present)."""
+    sym = {k: ca.SX.sym(k) for k in m.names}
+
+    def params(c: Condition) -> tuple[str, ...]:
+        out = ca.vertcat(*(ca.SX(t) for t in c.margin(sym)))
+        return tuple(k for k in m.names if ca.depends_on(out, sym[k]))
+
+    m = replace(m, conditions=tuple(replace(c, params=params(c)) for c in m.conditions))
     _REGISTRY[m.type] = m
     return m
 

@@ -175,7 +175,6 @@ register(
             Condition(
                 name="oscillating_lever",
                 text="crank < pivot_distance (the lever oscillates; otherwise a Whitworth)",
-                params=("crank", "pivot_distance"),
                 margin=lambda p: (p["pivot_distance"] - p["crank"],),
                 strict=True,
                 explain=lambda p: (
@@ -186,7 +185,6 @@ register(
             Condition(
                 name="block_on_lever",
                 text="pivot_distance + crank ≤ lever (the crank-pin block stays on the lever)",
-                params=("lever", "pivot_distance", "crank"),
                 margin=lambda p: (p["lever"] - p["pivot_distance"] - p["crank"],),
                 explain=lambda p: (
                     f"lever {p['lever']:g} < pivot_distance {p['pivot_distance']:g} + crank "

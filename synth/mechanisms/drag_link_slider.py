@@ -160,7 +160,6 @@ register(
             Condition(
                 name="rod_reach",
                 text="connecting_rod > follower_arm (the rod reaches the piston path)",
-                params=("connecting_rod", "follower_arm"),
                 margin=lambda p: (p["connecting_rod"] - p["follower_arm"],),
                 strict=True,
                 explain=lambda p: (

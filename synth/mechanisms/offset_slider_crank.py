@@ -232,7 +232,6 @@ register(
             Condition(
                 name="full_rotation",
                 text="coupler ≥ crank + |offset| (the crank turns a full revolution)",
-                params=("coupler", "crank", "offset"),
                 margin=lambda p: (
                     p["coupler"] - p["crank"] - p["offset"],
                     p["coupler"] - p["crank"] + p["offset"],

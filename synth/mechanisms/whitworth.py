@@ -132,7 +132,6 @@ register(
             Condition(
                 name="rotating_lever",
                 text="crank > pivot_distance (the lever turns fully; otherwise a crank shaper)",
-                params=("crank", "pivot_distance"),
                 margin=lambda p: (p["crank"] - p["pivot_distance"],),
                 strict=True,
                 explain=lambda p: (
@@ -143,7 +142,6 @@ register(
             Condition(
                 name="rod_reach",
                 text="connecting_rod > lever (the rod reaches the ram path in every position)",
-                params=("connecting_rod", "lever"),
                 margin=lambda p: (p["connecting_rod"] - p["lever"],),
                 strict=True,
                 explain=lambda p: (
