@@ -11,11 +11,12 @@ from fastapi_offline import FastAPIOffline
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 import synth
-from synth.errors import InvalidDesign, SynthError, UnknownMechanism
+from synth.errors import UnknownMechanism
 
 from .engine import Busy, Engine
 from .guard import Gate, error_item, too_large
 from .routers import analyze, mechanisms, sweep, synthesize
+from .routers.common import Located
 from .schemas import Health
 
 
@@ -88,16 +89,16 @@ def busy(request: Request, exc: Busy) -> JSONResponse:
     return JSONResponse({"detail": detail}, status_code=503, headers=headers)
 
 
-@app.exception_handler(SynthError)
-def synth_error(request: Request, exc: SynthError) -> JSONResponse:
-    """Misuse and invalid designs: 422 in FastAPI's shape; an unknown type in a path: 404.
+@app.exception_handler(Located)
+def located(request: Request, exc: Located) -> JSONResponse:
+    """Misuse and invalid designs: 422 in FastAPI's shape, one entry per place (an invalid
+    design: each parameter of the failed condition)."""
+    e = exc.error
+    detail = [error_item(["body", *loc], e.msg, e.kind) for loc in exc.locs]
+    return JSONResponse({"detail": detail}, status_code=422)
 
-    An invalid design names each parameter of the failed condition (one entry each)."""
-    root = ["path" if request.method == "GET" else "body", *exc.where]
-    if isinstance(exc, InvalidDesign):
-        locs = [[*root, name] for name in exc.loc] or [root]
-    else:
-        locs = [[*root, *exc.loc]]
-    detail = [error_item(loc, exc.msg, exc.kind) for loc in locs]
-    not_found = isinstance(exc, UnknownMechanism) and request.method == "GET"
-    return JSONResponse({"detail": detail}, status_code=404 if not_found else 422)
+
+@app.exception_handler(UnknownMechanism)
+def unknown(request: Request, exc: UnknownMechanism) -> JSONResponse:
+    """A type in a path that is not one: 404."""
+    return JSONResponse({"detail": [error_item(["path", *exc.loc], exc.msg, exc.kind)]}, 404)

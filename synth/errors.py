@@ -17,7 +17,6 @@ class SynthError(ValueError):
         self.msg = msg
         self.loc = tuple(loc)
         self.kind = kind
-        self.where: tuple[str, ...] = ()  # set by a caller: where the parameters sit in a request
 
     def __reduce__(self):  # survive pickling (a process pool sends errors back)
         return (_restore, (type(self), self.__dict__))

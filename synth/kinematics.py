@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 
@@ -60,12 +61,11 @@ def analyze(
     >>> round(a.time_ratio, 5), round(a.stroke, 9)
     (2.73524, 300.0)
     """
-    check_include(include)
+    deg = check(mechanism, params, crank_angles_deg, samples, include)
     m, p, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)
     summary = _summary(m, p, f, rows, theta, values)
-    if crank_angles_deg is not None or samples is not None:
-        summary["curves"] = _curves(f, pv, crank_speed, crank_acceleration, crank_angles_deg,
-                                    samples)  # fmt: skip
+    if deg is not None:
+        summary["curves"] = _curves(f, pv, crank_speed, crank_acceleration, deg)
     if "envelope" in include:
         summary["envelope"] = quality.envelope(m, variant, p, pv)
     if {"motion", "sensitivities"} & set(include) or tolerance is not None:
@@ -221,13 +221,27 @@ def conditioning(m: Mechanism, p: dict[str, float], mu_deg: float, reversals: in
     return Conditioning(mu_deg, margin, name, tuple(flags))
 
 
-def _curves(f: Model, pv, omega, alpha, angles_deg, samples) -> Curves:
-    if angles_deg is not None and samples is not None:
+def check(
+    mechanism: str,
+    params: Mapping[str, float],
+    crank_angles_deg: Sequence[float] | None = None,
+    samples: int | None = None,
+    include: Collection[str] = (),
+    **_: Any,
+) -> np.ndarray | None:
+    """What ``analyze`` checks before it analyses (its arguments' meaning; the design's
+    validity): the crank angles of the curves asked for, in degrees (None: no curves). Takes
+    (and ignores) ``analyze``'s other arguments."""
+    check_include(include)
+    get(mechanism).complete(params)
+    if crank_angles_deg is None and samples is None:
+        return None
+    if crank_angles_deg is not None and samples is not None:
         raise InvalidParameters("give crank_angles_deg or samples, not both", ("samples",))
-    if angles_deg is not None:
-        deg = np.asarray(angles_deg, dtype=float).ravel()
+    if crank_angles_deg is not None:
+        deg = np.asarray(crank_angles_deg, dtype=float).ravel()
     else:
-        if samples is None or samples < 1:
+        if not (isinstance(samples, int) and samples >= 1):
             raise InvalidParameters(f"samples must be ≥ 1, got {samples}", ("samples",))
         deg = np.arange(samples) * (360.0 / samples)
     if deg.size > MAX_CURVE_POINTS:
@@ -236,6 +250,10 @@ def _curves(f: Model, pv, omega, alpha, angles_deg, samples) -> Curves:
         )
     if not np.all(np.isfinite(deg)):
         raise InvalidParameters("crank angles must be finite", ("crank_angles_deg",))
+    return deg
+
+
+def _curves(f: Model, pv, omega, alpha, deg: np.ndarray) -> Curves:
     if deg.size == 0:
         empty = np.empty(0)
         return Curves(deg, empty, empty, empty, empty)

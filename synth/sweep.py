@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from scipy.optimize import minimize_scalar
@@ -19,6 +20,28 @@ from .mechanisms import get
 from .results import Extremum, SweepResult
 
 MAX_POINTS = 10_000
+
+
+def check(
+    mechanism: str, params: Mapping[str, float], vary: str, start: float, stop: float,
+    points: int = 101, **_: Any,
+) -> None:  # fmt: skip
+    """What ``sweep`` checks before it sweeps (its arguments' meaning)."""
+    m = get(mechanism)
+    for k in params:
+        m.parameter(k)
+    try:
+        q = m.parameter(vary)
+    except InvalidParameters as e:
+        raise InvalidParameters(e.msg, ("vary",)) from None
+    if not (math.isfinite(start) and math.isfinite(stop)):
+        raise InvalidParameters(f"need finite start and stop, got {start!r}, {stop!r}", ("stop",))
+    if start > stop:
+        raise InvalidParameters(f"start {start:g} > stop {stop:g}", ("stop",))
+    if not q.signed and start <= 0 and not (q.zero_means and start == 0):
+        raise InvalidParameters(f"{vary} is a length: start must be > 0, got {start:g}", ("start",))
+    if not (isinstance(points, int) and 1 <= points <= MAX_POINTS):
+        raise InvalidParameters(f"points must be 1 … {MAX_POINTS}, got {points!r}", ("points",))
 
 
 def sweep(
@@ -37,14 +60,7 @@ def sweep(
     >>> [[round(v, 12) for v in iv] for iv in r.valid_interval]
     [[0.15, 0.4]]
     """
-    m = get(mechanism)
-    q = m.parameter(vary)
-    if not (math.isfinite(start) and math.isfinite(stop) and start <= stop):
-        raise InvalidParameters(f"need finite start ≤ stop, got {start!r}, {stop!r}", ("stop",))
-    if not q.signed and start <= 0 and not (q.zero_means and start == 0):
-        raise InvalidParameters(f"{vary} is a length: start must be > 0, got {start:g}", ("start",))
-    if not (isinstance(points, int) and 1 <= points <= MAX_POINTS):
-        raise InvalidParameters(f"points must be 1 … {MAX_POINTS}, got {points!r}", ("points",))
+    check(mechanism, params, vary, start, stop, points)
     held = {k: v for k, v in params.items() if k != vary}
 
     def at(v: float):

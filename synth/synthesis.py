@@ -33,7 +33,7 @@ from .search import (
     search,
 )
 
-__all__ = ["MAX_CANDIDATES", "OBJECTIVES", "Spec", "synthesize"]
+__all__ = ["MAX_CANDIDATES", "OBJECTIVES", "Spec", "check", "synthesize"]
 
 OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE, *MOTION_OBJECTIVES)
 MAX_CANDIDATES = 50
@@ -76,20 +76,12 @@ def synthesize(
     [120.0, 450.0]
     """
     t0 = time.monotonic()
-    if mechanisms is None:
-        specs = [Spec(t) for t in all_types() if get(t).quick_return]
-    else:
-        specs = [_spec(s, i) for i, s in enumerate(mechanisms)]
+    specs = check(time_ratio, stroke, min_transmission_angle_deg, mechanisms, objective,
+                  max_candidates, time_budget_ms, include=include,
+                  max_working_speed_fluctuation=max_working_speed_fluctuation)  # fmt: skip
     per_type = max_candidates or PER_TYPE  # the most one type's front takes
     if max_candidates is None:
         max_candidates = min(PER_TYPE * (len(specs) if objective == PARETO else 1), MAX_CANDIDATES)
-    _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
-    _check_limit(max_working_speed_fluctuation, objective)
-    check_include(include)
-    if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
-        raise InvalidParameters(
-            f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
-        )
     deadline = t0 + time_budget_ms / 1000
     targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline)
     extras = {"include": include, "tolerance": tolerance}
@@ -150,6 +142,37 @@ def _verified(
     return found, left
 
 
+def check(
+    time_ratio: float,
+    stroke: float,
+    min_transmission_angle_deg: float = 0.0,
+    mechanisms: Sequence[Spec | Mapping[str, Any]] | None = None,
+    objective: str = PARETO,
+    max_candidates: int | None = None,
+    time_budget_ms: float = 2000.0,
+    *,
+    include: Collection[str] = (),
+    max_working_speed_fluctuation: float | None = None,
+    **_: Any,
+) -> list[Spec]:
+    """What ``synthesize`` checks before it solves (its arguments' meaning); the specs, every
+    quick-return type when ``mechanisms`` is None. Takes (and ignores) ``synthesize``'s other
+    arguments. Raises ``InvalidParameters`` located at the
+    argument, e.g. ``("mechanisms", 0, "bounds", "crank")``."""
+    if mechanisms is None:
+        specs = [Spec(t) for t in all_types() if get(t).quick_return]
+    else:
+        specs = [_spec(s, i) for i, s in enumerate(mechanisms)]
+    _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
+    _check_limit(max_working_speed_fluctuation, objective)
+    check_include(include)
+    if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
+        raise InvalidParameters(
+            f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
+        )
+    return specs
+
+
 def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
     checks = [
         ("time_ratio", tr, math.isfinite(tr) and tr >= 1, "a finite number ≥ 1"),
@@ -164,7 +187,8 @@ def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
         (
             "max_candidates",
             max_candidates,
-            isinstance(max_candidates, int) and 1 <= max_candidates <= MAX_CANDIDATES,
+            max_candidates is None
+            or (isinstance(max_candidates, int) and 1 <= max_candidates <= MAX_CANDIDATES),
             f"an integer from 1 to {MAX_CANDIDATES}",
         ),
     ]
@@ -203,20 +227,24 @@ def _spec(s: Spec | Mapping[str, Any], i: int) -> Spec:
     both = set(s.fixed) & set(s.bounds)
     if both:
         raise InvalidParameters(
-            f"{s.type}: {', '.join(sorted(both))} both fixed and bounded; give one",
-            ("mechanisms", i, s.type, "bounds", sorted(both)[0]),
+            f"{s.type} {', '.join(sorted(both))}: both fixed and bounded; give one",
+            ("mechanisms", i, "bounds", sorted(both)[0]),
         )
     for k, v in s.fixed.items():
         try:
             m.value(k, v)
         except InvalidParameters as e:
-            raise InvalidParameters(e.msg, ("mechanisms", i, s.type, "fixed", k)) from None
+            raise InvalidParameters(e.msg, ("mechanisms", i, "fixed", k)) from None
     for k, (lo, hi) in s.bounds.items():
         q = m.parameter(k)
-        if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi and (q.signed or lo >= 0)):
+        why = (
+            "need finite bounds" if not (math.isfinite(lo) and math.isfinite(hi))
+            else f"lower bound {lo:g} > upper bound {hi:g}" if lo > hi
+            else f"lower bound {lo:g} < 0 for a length" if not q.signed and lo < 0
+            else None
+        )  # fmt: skip
+        if why:
             raise InvalidParameters(
-                f"{s.type}.{k} bounds [{lo!r}, {hi!r}]: need finite lower ≤ upper"
-                + ("" if q.signed else ", lower ≥ 0"),
-                ("mechanisms", i, s.type, "bounds", k),
+                f"{s.type}.{k} bounds [{lo!r}, {hi!r}]: {why}", ("mechanisms", i, "bounds", k)
             )
     return Spec(s.type, dict(s.fixed), {k: (float(a), float(b)) for k, (a, b) in s.bounds.items()})

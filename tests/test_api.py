@@ -277,7 +277,7 @@ BAD = [
     ("/v1/synthesize", {**SYNTH, "mechanisms": [{"type": "cam"}]}, "mechanisms"),
     ("/v1/sweep", {**SWEEP, "points": 10_001}, "points"),
     ("/v1/sweep", {**SWEEP, "start": 60.0}, "start 60 > stop 50"),
-    ("/v1/sweep", {**SWEEP, "vary": "colour"}, "'colour' is not a parameter of crank_shaper"),
+    ("/v1/sweep", {**SWEEP, "vary": "colour"}, "crank_shaper has no parameter 'colour'"),
     ("/v1/sweep", {**SWEEP, "start": -10.0}, "start"),
 ]  # fmt: skip
 

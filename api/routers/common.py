@@ -1,42 +1,72 @@
-"""The one way a router calls synth: through the engine, with domain errors located in the body."""
+"""The one way a router calls synth: the operation's own checks at once, then the operation
+through the engine; synth's errors located in the request body."""
 
+from collections.abc import Callable
 from typing import Any
 
 from fastapi import Request
 
 from synth.errors import InvalidDesign, SynthError
+from synth.kinematics import check as check_analysis
 from synth.results import Tolerance
+from synth.sweep import check as check_sweep
+from synth.synthesis import check as check_synthesis
 
 from ..engine import Engine
 from ..schemas import Extras
 
+# each operation's own checks of its arguments (cheap, no solving): run before a request waits
+# for a solver, so a request synth refuses gets its 422 at once, under any load
+CHECKS: dict[str, Callable[..., Any]] = {
+    "analyze": check_analysis,
+    "synthesize": check_synthesis,
+    "sweep": check_sweep,
+}
+
+Loc = tuple[str | int, ...]
+
+
+class Located(Exception):
+    """A domain error (``error``) at places in the request (``locs``): a 422 (api.main)."""
+
+    def __init__(self, error: SynthError, locs: list[Loc]) -> None:
+        super().__init__(error.msg)
+        self.error, self.locs = error, locs
+
 
 async def run(
     request: Request,
-    params_loc: tuple[str, ...],
+    locate: Callable[[SynthError], list[Loc]],
     op: str,
     inline: bool = False,
     deadline: float | None = None,
     **kwargs: Any,
 ) -> Any:
-    """Run ``op`` on the engine (see ``Engine.run`` for ``inline`` and ``deadline``); an error
-    about the design's parameters is placed at ``params_loc`` in the request body."""
+    """Run ``op`` on the engine (see ``Engine.run`` for ``inline`` and ``deadline``) once its
+    checks pass; a domain error goes where ``locate`` places it in the request body."""
     try:
+        CHECKS[op](**kwargs)
         return await Engine.of(request.app).run(op, inline, deadline, **kwargs)
     except SynthError as e:
-        params = kwargs.get("params", ())
-        if isinstance(e, InvalidDesign) or (e.loc and e.loc[0] in params):
-            e.where = params_loc
-        raise
+        raise Located(e, locate(e)) from None
 
 
 async def run_design(
     request: Request, op: str, design: Any, inline: bool = False, **kwargs: Any
 ) -> Any:
-    """``run`` for an operation on one design of the request (``body.mechanism``)."""
+    """``run`` for an operation on one design of the request (``body.mechanism``): an error
+    about its parameters is located at each parameter in ``mechanism.params``, any other at
+    the argument it names."""
     params = design.params.model_dump(exclude_none=True)
-    loc = ("mechanism", "params")
-    return await run(request, loc, op, inline, mechanism=design.type, params=params, **kwargs)
+
+    def locate(e: SynthError) -> list[Loc]:
+        if isinstance(e, InvalidDesign):
+            return [("mechanism", "params", name) for name in e.loc] or [("mechanism",)]
+        if e.loc and e.loc[0] in params:
+            return [("mechanism", "params", *e.loc)]
+        return [e.loc]
+
+    return await run(request, locate, op, inline, mechanism=design.type, params=params, **kwargs)
 
 
 def tolerance(body: Extras) -> Tolerance | None:

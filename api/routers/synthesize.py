@@ -4,10 +4,12 @@ from typing import Annotated
 
 from fastapi import APIRouter, Body, Request
 
+from synth.errors import SynthError
+
 from ..examples import SYNTHESIZE
 from ..guard import Route, arrival
 from ..schemas import REFUSALS, SynthesizeRequest, SynthesizeResponse
-from .common import run, tolerance
+from .common import Loc, run, tolerance
 
 router = APIRouter(tags=["synthesis"], route_class=Route)
 
@@ -30,9 +32,18 @@ async def synthesize(
             }
             for s in body.mechanisms
         ]
+
+    def locate(e: SynthError) -> list[Loc]:
+        """At the argument; in ``mechanisms[i]``, under its type's tag (as FastAPI's own
+        errors in a tagged union are)."""
+        at = e.loc
+        if len(at) > 1 and at[0] == "mechanisms" and body.mechanisms is not None:
+            at = (*at[:2], body.mechanisms[int(at[1])].type, *at[2:])
+        return [at]
+
     r = await run(
         request,
-        (),
+        locate,
         "synthesize",
         deadline=arrival(request) + body.time_budget_ms / 1000,  # the budget bounds the wait
         time_ratio=body.time_ratio,
