@@ -7,7 +7,9 @@ offset takes either sign), and every size is capped.
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from dataclasses import MISSING
+from dataclasses import fields as dataclass_fields
+from typing import Annotated, Any, Literal, Union, get_type_hints
 
 from pydantic import (
     BaseModel,
@@ -307,26 +309,29 @@ class Curves(BaseModel):
     transmission_deg: list[float]
 
 
-class AnalyzeResponse(BaseModel):
-    """synth.Analysis, its curves as lists; the nested values are synth's own dataclasses."""
+# what an analysis answers only when asked, and a field's meaning where its name needs one
+_ANALYSIS_NOTES = {
+    "reversals": "slider reversals per revolution (2: a clean design)",
+    "curves": "with crank_angles_deg or samples",
+    "motion": "when include has motion",
+    "sensitivities": "when include has sensitivities, or with a tolerance",
+    "envelope": "when include has envelope",
+}
 
-    type: str
-    params: dict[str, float]
-    time_ratio: float
-    stroke: float
-    extremes: dict[Literal["min", "max"], results.Extreme]
-    working_stroke: results.Stroke
-    return_stroke: results.Stroke
-    transmission: results.Transmission
-    grashof: str | None
-    reversals: int = Field(description="slider reversals per revolution (2: a clean design)")
-    conditioning: results.Conditioning
-    motion: results.Motion | None = Field(None, description="when include has motion")
-    sensitivities: results.Sensitivities | None = Field(
-        None, description="when include has sensitivities, or with a tolerance"
-    )
-    envelope: results.Envelope | None = Field(None, description="when include has envelope")
-    curves: Curves | None = None
+
+def _analysis_response() -> type[BaseModel]:
+    """synth.Analysis field for field (a field added there is served), its curves as lists;
+    the nested values are synth's own dataclasses."""
+    hints = get_type_hints(results.Analysis) | {"curves": Curves | None}
+    fields = {
+        f.name: (hints[f.name], Field(... if f.default is MISSING else f.default,
+                                      description=_ANALYSIS_NOTES.get(f.name)))
+        for f in dataclass_fields(results.Analysis)
+    }  # fmt: skip
+    return create_model("AnalyzeResponse", __doc__=results.Analysis.__doc__, **fields)
+
+
+AnalyzeResponse = _analysis_response()
 
 
 # synthesize and sweep answer with synth's result dataclasses as they are

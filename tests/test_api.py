@@ -1,5 +1,7 @@
 """HTTP tests of every endpoint (TestClient, the shipped process-pool engine)."""
 
+import dataclasses
+import json
 import math
 
 import numpy as np
@@ -289,3 +291,18 @@ def test_bad_bodies_are_422_naming_the_field(client, path, body, named):
     detail = r.json()["detail"]
     assert isinstance(detail, list) and detail
     assert any(named in map(str, d["loc"]) or named in d["msg"] for d in detail), detail
+
+
+def test_an_analysis_answers_every_field_synth_gives(client):
+    """Everything synth.analyze returns for a request that asks for everything reaches the
+    client, value for value: a field added to synth.Analysis is served, not dropped."""
+    params = {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0}
+    everything = ["motion", "sensitivities", "envelope"]
+    body = {"mechanism": {"type": "whitworth", "params": params}, "samples": 4,
+            "include": everything, "tolerance": {"relative": 1e-3}}  # fmt: skip
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 200, r.text
+    want = synth.analyze("whitworth", params, samples=4, include=everything,
+                         tolerance=synth.Tolerance(relative=1e-3)).to_dict()  # fmt: skip
+    assert set(want) == {f.name for f in dataclasses.fields(synth.Analysis)}
+    assert r.json() == json.loads(json.dumps(want))
