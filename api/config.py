@@ -1,4 +1,5 @@
-"""Settings: the only place the service reads the environment (read once, overridable in tests).
+"""Settings: the only place the service reads the environment (read once, overridable in tests),
+``api.serve``'s host, port and processes included.
 
 The library reads its own two, for the compiled analysis, in ``synth.native``."""
 
@@ -8,33 +9,51 @@ import os
 from functools import lru_cache
 from typing import Literal
 
+from pydantic import Field, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 CORES = max(1, len(os.sched_getaffinity(0)))
-# server processes on this machine: uvicorn's variable, which `python -m api.serve` sets
-SERVER_PROCESSES = int(os.environ.get("WEB_CONCURRENCY", 1))
 
 
 class Settings(BaseSettings):
-    """``SYNTH_*`` environment variables (README "Serving" has the measurements behind the
-    defaults)."""
+    """``SYNTH_*`` environment variables, and the server's own (README "Serving" has the
+    measurements behind the defaults)."""
 
     model_config = SettingsConfigDict(env_prefix="SYNTH_")
 
+    host: str = Field("127.0.0.1", validation_alias="HOST")  # where `api.serve` listens
+    port: int = Field(8000, ge=0, le=65535, validation_alias="PORT")
+    # server processes: uvicorn's variable (`api.serve`: one per core unless it is set, and it
+    # sets it for its processes; plain uvicorn: its --workers default)
+    web_concurrency: int | None = Field(None, ge=1, validation_alias="WEB_CONCURRENCY")
     # where solves run: "thread" (solver threads in this process, each with its own CasADi
-    # solvers) or "process" (a pool of worker processes). Threads when several server
+    # solvers) or "process" (a pool of worker processes). Default: threads when several server
     # processes already use the cores; a process pool when one server process must.
-    executor: Literal["process", "thread"] = "thread" if SERVER_PROCESSES > 1 else "process"
-    # solves at once in this server process: its share of the cores (solver threads share
-    # one interpreter, so more threads would only take turns: each solve slower, and a
+    executor: Literal["process", "thread"] | None = None
+    # solves at once in this server process. Default: its share of the cores (solver threads
+    # share one interpreter, so more threads would only take turns: each solve slower, and a
     # budget that binds under load changes the answer); a process pool: every core
-    workers: int = max(1, CORES // SERVER_PROCESSES)
+    workers: int | None = Field(None, ge=1)
     warm: bool = True  # build the common solvers in the workers at start, in the background
     max_budget_ms: float = 60_000.0  # the largest time_budget_ms a request may ask for
     # how long a request may wait for a solver slot before a 503: this share of what is left
     # of its budget (a synthesis), at most max_queue_ms (also for sweeps and long curves)
     queue_share: float = 0.5
     max_queue_ms: float = 1000.0
+
+    @model_validator(mode="after")
+    def _defaults(self) -> Settings:
+        processes = self.web_concurrency or 1
+        if self.executor is None:
+            self.executor = "thread" if processes > 1 else "process"
+        if self.workers is None:
+            self.workers = max(1, CORES // processes)
+        return self
+
+    @property
+    def default_budget_ms(self) -> float:
+        """A synthesis's budget when its request gives none."""
+        return min(2000.0, self.max_budget_ms)
 
 
 @lru_cache

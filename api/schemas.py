@@ -25,8 +25,6 @@ from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.sweep import MAX_POINTS
 from synth.synthesis import MAX_CANDIDATES
 
-from .config import get_settings
-
 LENGTH_MIN, LENGTH_MAX = 1e-9, 1e12
 STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 Finite = Annotated[float, Field(allow_inf_nan=False)]
@@ -199,8 +197,12 @@ class SynthesizeRequest(Extras):
         description="in all; omitted: 5 (pareto: 5 per type of the request, at most "
         f"{MAX_CANDIDATES}, a front of one point taking one)",
     )
-    time_budget_ms: float = Field(
-        min(2000.0, get_settings().max_budget_ms), gt=0.0, le=get_settings().max_budget_ms
+    time_budget_ms: float | None = Field(
+        None,
+        gt=0.0,
+        description="from the request's arrival; omitted: 2000, or the server's largest budget "
+        "if that is less; at most the server's largest budget (SYNTH_MAX_BUDGET_MS, 60 000 by "
+        "default)",
     )
 
 

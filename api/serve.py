@@ -1,6 +1,7 @@
 """The production command, ``make serve`` and the image: ``python -m api.serve [--host] [--port]``.
 
-Runs ``WEB_CONCURRENCY`` uvicorn processes (default: one per core) on one listening socket.
+Runs ``WEB_CONCURRENCY`` uvicorn processes (default: one per core) on one listening socket;
+``HOST`` and ``PORT`` give the defaults of ``--host`` and ``--port`` (``api.config``).
 Each process answers short analyses in its own event loop and solves in its own solver threads
 (``api.config``); the processes share nothing, so analysis throughput scales with the cores.
 
@@ -21,7 +22,7 @@ import sys
 import uvicorn
 from uvicorn.supervisors import Multiprocess
 
-from .config import CORES
+from .config import CORES, Settings
 
 APP = "api.main:app"
 # on SIGTERM: stop accepting at once, give requests in flight this long, then cancel them and
@@ -46,11 +47,13 @@ def listener(host: str, port: int) -> socket.socket:
 
 def main(argv: list[str] | None = None) -> None:
     sys.setswitchinterval(SWITCH_S)
+    settings = Settings()
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--host", default=os.environ.get("HOST", "127.0.0.1"))
-    ap.add_argument("--port", type=int, default=int(os.environ.get("PORT", "8000")))
+    ap.add_argument("--host", default=settings.host)
+    ap.add_argument("--port", type=int, default=settings.port)
     a = ap.parse_args(argv)
-    workers = int(os.environ.setdefault("WEB_CONCURRENCY", str(CORES)))  # the processes read it
+    workers = settings.web_concurrency or CORES
+    os.environ["WEB_CONCURRENCY"] = str(workers)  # for the processes' own settings
     config = uvicorn.Config(APP, host=a.host, port=a.port, workers=workers,
                             timeout_graceful_shutdown=SHUTDOWN_S)  # fmt: skip
     if workers == 1:

@@ -9,7 +9,10 @@ import pytest
 from fastapi.testclient import TestClient
 
 import synth
+from api.config import Settings
+from api.engine import Engine
 from api.main import app
+from api.routers.common import engine
 from synth.mechanisms import all_types, get
 
 from . import bruteforce
@@ -306,3 +309,21 @@ def test_an_analysis_answers_every_field_synth_gives(client):
                          tolerance=synth.Tolerance(relative=1e-3)).to_dict()  # fmt: skip
     assert set(want) == {f.name for f in dataclasses.fields(synth.Analysis)}
     assert r.json() == json.loads(json.dumps(want))
+
+
+def test_the_budget_limit_is_the_servers_setting(client):
+    """The largest budget is read from the settings of the engine the routes depend on, at
+    request time: the session's (SYNTH_MAX_BUDGET_MS=1000, tests/conftest.py), then another."""
+    r = client.post("/v1/synthesize", json={**SYNTH, "time_budget_ms": 1500})
+    assert r.status_code == 422
+    (d,) = r.json()["detail"]
+    assert d["loc"] == ["body", "time_budget_ms"] and "≤ 1000" in d["msg"], d
+    small = Engine(Settings(max_budget_ms=5.0))
+    app.dependency_overrides[engine] = lambda: small
+    try:
+        r = client.post("/v1/synthesize", json={**SYNTH, "time_budget_ms": 10})
+        assert r.status_code == 422 and "≤ 5 " in r.json()["detail"][0]["msg"]
+    finally:
+        del app.dependency_overrides[engine]
+        small.close()
+    assert client.post("/v1/synthesize", json={**SYNTH, "time_budget_ms": 10}).status_code == 200

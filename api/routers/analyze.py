@@ -2,12 +2,12 @@
 
 from typing import Annotated
 
-from fastapi import APIRouter, Body, Request
+from fastapi import APIRouter, Body
 
 from ..examples import ANALYZE
 from ..guard import Route
 from ..schemas import REFUSALS, AnalyzeRequest, AnalyzeResponse
-from .common import run_design, tolerance
+from .common import EngineDep, run_design, tolerance
 
 router = APIRouter(tags=["analysis"], route_class=Route)
 # an analysis with at most this many curve points runs in the request's own thread: it costs
@@ -22,14 +22,14 @@ INLINE_CURVE_POINTS = 1000
     responses=REFUSALS,
 )
 async def analyze(
-    request: Request, body: Annotated[AnalyzeRequest, Body(openapi_examples=ANALYZE)]
+    engine: EngineDep, body: Annotated[AnalyzeRequest, Body(openapi_examples=ANALYZE)]
 ) -> AnalyzeResponse:
     """Time ratio, stroke, dead centres, strokes and transmission angles of a design; curves at
     exactly ``crank_angles_deg`` or at ``samples`` evenly spaced angles, and only then; motion
     quality and sensitivities only when ``include`` names them (or a ``tolerance`` is given)."""
     points = len(body.crank_angles_deg or ()) + (body.samples or 0)
     a = await run_design(
-        request,
+        engine,
         "analyze",
         body.mechanism,
         inline=points <= INLINE_CURVE_POINTS,

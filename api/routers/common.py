@@ -2,9 +2,9 @@
 through the engine; synth's errors located in the request body."""
 
 from collections.abc import Callable
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import Request
+from fastapi import Depends, Request
 
 from synth.errors import InvalidDesign, SynthError
 from synth.kinematics import check as check_analysis
@@ -26,6 +26,14 @@ CHECKS: dict[str, Callable[..., Any]] = {
 Loc = tuple[str | int, ...]
 
 
+def engine(request: Request) -> Engine:
+    """The app's engine (and with it the settings): what the routes depend on."""
+    return Engine.of(request.app)
+
+
+EngineDep = Annotated[Engine, Depends(engine)]
+
+
 class Located(Exception):
     """A domain error (``error``) at places in the request (``locs``): a 422 (api.main)."""
 
@@ -35,7 +43,7 @@ class Located(Exception):
 
 
 async def run(
-    request: Request,
+    engine: Engine,
     locate: Callable[[SynthError], list[Loc]],
     op: str,
     inline: bool = False,
@@ -46,13 +54,13 @@ async def run(
     checks pass; a domain error goes where ``locate`` places it in the request body."""
     try:
         CHECKS[op](**kwargs)
-        return await Engine.of(request.app).run(op, inline, deadline, **kwargs)
+        return await engine.run(op, inline, deadline, **kwargs)
     except SynthError as e:
         raise Located(e, locate(e)) from None
 
 
 async def run_design(
-    request: Request, op: str, design: Any, inline: bool = False, **kwargs: Any
+    engine: Engine, op: str, design: Any, inline: bool = False, **kwargs: Any
 ) -> Any:
     """``run`` for an operation on one design of the request (``body.mechanism``): an error
     about its parameters is located at each parameter in ``mechanism.params``, any other at
@@ -66,7 +74,7 @@ async def run_design(
             return [("mechanism", "params", *e.loc)]
         return [e.loc]
 
-    return await run(request, locate, op, inline, mechanism=design.type, params=params, **kwargs)
+    return await run(engine, locate, op, inline, mechanism=design.type, params=params, **kwargs)
 
 
 def tolerance(body: Extras) -> Tolerance | None:

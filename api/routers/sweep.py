@@ -2,23 +2,23 @@
 
 from typing import Annotated
 
-from fastapi import APIRouter, Body, Request
+from fastapi import APIRouter, Body
 
 from ..examples import SWEEP
 from ..guard import Route
 from ..schemas import REFUSALS, SweepRequest, SweepResponse
-from .common import run_design
+from .common import EngineDep, run_design
 
 router = APIRouter(tags=["analysis"], route_class=Route)
 
 
 @router.post("/v1/sweep", response_model=SweepResponse, responses=REFUSALS)
 async def sweep(
-    request: Request, body: Annotated[SweepRequest, Body(openapi_examples=SWEEP)]
+    engine: EngineDep, body: Annotated[SweepRequest, Body(openapi_examples=SWEEP)]
 ) -> SweepResponse:
     """What range must an adjustable part cover (Podhorodeski et al. (2005), Fig. 5)."""
     r = await run_design(
-        request,
+        engine,
         "sweep",
         body.mechanism,
         vary=body.vary,

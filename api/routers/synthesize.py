@@ -4,19 +4,21 @@ from typing import Annotated
 
 from fastapi import APIRouter, Body, Request
 
-from synth.errors import SynthError
+from synth.errors import InvalidParameters, SynthError
 
 from ..examples import SYNTHESIZE
 from ..guard import Route, arrival
 from ..schemas import REFUSALS, SynthesizeRequest, SynthesizeResponse
-from .common import Loc, run, tolerance
+from .common import EngineDep, Loc, Located, run, tolerance
 
 router = APIRouter(tags=["synthesis"], route_class=Route)
 
 
 @router.post("/v1/synthesize", response_model=SynthesizeResponse, responses=REFUSALS)
 async def synthesize(
-    request: Request, body: Annotated[SynthesizeRequest, Body(openapi_examples=SYNTHESIZE)]
+    request: Request,
+    engine: EngineDep,
+    body: Annotated[SynthesizeRequest, Body(openapi_examples=SYNTHESIZE)],
 ) -> SynthesizeResponse:
     """Every good design for the time ratio, stroke and transmission bound, each verified by
     the forward analysis; an impossible request gives no candidates and a reason per type.
@@ -41,18 +43,24 @@ async def synthesize(
             at = (*at[:2], body.mechanisms[int(at[1])].type, *at[2:])
         return [at]
 
+    budget = body.time_budget_ms or engine.settings.default_budget_ms
+    largest = engine.settings.max_budget_ms
+    if budget > largest:
+        e = InvalidParameters(f"time_budget_ms must be ≤ {largest:g} (this server's largest "
+                              f"budget), got {budget:g}", ("time_budget_ms",))  # fmt: skip
+        raise Located(e, [e.loc])
     r = await run(
-        request,
+        engine,
         locate,
         "synthesize",
-        deadline=arrival(request) + body.time_budget_ms / 1000,  # the budget bounds the wait
+        deadline=arrival(request) + budget / 1000,  # the budget bounds the wait
         time_ratio=body.time_ratio,
         stroke=body.stroke,
         min_transmission_angle_deg=body.min_transmission_angle_deg,
         mechanisms=specs,
         objective=body.objective,
         max_candidates=body.max_candidates,
-        time_budget_ms=body.time_budget_ms,
+        time_budget_ms=budget,
         include=body.include,
         max_working_speed_fluctuation=body.max_working_speed_fluctuation,
         tolerance=tolerance(body),
