@@ -17,6 +17,7 @@ import casadi as ca
 import numpy as np
 
 from .mechanisms import Mechanism, all_types, get
+from .mechanisms._fourbar_construction import construction
 from .native import native
 
 GRID = 128  # samples per revolution that bracket the stationary points
@@ -148,3 +149,6 @@ def compile_all() -> None:
                 for fn in (f.fn.fn, f._dp.fn, f.dead and f.dead.fn):
                     if fn is not None and fn.class_name() != "External":
                         raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.native)")
+    fn = construction().fn  # the four-bar types' reduced synthesis
+    if fn.class_name() != "External":
+        raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.native)")

@@ -156,56 +156,103 @@ def newton(
     root finding), derivatives by central differences over ±``scale`` × 1e-5 (one batch of
     ≤ 9 points a step, so a step costs one vectorised evaluation); a step that leaves the
     designs (or the stencil around it) is halved. Returns None when it does not converge.
+
+    The algebra of a step (a system of at most four unknowns) is done in Python floats:
+    numpy's per-call overhead on such small arrays cost several times the evaluation.
     """
     d = x0.size
-    h = 1e-5 * np.asarray(scale, dtype=float)
-    offsets = _stencil(d) * h
+    sc = np.broadcast_to(np.asarray(scale, dtype=float), (d,))
+    h = (1e-5 * sc).tolist()
+    offsets = _stencil(d) * (1e-5 * sc)
+    inv = (1.0 / sc).tolist()
     x = np.array(x0, dtype=float)
-    nu, last = None, math.inf
+    nu: list[float] | None = None
+    last = math.inf
     v = fn(x + offsets)
     for it in range(iters):
         if not np.isfinite(v).all():
             return None
-        plus, minus = v[:, 1 : 1 + 2 * d : 2], v[:, 2 : 2 + 2 * d : 2]
-        grad = (plus - minus) / (2 * h)  # (rows, d)
-        g, jac, eq = grad[0], grad[1 : 1 + n_eq], v[1 : 1 + n_eq, 0]
-        try:
-            if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
-                if it > 12:
+        rows = v.tolist()
+        # central differences: the gradient (and the Hessian's diagonal) of each row
+        grad = [[(r[1 + 2 * i] - r[2 + 2 * i]) / (2 * h[i]) for i in range(d)] for r in rows]
+        g, jac = grad[0], grad[1 : 1 + n_eq]
+        eq = [r[0] for r in rows[1 : 1 + n_eq]]
+        if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
+            if it > 12:
+                return None
+            step = _solve(jac, [-e for e in eq])
+        else:
+            if nu is None:  # least-squares multipliers: jac jacᵀ ν = −jac g
+                jjt = [[_dot(a, b) for b in jac] for a in jac]
+                nu = _solve(jjt, [-_dot(a, g) for a in jac]) if n_eq else []
+                if nu is None:
                     return None
-                step = np.linalg.solve(jac, -eq)
-            else:
-                curv = (plus - 2 * v[:, :1] + minus) / h**2  # (rows, d): the Hessians' diagonals
-                if nu is None:  # least-squares multipliers: jac jacᵀ ν = −jac g
-                    nu = np.linalg.solve(jac @ jac.T, -jac @ g) if n_eq else np.zeros(0)
-                weights = np.concatenate([[1.0], nu])  # the Lagrangian's Hessian, row-weighted
-                lag = np.diag(weights @ curv)
-                if d == 2:
-                    pp, pm, mp, mm = v[:, 5:9].T
-                    lag[0, 1] = lag[1, 0] = weights @ (pp - pm - mp + mm) / (4 * h[0] * h[1])
-                kkt = np.block([[lag, jac.T], [jac, np.zeros((n_eq, n_eq))]]) if n_eq else lag
-                sol = np.linalg.solve(kkt, -np.concatenate([g + jac.T @ nu, eq]))
-                step, nu = sol[:d], nu + sol[d:]
-        except np.linalg.LinAlgError:
+            weights = [1.0, *nu]  # the Lagrangian's Hessian, row-weighted
+            lag = [[0.0] * d for _ in range(d)]
+            for i in range(d):
+                lag[i][i] = sum(
+                    w * (r[1 + 2 * i] - 2 * r[0] + r[2 + 2 * i]) / (h[i] * h[i])
+                    for w, r in zip(weights, rows, strict=False)
+                )
+            if d == 2:
+                lag[0][1] = lag[1][0] = sum(
+                    w * (r[5] - r[6] - r[7] + r[8]) for w, r in zip(weights, rows, strict=False)
+                ) / (4 * h[0] * h[1])
+            kkt = [lag[i] + [jac[k][i] for k in range(n_eq)] for i in range(d)]
+            kkt += [jac[k] + [0.0] * n_eq for k in range(n_eq)]
+            rhs = [-(g[i] + sum(jac[k][i] * nu[k] for k in range(n_eq))) for i in range(d)]
+            sol = _solve(kkt, rhs + [-e for e in eq])
+            if sol is None:
+                return None
+            step, nu = sol[:d], [a + b for a, b in zip(nu, sol[d:], strict=True)]
+        if step is None:
             return None
+        dx = np.array(step)
         for _ in range(30 if n_eq < d else 8):  # a step that leaves the designs is halved
-            v = fn(x + step + offsets)
+            v = fn(x + dx + offsets)
             if np.isfinite(v).all():
                 break
-            step = step / 2
+            dx = dx / 2
         else:
             return None
-        x = x + step
+        x = x + dx
         # converged where the equalities hold and the step is down to the differences'
         # rounding (~1e-11 × a condition number), or is 1e-6 and converging quadratically (it
         # leaves ~1e-12): a stationary value is off by that squared
-        size = np.max(np.abs(step) / scale)
-        if (np.abs(v[1 : 1 + n_eq, 0]) <= 1e-10).all() and (
-            size <= 1e-8 or (size <= 1e-6 and size <= 1e-2 * last)
-        ):
+        size = max(abs(a) * b for a, b in zip(dx.tolist(), inv, strict=True))
+        held = all(abs(r[0]) <= 1e-10 for r in v[1 : 1 + n_eq].tolist())
+        if held and (size <= 1e-8 or (size <= 1e-6 and size <= 1e-2 * last)):
             return x
         last = size
     return None
+
+
+def _dot(a: list[float], b: list[float]) -> float:
+    return sum(x * y for x, y in zip(a, b, strict=True))
+
+
+def _solve(a: list[list[float]], b: list[float]) -> list[float] | None:
+    """x with a x = b, by Gaussian elimination with partial pivoting (LAPACK's getrf/getrs
+    for a handful of unknowns); None where a pivot is exactly zero (a singular system)."""
+    n = len(b)
+    m = [[*row, rhs] for row, rhs in zip(a, b, strict=True)]
+    for c in range(n):
+        p = max(range(c, n), key=lambda r: abs(m[r][c]))
+        if m[p][c] == 0:
+            return None
+        m[c], m[p] = m[p], m[c]
+        piv = m[c]
+        for r in range(c + 1, n):
+            f = m[r][c] / piv[c]
+            if f:
+                row = m[r]
+                for k in range(c, n + 1):
+                    row[k] -= f * piv[k]
+    x = [0.0] * n
+    for c in range(n - 1, -1, -1):
+        row = m[c]
+        x[c] = (row[n] - sum(row[k] * x[k] for k in range(c + 1, n))) / row[c]
+    return x
 
 
 @cache

@@ -34,9 +34,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import Unreachable
-from ..reduced import Problem, rod, unreachable
+from ..reduced import MIN_SIZE, ONE_WAY, STRICT, Problem, rod, unreachable
+from ._fourbar_native import MAX_WIDTH, ROWS, compiled
 
 BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
+
+
+def construction():
+    """This thread's compiled evaluation (``_fourbar_native``)."""
+    return compiled(BOUND_TOL, STRICT, ONE_WAY)
 
 
 @dataclass(frozen=True)
@@ -118,9 +124,41 @@ class Construction:
     def evaluate(self, sigma: int, psi, lam):
         """The designs at (ψ, λ), arrays: valid, feasible (within the bounds), f (the coupler's
         worst cos), size, k (the four-bar's scale), ρ (its links at scale 1, the crank-rocker's
-        order), r5, l, h and the rod's worst cos; a point that is no design is NaN or False."""
+        order), r5, l, h and the rod's worst cos; a point that is no design is NaN or False.
+        A few points (a Newton step's, a design's) are evaluated by the compiled function
+        (``_fourbar_native``), a grid by numpy."""
+        psi, lam = np.asarray(psi, dtype=float), np.asarray(lam, dtype=float)
+        shape = np.broadcast_shapes(psi.shape, lam.shape)
+        if 0 < math.prod(shape) <= MAX_WIDTH:
+            return self._compiled(sigma, psi, lam, shape)
         with np.errstate(all="ignore"):
             return self._evaluate(sigma, psi, lam)
+
+    def _compiled(self, sigma: int, psi, lam, shape):
+        flat = len(shape) == 1
+        points = np.empty((math.prod(shape), 2))
+        points[:, 0] = psi if flat else np.broadcast_to(psi, shape).ravel()
+        points[:, 1] = lam if flat else np.broadcast_to(lam, shape).ravel()
+        out = construction()(points, self._params(sigma))
+        e = dict(zip(ROWS, out if flat else out.reshape(len(ROWS), *shape), strict=True))
+        e["valid"], e["feasible"] = e["valid"] > 0, e["feasible"] > 0
+        e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
+        return e
+
+    def _params(self, sigma: int) -> list[float]:
+        """The compiled function's parameters (``_fourbar_native.PARAMS``) for sheet σ, read
+        afresh: a copy of this construction may differ in its bounds or its rod."""
+        p, r = self.p, self.r
+        sb = sigma * p.beta
+        rod_box = p.box(r.rod) if self.rod else (0.0, 0.0)
+        fixed_h = r.height is not None and r.height in p.fixed
+        h_box = p.bounds.get(r.height, (0.0, 0.0)) if r.height is not None else (0.0, 0.0)
+        return [-math.cos(sb), -math.sin(sb), *self.lo, *self.hi,
+                float(self.set_by is None), *(float(self.set_by == i) for i in range(4)),
+                float(r.swings), p.fixed.get(r.arm, 0.5),
+                float(self.rod), float(p.objective == MIN_SIZE), p.cos_bound, *rod_box,
+                float(r.height is None), float(fixed_h),
+                p.fixed[r.height] if fixed_h else 0.0, *h_box]  # fmt: skip
 
     def _evaluate(self, sigma: int, psi, lam):
         a2, a3, a4, valid = shape(sigma, self.p.beta, psi, lam)
