@@ -56,6 +56,9 @@ class Problem:
     stroke: float = 1.0
     explicit: frozenset[str] = frozenset()  # parameters whose bounds the caller gave
     hints: tuple[Mapping[str, float], ...] = ()  # the optima of the type's other variants
+    # where this variant's optima were at a nearby bound (a front's previous point), in the
+    # solver's own coordinates (``Reduced.at``): a solver may continue from there
+    near: tuple[tuple[float, ...], ...] = ()
 
     @property
     def ratio(self) -> float:
@@ -90,6 +93,7 @@ class Reduced:
 
     designs: list[dict[str, float]] = field(default_factory=list)
     exact: bool = True
+    at: tuple[tuple[float, ...], ...] = ()  # where the solver found them, its coordinates
 
 
 def unreachable(what: str) -> Unreachable:

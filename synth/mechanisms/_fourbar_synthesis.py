@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ..reduced import MAX_TRANSMISSION, Reduced, clip, newton
+from ..reduced import MAX_TRANSMISSION, MIN_SIZE, Reduced, _solve, _stencil, clip, newton
 from ._fourbar_construction import Construction, Roles, worst_cos
 
 __all__ = ["FourBar", "Roles", "worst_cos"]
@@ -34,6 +34,7 @@ U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
 GRID = 48
 STEP = (U_HI - U_LO) / (GRID - 1)  # the grid's spacing in u
 NEAR = 0.1  # log: the links this near their bounds may be the ones that bind
+CONTINUE = 8  # Newton steps a front's continuation may take (else the full search runs)
 SLACK = 1e-6  # a design closer to a link's bound than this (log of the scale's range) may be
 # held by that bound, which the Newton steps do not model: IPOPT polishes it
 
@@ -154,7 +155,13 @@ class FourBar(Construction):
         the two sheets; with nothing fixed, no bound given and no rod, σ = −1 only where
         σ = +1 has none (it was never smaller in a survey of 300 random targets; a rod or a
         fixed link can make it smaller). None at all when the best transmission misses the
-        bound."""
+        bound. On a front (``Problem.near``: this variant's optima at the previous point's
+        bound), each sheet's optimum is continued from there (``continued``), and the full
+        search runs only where that fails."""
+        if start is None and self.p.near and not self.ratios and self.p.objective == MIN_SIZE:
+            answer = self.continued(cos_bound)
+            if answer is not None:
+                return answer
         best: list[dict] = []
         if start is None:  # does any coupler transmit well enough? A rod only adds a joint
             # (and a bound no rod meets leaves no feasible design), so ask without it
@@ -167,7 +174,7 @@ class FourBar(Construction):
                 found, _ = self.coupler_optimum()
             best = [found[0]] if found else []
         both = self.rod or bool(self.p.fixed) or bool(self.p.explicit)
-        sheets: list[tuple[list, bool]] = []
+        sheets: list[tuple[int, list, bool]] = []
         for sigma in (1, -1):
             self.missed = None
             found, exact = self.optimum(sigma, "size", cos_bound)
@@ -176,14 +183,90 @@ class FourBar(Construction):
                 # can be closer than the grid tells apart, so this is a start for IPOPT only
                 held, _ = self.bounded(self.missed, "size", cos_bound)
                 found = [held] if held else found
-            sheets.append((found, exact))
+            sheets.append((sigma, found, exact))
             if found and not both:
                 break
-        found = sorted((de for f, _ in sheets for de in f), key=lambda de: de[1]["size"])
+        found = sorted((de for _, f, _ in sheets for de in f), key=lambda de: de[1]["size"])
         if found:
-            exact = all(exact for f, exact in sheets if f)  # then the best alone is the answer
-            return Reduced([d for d, _ in found[: 1 if exact else None]], exact)
+            exact = all(exact for _, f, exact in sheets if f)  # then the best alone is the answer
+            at = ()
+            if exact and not self.ratios and self.p.objective == MIN_SIZE:
+                at = tuple(self._onward(s, f[0][1]["at"], cos_bound) for s, f, _ in sheets if f)
+                at = () if None in at else at
+            return Reduced([d for d, _ in found[: 1 if exact else None]], exact, at)
         return Reduced([start] if start else best, exact=False)
+
+    def continued(self, cos_bound: float) -> Reduced | None:
+        """The smallest design at this bound from each sheet's optimum at a nearby one
+        (``Problem.near``): Newton's method with the bound active, from there. Accepted only
+        where each ends within the swing's range and the links' bounds, on the bound, at a
+        strict local minimum of the size along it (``_binding_minimum``): a front point
+        (the smallest design that transmits at least at its angle) holds its bound, as the
+        full search finds it. None (the full search then runs) where any does not."""
+        lo, hi = self.psi
+        found = []
+        for sigma, psi, u, c, dpsi, du in self.p.near:
+            sigma = int(sigma)  # Newton from the tangent's prediction, the bound active
+            x0 = np.array([psi + dpsi * (cos_bound - c), u + du * (cos_bound - c)])
+            rows = self._rows(sigma, "size", cos_bound, True, None)
+            x = newton(rows, x0, 1, np.ones(2), iters=CONTINUE)
+            onward = None if x is None or not lo < x[0] < hi else self._onward(sigma, x, cos_bound)
+            if onward is not None:
+                d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
+                if e["feasible"] and abs(e["f"] - cos_bound) <= 1e-9 and e["slack"] > SLACK:
+                    found.append((e["size"], onward, d))
+                    continue
+            # this sheet's optimum moved off its branch (out of the swing's range, onto a
+            # link's bound): its full search, as ``smallest`` runs it
+            self.missed = None
+            got, exact = self.optimum(sigma, "size", cos_bound)
+            if got and not (exact and self.missed is None):
+                return None
+            for d, e in got[:1]:
+                onward = self._onward(sigma, e["at"], cos_bound)
+                if onward is None:
+                    return None
+                found.append((e["size"], onward, d))
+        if not found:
+            return None
+        found.sort(key=lambda f: f[0])
+        return Reduced([found[0][2]], True, tuple(f[1] for f in found))
+
+    def _onward(self, sigma: int, x, cos_bound: float) -> tuple[float, ...] | None:
+        """Where a front continues from x, a local minimum of the size on the bound
+        (f = cos_bound): (σ, ψ, u, cos_bound, dψ/dc, du/dc), the optimum's tangent in the
+        bound c (the KKT system differentiated: H dx + ∇f dν = 0, ∇f·dx = 1). None where x
+        is not a strict local minimum that holds the bound: the bound's multiplier
+        ν = −∇size·∇f/|∇f|² is positive (a worse transmission would allow a smaller design)
+        and the Lagrangian size + ν f curves upward along the bound's curve (second-order
+        sufficiency), both by central differences on Newton's stencil."""
+        h = 1e-5
+        x = np.asarray(x, dtype=float)
+        v = self._rows(sigma, "size", cos_bound, True, None)(x + _stencil(2) * h)
+        if not np.isfinite(v).all():
+            return None
+        size, f = v.tolist()
+        gs = [(size[1 + 2 * i] - size[2 + 2 * i]) / (2 * h) for i in range(2)]
+        gf = [(f[1 + 2 * i] - f[2 + 2 * i]) / (2 * h) for i in range(2)]
+        ff = gf[0] ** 2 + gf[1] ** 2
+        nu = -(gs[0] * gf[0] + gs[1] * gf[1]) / ff if ff > 0 else math.nan
+        if not nu > 0:
+            return None
+        hess = [[0.0, 0.0], [0.0, 0.0]]
+        for w, r in ((1.0, size), (nu, f)):
+            hess[0][0] += w * (r[1] - 2 * r[0] + r[2]) / h**2
+            hess[1][1] += w * (r[3] - 2 * r[0] + r[4]) / h**2
+            hess[0][1] += w * (r[5] - r[6] - r[7] + r[8]) / (4 * h**2)
+        t0, t1 = -gf[1], gf[0]  # the bound's tangent
+        along = t0 * t0 * hess[0][0] + 2 * t0 * t1 * hess[0][1] + t1 * t1 * hess[1][1]
+        scale = (abs(hess[0][0]) + 2 * abs(hess[0][1]) + abs(hess[1][1])) * ff
+        if not along > 1e-6 * scale:
+            return None
+        kkt = [[hess[0][0], hess[0][1], gf[0]], [hess[0][1], hess[1][1], gf[1]], [*gf, 0.0]]
+        dx = _solve(kkt, [0.0, 0.0, 1.0])
+        if dx is None:
+            return None
+        return (float(sigma), float(x[0]), float(x[1]), cos_bound, dx[0], dx[1])
 
     def optimum(
         self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None, limits=True
@@ -259,6 +342,7 @@ class FourBar(Construction):
         if x is None:
             return None
         d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
+        e["at"] = x
         ok = e["feasible"] and e["f"] <= self.p.cos_bound * (1 + 1e-12) and e["slack"] > SLACK
         return (d, e) if ok else None
 
