@@ -146,8 +146,17 @@ class Construction:
         return e
 
     def _params(self, sigma: int) -> list[float]:
-        """The compiled function's parameters (``_fourbar_native.PARAMS``) for sheet σ, read
-        afresh: a copy of this construction may differ in its bounds or its rod."""
+        """The compiled function's parameters (``_fourbar_native.PARAMS``) for sheet σ, kept
+        per sheet, bounds and rod: a copy of this construction (``copy.copy``, ``holding``)
+        shares the cache but may differ in its rod or its bounds' arrays (replaced, never
+        changed in place)."""
+        key = (sigma, id(self.lo), id(self.hi), self.rod)
+        cache = self.__dict__.setdefault("_param_cache", {})
+        if key not in cache:
+            cache[key] = (self._make_params(sigma), self.lo, self.hi)  # the arrays kept alive
+        return cache[key][0]
+
+    def _make_params(self, sigma: int) -> list[float]:
         p, r = self.p, self.r
         sb = sigma * p.beta
         rod_box = p.box(r.rod) if self.rod else (0.0, 0.0)
