@@ -191,21 +191,22 @@ def newton(
                 nu = _solve(jjt, [-_dot(a, g) for a in jac]) if n_eq else []
                 if nu is None:
                     return None
-            weights = [1.0, *nu]  # the Lagrangian's Hessian, row-weighted
-            lag = [[0.0] * d for _ in range(d)]
-            for i in range(d):
-                lag[i][i] = sum(
-                    w * (r[1 + 2 * i] - 2 * r[0] + r[2 + 2 * i]) / (h[i] * h[i])
-                    for w, r in zip(weights, rows, strict=False)
-                )
+            # the Lagrangian's Hessian (rows weighted 1, ν) and the KKT system
+            kkt = [[0.0] * (d + n_eq) for _ in range(d + n_eq)]
+            rhs = [-x for x in g] + [-e for e in eq]
+            for w, r in zip([1.0, *nu], rows, strict=False):
+                c = 2 * r[0]
+                for i in range(d):
+                    kkt[i][i] += w * (r[1 + 2 * i] - c + r[2 + 2 * i]) / (h[i] * h[i])
+                if d == 2:
+                    kkt[0][1] += w * (r[5] - r[6] - r[7] + r[8]) / (4 * h[0] * h[1])
             if d == 2:
-                lag[0][1] = lag[1][0] = sum(
-                    w * (r[5] - r[6] - r[7] + r[8]) for w, r in zip(weights, rows, strict=False)
-                ) / (4 * h[0] * h[1])
-            kkt = [lag[i] + [jac[k][i] for k in range(n_eq)] for i in range(d)]
-            kkt += [jac[k] + [0.0] * n_eq for k in range(n_eq)]
-            rhs = [-(g[i] + sum(jac[k][i] * nu[k] for k in range(n_eq))) for i in range(d)]
-            sol = _solve(kkt, rhs + [-e for e in eq])
+                kkt[1][0] = kkt[0][1]
+            for k in range(n_eq):
+                for i in range(d):
+                    kkt[i][d + k] = kkt[d + k][i] = jac[k][i]
+                    rhs[i] -= jac[k][i] * nu[k]
+            sol = _solve(kkt, rhs)
             if sol is None:
                 return None
             step, nu = sol[:d], [a + b for a, b in zip(nu, sol[d:], strict=True)]
@@ -241,21 +242,27 @@ def _solve(a: list[list[float]], b: list[float]) -> list[float] | None:
     n = len(b)
     m = [[*row, rhs] for row, rhs in zip(a, b, strict=True)]
     for c in range(n):
-        p = max(range(c, n), key=lambda r: abs(m[r][c]))
-        if m[p][c] == 0:
+        p, big = c, abs(m[c][c])
+        for r in range(c + 1, n):
+            if abs(m[r][c]) > big:
+                p, big = r, abs(m[r][c])
+        if big == 0:
             return None
         m[c], m[p] = m[p], m[c]
         piv = m[c]
         for r in range(c + 1, n):
-            f = m[r][c] / piv[c]
+            row = m[r]
+            f = row[c] / piv[c]
             if f:
-                row = m[r]
                 for k in range(c, n + 1):
                     row[k] -= f * piv[k]
     x = [0.0] * n
     for c in range(n - 1, -1, -1):
         row = m[c]
-        x[c] = (row[n] - sum(row[k] * x[k] for k in range(c + 1, n))) / row[c]
+        s = row[n]
+        for k in range(c + 1, n):
+            s -= row[k] * x[k]
+        x[c] = s / row[c]
     return x
 
 
