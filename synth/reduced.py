@@ -152,6 +152,7 @@ def newton(
     n_eq: int,
     scale: np.ndarray,
     iters: int = 30,
+    keep: list | None = None,
 ) -> np.ndarray | None:
     """A stationary point of ``fn(X)[0]`` on the set where ``fn(X)[1:1 + n_eq]`` = 0, from x0.
 
@@ -163,6 +164,7 @@ def newton(
 
     The algebra of a step (a system of at most four unknowns) is done in Python floats:
     numpy's per-call overhead on such small arrays cost several times the evaluation.
+    ``keep`` (a list) receives ``fn`` at the answer's stencil, for derivatives there.
     """
     d = x0.size
     sc = np.broadcast_to(np.asarray(scale, dtype=float), (d,))
@@ -173,45 +175,18 @@ def newton(
     nu: list[float] | None = None
     last = math.inf
     v = fn(x + offsets)
+    if not np.isfinite(v).all():  # later ones are checked as the step is taken
+        return None
     for it in range(iters):
-        if not np.isfinite(v).all():
-            return None
         rows = v.tolist()
-        # central differences: the gradient (and the Hessian's diagonal) of each row
-        grad = [[(r[1 + 2 * i] - r[2 + 2 * i]) / (2 * h[i]) for i in range(d)] for r in rows]
-        g, jac = grad[0], grad[1 : 1 + n_eq]
-        eq = [r[0] for r in rows[1 : 1 + n_eq]]
-        if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
-            if it > 12:
+        if d == 2 and n_eq == 1:  # the common case (a size on a bound), written out
+            step, nu = _kkt_2_1(rows, h, nu)
+            if step is None:
                 return None
-            step = _solve(jac, [-e for e in eq])
         else:
-            if nu is None:  # least-squares multipliers: jac jacᵀ ν = −jac g
-                jjt = [[_dot(a, b) for b in jac] for a in jac]
-                nu = _solve(jjt, [-_dot(a, g) for a in jac]) if n_eq else []
-                if nu is None:
-                    return None
-            # the Lagrangian's Hessian (rows weighted 1, ν) and the KKT system
-            kkt = [[0.0] * (d + n_eq) for _ in range(d + n_eq)]
-            rhs = [-x for x in g] + [-e for e in eq]
-            for w, r in zip([1.0, *nu], rows, strict=False):
-                c = 2 * r[0]
-                for i in range(d):
-                    kkt[i][i] += w * (r[1 + 2 * i] - c + r[2 + 2 * i]) / (h[i] * h[i])
-                if d == 2:
-                    kkt[0][1] += w * (r[5] - r[6] - r[7] + r[8]) / (4 * h[0] * h[1])
-            if d == 2:
-                kkt[1][0] = kkt[0][1]
-            for k in range(n_eq):
-                for i in range(d):
-                    kkt[i][d + k] = kkt[d + k][i] = jac[k][i]
-                    rhs[i] -= jac[k][i] * nu[k]
-            sol = _solve(kkt, rhs)
-            if sol is None:
+            step, nu = _kkt(rows, h, d, n_eq, nu, it)
+            if step is None:
                 return None
-            step, nu = sol[:d], [a + b for a, b in zip(nu, sol[d:], strict=True)]
-        if step is None:
-            return None
         dx = np.array(step)
         for _ in range(30 if n_eq < d else 8):  # a step that leaves the designs is halved
             v = fn(x + dx + offsets)
@@ -227,9 +202,72 @@ def newton(
         size = max(abs(a) * b for a, b in zip(dx.tolist(), inv, strict=True))
         held = all(abs(r[0]) <= 1e-10 for r in v[1 : 1 + n_eq].tolist())
         if held and (size <= 1e-8 or (size <= 1e-6 and size <= 1e-2 * last)):
+            if keep is not None:
+                keep.append(v)
             return x
         last = size
     return None
+
+
+def _kkt_2_1(rows, h, nu):
+    """A step (and the multiplier) in two variables with one equality: ``_kkt`` written out."""
+    s, r = rows[0], rows[1]
+    h0, h1 = h
+    g0, g1 = (s[1] - s[2]) / (2 * h0), (s[3] - s[4]) / (2 * h1)
+    a0, a1 = (r[1] - r[2]) / (2 * h0), (r[3] - r[4]) / (2 * h1)
+    if nu is None:  # the least-squares multiplier
+        aa = a0 * a0 + a1 * a1
+        if not aa:
+            return None, None
+        nu = [-(a0 * g0 + a1 * g1) / aa]
+    n = nu[0]
+    cs, cr = 2 * s[0], 2 * r[0]
+    l00 = (s[1] - cs + s[2]) / (h0 * h0) + n * (r[1] - cr + r[2]) / (h0 * h0)
+    l11 = (s[3] - cs + s[4]) / (h1 * h1) + n * (r[3] - cr + r[4]) / (h1 * h1)
+    l01 = (s[5] - s[6] - s[7] + s[8]) / (4 * h0 * h1) + n * (r[5] - r[6] - r[7] + r[8]) / (
+        4 * h0 * h1
+    )
+    sol = _solve([[l00, l01, a0], [l01, l11, a1], [a0, a1, 0.0]],
+                 [-g0 - a0 * n, -g1 - a1 * n, -r[0]])  # fmt: skip
+    if sol is None:
+        return None, None
+    return sol[:2], [n + sol[2]]
+
+
+def _kkt(rows, h, d: int, n_eq: int, nu, it: int):
+    """A Newton step from the rows at the stencil (central differences: the gradients and the
+    Hessians' diagonals, and for d = 2 the cross term): (step, multipliers), or (None, _)."""
+    grad = [[(r[1 + 2 * i] - r[2 + 2 * i]) / (2 * h[i]) for i in range(d)] for r in rows]
+    g, jac = grad[0], grad[1 : 1 + n_eq]
+    eq = [r[0] for r in rows[1 : 1 + n_eq]]
+    if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
+        if it > 12:
+            return None, nu
+        return _solve(jac, [-e for e in eq]), nu
+    if nu is None:  # least-squares multipliers: jac jacᵀ ν = −jac g
+        jjt = [[_dot(a, b) for b in jac] for a in jac]
+        nu = _solve(jjt, [-_dot(a, g) for a in jac]) if n_eq else []
+        if nu is None:
+            return None, None
+    # the Lagrangian's Hessian (rows weighted 1, ν) and the KKT system
+    kkt = [[0.0] * (d + n_eq) for _ in range(d + n_eq)]
+    rhs = [-x for x in g] + [-e for e in eq]
+    for w, r in zip([1.0, *nu], rows, strict=False):
+        c = 2 * r[0]
+        for i in range(d):
+            kkt[i][i] += w * (r[1 + 2 * i] - c + r[2 + 2 * i]) / (h[i] * h[i])
+        if d == 2:
+            kkt[0][1] += w * (r[5] - r[6] - r[7] + r[8]) / (4 * h[0] * h[1])
+    if d == 2:
+        kkt[1][0] = kkt[0][1]
+    for k in range(n_eq):
+        for i in range(d):
+            kkt[i][d + k] = kkt[d + k][i] = jac[k][i]
+            rhs[i] -= jac[k][i] * nu[k]
+    sol = _solve(kkt, rhs)
+    if sol is None:
+        return None, None
+    return sol[:d], [a + b for a, b in zip(nu, sol[d:], strict=True)]
 
 
 def _dot(a: list[float], b: list[float]) -> float:

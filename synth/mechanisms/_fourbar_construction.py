@@ -37,6 +37,7 @@ from ..errors import Unreachable
 from ..reduced import MIN_SIZE, ONE_WAY, STRICT, Problem, rod, unreachable
 from ._fourbar_native import MAX_WIDTH, ROWS, compiled
 
+_VALID, _F, _SIZE = (ROWS.index(k) for k in ("valid", "f", "size"))
 BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
 
 
@@ -145,6 +146,21 @@ class Construction:
         e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
         return e
 
+    def rows_compiled(self, sigma, psi, lam, objective, cos_bound, bound_active) -> np.ndarray:
+        """A Newton step's rows at a few points (ψ, λ), no ratios held: the objective (f, or
+        the size) and, with the bound active, f − cos_bound; NaN where a point is not a design
+        that runs (``evaluate``'s, straight from the compiled function's output)."""
+        points = np.empty((len(psi), 2))
+        points[:, 0], points[:, 1] = psi, lam
+        out = construction()(points, self._params(sigma))  # rows ROWS
+        f, size = out[_F], out[_SIZE]
+        rows = np.empty((1 + bound_active, len(psi)))
+        rows[0] = f if objective == "f" else size
+        if bound_active:
+            rows[1] = f - cos_bound
+        rows[:, ~((out[_VALID] > 0) & np.isfinite(size))] = np.nan
+        return rows
+
     def _params(self, sigma: int) -> list[float]:
         """The compiled function's parameters (``_fourbar_native.PARAMS``) for sheet σ, kept
         per sheet, bounds and rod: a copy of this construction (``copy.copy``, ``holding``)
@@ -204,10 +220,10 @@ class Construction:
         return rod(self.p, self.r.rod, self.r.height, r5, psi / 2, f)
 
     def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict]:
-        """The design at one point, and its evaluation."""
-        e = self.evaluate(sigma, np.array([psi]), np.array([lam]))
-        one = {k: float(np.ravel(v)[0]) for k, v in e.items() if k != "rho"}
-        one["rho"] = [float(np.ravel(x)[0]) for x in e["rho"]]
+        """The design at one point, and its evaluation (numbers; valid and feasible 1 or 0)."""
+        out = construction()(np.array([[psi, lam]]), self._params(sigma))
+        one = dict(zip(ROWS, out[:, 0].tolist(), strict=True))
+        one["rho"] = [1.0, one.pop("a2"), one.pop("a3"), one.pop("a4")]
         r = self.r
         out = {n: one["k"] * x for n, x in zip(r.links, one["rho"], strict=True)}
         out[r.arm] = one["r5"]

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..reduced import MAX_TRANSMISSION, MIN_SIZE, Reduced, _solve, _stencil, clip, newton
 from ._fourbar_construction import Construction, Roles, worst_cos
+from ._fourbar_native import MAX_WIDTH
 
 __all__ = ["FourBar", "Roles", "worst_cos"]
 
@@ -205,12 +206,12 @@ class FourBar(Construction):
         full search finds it. None (the full search then runs) where any does not."""
         lo, hi = self.psi
         found = []
-        for sigma, psi, u, c, dpsi, du in self.p.near:
-            sigma = int(sigma)  # Newton from the tangent's prediction, the bound active
-            x0 = np.array([psi + dpsi * (cos_bound - c), u + du * (cos_bound - c)])
-            rows = self._rows(sigma, "size", cos_bound, True, None)
-            x = newton(rows, x0, 1, np.ones(2), iters=CONTINUE)
-            onward = None if x is None or not lo < x[0] < hi else self._onward(sigma, x, cos_bound)
+        for sigma, *at in self.p.near:
+            sigma = int(sigma)  # Newton from the prediction, the bound active
+            rows, kept = self._rows(sigma, "size", cos_bound, True, None), []
+            x = newton(rows, _predict(at, cos_bound), 1, np.ones(2), CONTINUE, kept)
+            inside = x is not None and lo < x[0] < hi
+            onward = self._onward(sigma, x, cos_bound, kept[0], at) if inside else None
             if onward is not None:
                 d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
                 if e["feasible"] and abs(e["f"] - cos_bound) <= 1e-9 and e["slack"] > SLACK:
@@ -232,17 +233,19 @@ class FourBar(Construction):
         found.sort(key=lambda f: f[0])
         return Reduced([found[0][2]], True, tuple(f[1] for f in found))
 
-    def _onward(self, sigma: int, x, cos_bound: float) -> tuple[float, ...] | None:
+    def _onward(self, sigma: int, x, cos_bound: float, v=None, before=None):
         """Where a front continues from x, a local minimum of the size on the bound
-        (f = cos_bound): (σ, ψ, u, cos_bound, dψ/dc, du/dc), the optimum's tangent in the
-        bound c (the KKT system differentiated: H dx + ∇f dν = 0, ∇f·dx = 1). None where x
-        is not a strict local minimum that holds the bound: the bound's multiplier
-        ν = −∇size·∇f/|∇f|² is positive (a worse transmission would allow a smaller design)
-        and the Lagrangian size + ν f curves upward along the bound's curve (second-order
-        sufficiency), both by central differences on Newton's stencil."""
+        (f = cos_bound): (σ, ψ, u, cos_bound, dψ/dc, du/dc, and the point before: ψ, u,
+        cos_bound, NaN for none), with the optimum's tangent in the bound c (the KKT system
+        differentiated: H dx + ∇f dν = 0, ∇f·dx = 1). None where x is not a strict local
+        minimum that holds the bound: the bound's multiplier ν = −∇size·∇f/|∇f|² is positive
+        (a worse transmission would allow a smaller design) and the Lagrangian size + ν f
+        curves upward along the bound's curve (second-order sufficiency), both by central
+        differences on Newton's stencil (``v``: the rows there, if Newton kept them)."""
         h = 1e-5
         x = np.asarray(x, dtype=float)
-        v = self._rows(sigma, "size", cos_bound, True, None)(x + _stencil(2) * h)
+        if v is None:
+            v = self._rows(sigma, "size", cos_bound, True, None)(x + _stencil(2) * h)
         if not np.isfinite(v).all():
             return None
         size, f = v.tolist()
@@ -266,7 +269,8 @@ class FourBar(Construction):
         dx = _solve(kkt, [0.0, 0.0, 1.0])
         if dx is None:
             return None
-        return (float(sigma), float(x[0]), float(x[1]), cos_bound, dx[0], dx[1])
+        prev = (before[0], before[1], before[2]) if before else (math.nan,) * 3
+        return (float(sigma), float(x[0]), float(x[1]), cos_bound, dx[0], dx[1], *prev)
 
     def optimum(
         self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None, limits=True
@@ -426,7 +430,10 @@ class FourBar(Construction):
     def _rows(self, sigma, objective, cos_bound, bound_active, psi_fixed):
         def rows(x):
             ps = x[:, 0] if psi_fixed is None else np.full(len(x), psi_fixed)
-            e = self.evaluate(sigma, ps, 1 + np.exp(np.minimum(x[:, -1], 50.0)))
+            lam = 1 + np.exp(np.minimum(x[:, -1], 50.0))
+            if not self.ratios and len(x) <= MAX_WIDTH:  # a Newton step: the compiled rows
+                return self.rows_compiled(sigma, ps, lam, objective, cos_bound, bound_active)
+            e = self.evaluate(sigma, ps, lam)
             out = [e["f"] if objective == "f" else e["size"], *self.residuals(e)]
             if bound_active:
                 out.append(e["f"] - cos_bound)
@@ -434,6 +441,18 @@ class FourBar(Construction):
             return np.where(e["valid"] & np.isfinite(e["size"]), np.array(out), np.nan)
 
         return rows
+
+
+def _predict(at, c: float) -> np.ndarray:
+    """A front's next optimum (ψ, u) at the bound c, from the last one's (``_onward``): its
+    tangent, and where there is a point before it, the quadratic through that point too."""
+    psi, u, c1, dpsi, du, psi0, u0, c0 = at
+    d = c - c1
+    x = np.array([psi + dpsi * d, u + du * d])
+    if math.isfinite(c0) and c0 != c1:
+        d0 = c0 - c1  # the curvature that puts the point before on the quadratic
+        x += np.array([psi0 - psi - dpsi * d0, u0 - u - du * d0]) * (d / d0) ** 2
+    return x
 
 
 def _crossings(r: np.ndarray, valid: np.ndarray, pts: np.ndarray) -> np.ndarray:
