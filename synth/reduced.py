@@ -270,6 +270,36 @@ def _kkt(rows, h, d: int, n_eq: int, nu, it: int):
     return sol[:d], [a + b for a, b in zip(nu, sol[d:], strict=True)]
 
 
+def _solve3(a: list[list[float]], b: list[float]) -> list[float] | None:
+    """``_solve`` for three unknowns, unrolled: the same pivots and operations."""
+    r0, r1, r2 = [*a[0], b[0]], [*a[1], b[1]], [*a[2], b[2]]
+    # column 0: the largest of the three leads
+    if abs(r1[0]) > abs(r0[0]) and abs(r1[0]) >= abs(r2[0]):
+        r0, r1 = r1, r0
+    elif abs(r2[0]) > abs(r0[0]) and abs(r2[0]) > abs(r1[0]):
+        r0, r2 = r2, r0
+    if r0[0] == 0:
+        return None
+    f1, f2 = r1[0] / r0[0], r2[0] / r0[0]
+    if f1:
+        r1 = [r1[0] - f1 * r0[0], r1[1] - f1 * r0[1], r1[2] - f1 * r0[2], r1[3] - f1 * r0[3]]
+    if f2:
+        r2 = [r2[0] - f2 * r0[0], r2[1] - f2 * r0[1], r2[2] - f2 * r0[2], r2[3] - f2 * r0[3]]
+    if abs(r2[1]) > abs(r1[1]):  # column 1
+        r1, r2 = r2, r1
+    if r1[1] == 0:
+        return None
+    f = r2[1] / r1[1]
+    if f:
+        r2 = [r2[0], r2[1] - f * r1[1], r2[2] - f * r1[2], r2[3] - f * r1[3]]
+    if r2[2] == 0:
+        return None
+    x2 = r2[3] / r2[2]
+    x1 = (r1[3] - r1[2] * x2) / r1[1]
+    x0 = (r0[3] - r0[1] * x1 - r0[2] * x2) / r0[0]
+    return [x0, x1, x2]
+
+
 def _dot(a: list[float], b: list[float]) -> float:
     return sum(x * y for x, y in zip(a, b, strict=True))
 
@@ -278,6 +308,8 @@ def _solve(a: list[list[float]], b: list[float]) -> list[float] | None:
     """x with a x = b, by Gaussian elimination with partial pivoting (LAPACK's getrf/getrs
     for a handful of unknowns); None where a pivot is exactly zero (a singular system)."""
     n = len(b)
+    if n == 3:
+        return _solve3(a, b)
     m = [[*row, rhs] for row, rhs in zip(a, b, strict=True)]
     for c in range(n):
         p, big = c, abs(m[c][c])

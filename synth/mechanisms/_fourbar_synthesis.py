@@ -192,7 +192,8 @@ class FourBar(Construction):
             exact = all(exact for _, f, exact in sheets if f)  # then the best alone is the answer
             at = ()
             if exact and not self.ratios and self.p.objective == MIN_SIZE:
-                at = tuple(self._onward(s, f[0][1]["at"], cos_bound) for s, f, _ in sheets if f)
+                at = tuple(self._onward(s, f[0][1]["at"], cos_bound, floor=self._floor(s))
+                           for s, f, _ in sheets if f)  # fmt: skip
                 at = () if None in at else at
             return Reduced([d for d, _ in found[: 1 if exact else None]], exact, at)
         return Reduced([start] if start else best, exact=False)
@@ -211,20 +212,26 @@ class FourBar(Construction):
             rows, kept = self._rows(sigma, "size", cos_bound, True, None), []
             x = newton(rows, _predict(at, cos_bound), 1, np.ones(2), CONTINUE, kept)
             inside = x is not None and lo < x[0] < hi
-            onward = self._onward(sigma, x, cos_bound, kept[0], at) if inside else None
+            floor = at[-1]  # the least coupler cos on the sheet's grid (NaN: not known)
+            onward = self._onward(sigma, x, cos_bound, kept[0], at, floor) if inside else None
             if onward is not None:
                 d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
                 if e["feasible"] and abs(e["f"] - cos_bound) <= 1e-9 and e["slack"] > SLACK:
                     found.append((e["size"], onward, d))
                     continue
             # this sheet's optimum moved off its branch (out of the swing's range, onto a
-            # link's bound): its full search, as ``smallest`` runs it
+            # link's bound): its full search, as ``smallest`` runs it. Where no point of its
+            # grid transmits that well (the grid's f, valid points, does not depend on the
+            # bound) and no hint starts it (``hinted``), that search has no start and finds
+            # nothing: it need not run
+            if floor > cos_bound and (sigma != 1 or not self.p.hints):
+                continue
             self.missed = None
             got, exact = self.optimum(sigma, "size", cos_bound)
             if got and not (exact and self.missed is None):
                 return None
             for d, e in got[:1]:
-                onward = self._onward(sigma, e["at"], cos_bound)
+                onward = self._onward(sigma, e["at"], cos_bound, floor=self._floor(sigma))
                 if onward is None:
                     return None
                 found.append((e["size"], onward, d))
@@ -233,15 +240,21 @@ class FourBar(Construction):
         found.sort(key=lambda f: f[0])
         return Reduced([found[0][2]], True, tuple(f[1] for f in found))
 
-    def _onward(self, sigma: int, x, cos_bound: float, v=None, before=None):
+    def _floor(self, sigma: int) -> float:
+        """The least coupler cos f over the valid points of sheet σ's last grid (``_starts``,
+        no ratios held), NaN where none was evaluated."""
+        return self.__dict__.get("floors", {}).get(sigma, math.nan)
+
+    def _onward(self, sigma: int, x, cos_bound: float, v=None, before=None, floor=math.nan):
         """Where a front continues from x, a local minimum of the size on the bound
-        (f = cos_bound): (σ, ψ, u, cos_bound, dψ/dc, du/dc, and the point before: ψ, u,
-        cos_bound, NaN for none), with the optimum's tangent in the bound c (the KKT system
-        differentiated: H dx + ∇f dν = 0, ∇f·dx = 1). None where x is not a strict local
-        minimum that holds the bound: the bound's multiplier ν = −∇size·∇f/|∇f|² is positive
-        (a worse transmission would allow a smaller design) and the Lagrangian size + ν f
-        curves upward along the bound's curve (second-order sufficiency), both by central
-        differences on Newton's stencil (``v``: the rows there, if Newton kept them)."""
+        (f = cos_bound): (σ, ψ, u, cos_bound, dψ/dc, du/dc, the point before: ψ, u,
+        cos_bound, NaN for none, and the sheet's ``_floor``), with the optimum's tangent in
+        the bound c (the KKT system differentiated: H dx + ∇f dν = 0, ∇f·dx = 1). None where
+        x is not a strict local minimum that holds the bound: the bound's multiplier
+        ν = −∇size·∇f/|∇f|² is positive (a worse transmission would allow a smaller design)
+        and the Lagrangian size + ν f curves upward along the bound's curve (second-order
+        sufficiency), both by central differences on Newton's stencil (``v``: the rows there,
+        if Newton kept them)."""
         h = 1e-5
         x = np.asarray(x, dtype=float)
         if v is None:
@@ -270,7 +283,7 @@ class FourBar(Construction):
         if dx is None:
             return None
         prev = (before[0], before[1], before[2]) if before else (math.nan,) * 3
-        return (float(sigma), float(x[0]), float(x[1]), cos_bound, dx[0], dx[1], *prev)
+        return (float(sigma), float(x[0]), float(x[1]), cos_bound, dx[0], dx[1], *prev, floor)
 
     def optimum(
         self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None, limits=True
@@ -365,6 +378,9 @@ class FourBar(Construction):
         ok = e["feasible" if limits else "valid"] & ((objective == "f") | (e["f"] <= cos_bound))
         pts = np.stack(np.broadcast_arrays(psi, u), axis=-1)  # (rows, cols, 2)
         if not self.ratios:
+            if objective == "size" and psi.size > 1:  # a front's later bounds may use it
+                floor = np.min(np.where(e["valid"], e["f"], np.inf))
+                self.__dict__.setdefault("floors", {})[sigma] = float(floor)
             if not np.any(ok):
                 return []
             i, j = np.unravel_index(np.argmin(np.where(ok, value, np.inf)), ok.shape)
@@ -446,7 +462,7 @@ class FourBar(Construction):
 def _predict(at, c: float) -> np.ndarray:
     """A front's next optimum (ψ, u) at the bound c, from the last one's (``_onward``): its
     tangent, and where there is a point before it, the quadratic through that point too."""
-    psi, u, c1, dpsi, du, psi0, u0, c0 = at
+    psi, u, c1, dpsi, du, psi0, u0, c0, _ = at
     d = c - c1
     x = np.array([psi + dpsi * d, u + du * d])
     if math.isfinite(c0) and c0 != c1:
