@@ -153,6 +153,7 @@ def newton(
     scale: np.ndarray,
     iters: int = 30,
     keep: list | None = None,
+    halvings: int | None = None,
 ) -> np.ndarray | None:
     """A stationary point of ``fn(X)[0]`` on the set where ``fn(X)[1:1 + n_eq]`` = 0, from x0.
 
@@ -164,7 +165,8 @@ def newton(
 
     The algebra of a step (a system of at most four unknowns) is done in Python floats:
     numpy's per-call overhead on such small arrays cost several times the evaluation.
-    ``keep`` (a list) receives ``fn`` at the answer's stencil, for derivatives there.
+    ``keep`` (a list) receives ``fn`` at the answer's stencil, for derivatives there;
+    ``halvings`` caps the halvings of a step (by default 30, 8 for root finding).
     """
     d = x0.size
     sc = np.broadcast_to(np.asarray(scale, dtype=float), (d,))
@@ -188,7 +190,7 @@ def newton(
             if step is None:
                 return None
         dx = np.array(step)
-        for _ in range(30 if n_eq < d else 8):  # a step that leaves the designs is halved
+        for _ in range(halvings or (30 if n_eq < d else 8)):  # a step leaving the designs is halved
             v = fn(x + dx + offsets)
             if np.isfinite(v).all():
                 break

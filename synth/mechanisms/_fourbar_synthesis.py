@@ -36,6 +36,10 @@ GRID = 48
 STEP = (U_HI - U_LO) / (GRID - 1)  # the grid's spacing in u
 NEAR = 0.1  # log: the links this near their bounds may be the ones that bind
 CONTINUE = 8  # Newton steps a front's continuation may take (else the full search runs)
+# halvings of a step a shortcut's Newton may take (a continuation, a hint; both also take
+# at most CONTINUE steps): a start whose steps keep leaving the designs is at their edge,
+# where the grid's search does better
+SHORTCUT = 6
 SLACK = 1e-6  # a design closer to a link's bound than this (log of the scale's range) may be
 # held by that bound, which the Newton steps do not model: IPOPT polishes it
 
@@ -210,7 +214,7 @@ class FourBar(Construction):
         for sigma, *at in self.p.near:
             sigma = int(sigma)  # Newton from the prediction, the bound active
             rows, kept = self._rows(sigma, "size", cos_bound, True, None), []
-            x = newton(rows, _predict(at, cos_bound), 1, np.ones(2), CONTINUE, kept)
+            x = newton(rows, _predict(at, cos_bound), 1, np.ones(2), CONTINUE, kept, SHORTCUT)
             inside = x is not None and lo < x[0] < hi
             floor = at[-1]  # the least coupler cos on the sheet's grid (NaN: not known)
             onward = self._onward(sigma, x, cos_bound, kept[0], at, floor) if inside else None
@@ -355,7 +359,7 @@ class FourBar(Construction):
             return None
         crank, coupler = (h[n] for n in self.r.links[1:3])
         x0 = np.array([2 * math.asin(min(0.5 / h[self.r.arm], 1.0)), math.log(coupler / crank - 1)])
-        x = self._newton(sigma, x0, objective, self.p.cos_bound, psi_fixed)
+        x = self._newton(sigma, x0, objective, self.p.cos_bound, psi_fixed, shortcut=True)
         if x is None:
             return None
         d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
@@ -376,7 +380,6 @@ class FourBar(Construction):
         e = self.evaluate(sigma, psi, 1 + np.exp(u))
         value = e["f"] if objective == "f" else e["size"]
         ok = e["feasible" if limits else "valid"] & ((objective == "f") | (e["f"] <= cos_bound))
-        pts = np.stack(np.broadcast_arrays(psi, u), axis=-1)  # (rows, cols, 2)
         if not self.ratios:
             if objective == "size" and psi.size > 1:  # a front's later bounds may use it
                 floor = np.min(np.where(e["valid"], e["f"], np.inf))
@@ -384,7 +387,9 @@ class FourBar(Construction):
             if not np.any(ok):
                 return []
             i, j = np.unravel_index(np.argmin(np.where(ok, value, np.inf)), ok.shape)
-            return [(pts[i, j], float(value[i, j]), False, -math.inf)]
+            start = np.array([psi[min(i, psi.shape[0] - 1), 0], u[0, min(j, u.shape[1] - 1)]])
+            return [(start, float(value[i, j]), False, -math.inf)]
+        pts = np.stack(np.broadcast_arrays(psi, u), axis=-1)  # (rows, cols, 2)
         res = self.residuals(e)
         x = _crossings(res[0], e["valid"], pts)
         if len(x) == 0:
@@ -405,18 +410,18 @@ class FourBar(Construction):
             out += [(y, math.nan, True, -math.inf) for y in _meet(x, bound)]
         return out
 
-    def _newton(self, sigma, x0, objective, cos_bound, psi_fixed, root=False):
+    def _newton(self, sigma, x0, objective, cos_bound, psi_fixed, root=False, shortcut=False):
         """Newton from x0 = (ψ, u) with the ratios (and, for the size, the bound where it
         binds; only the bound from a ``root`` start) as equalities; a swing that leaves its
         range is held at the nearer edge."""
         lo, hi = self.psi
-        x = self._newton_at(sigma, x0, objective, cos_bound, psi_fixed, root)
+        x = self._newton_at(sigma, x0, objective, cos_bound, psi_fixed, root, shortcut)
         if psi_fixed is None and (x is None or not lo <= x[0] <= hi):
             edge = lo if (x if x is not None else x0)[0] < (lo + hi) / 2 else hi
-            x = self._newton_at(sigma, x0, objective, cos_bound, edge, root)
+            x = self._newton_at(sigma, x0, objective, cos_bound, edge, root, shortcut)
         return x
 
-    def _newton_at(self, sigma, x0, objective, cos_bound, psi, root=False):
+    def _newton_at(self, sigma, x0, objective, cos_bound, psi, root=False, shortcut=False):
         """Newton with ψ held (or not); for the size, with the bound binding and, where ratios
         are held (it may then not bind), without it: the smaller design that keeps it."""
         both = objective == "size" and bool(self.ratios) and not root
@@ -432,7 +437,8 @@ class FourBar(Construction):
             y0 = x0 if psi is None else x0[1:]
             if n_eq > y0.size:
                 continue
-            y = newton(rows, y0, n_eq, np.ones(y0.size))
+            limits = (CONTINUE, None, SHORTCUT) if shortcut else (30, None, None)
+            y = newton(rows, y0, n_eq, np.ones(y0.size), *limits)
             if y is None:
                 continue
             x = y if psi is None else np.array([psi, y[0]])
