@@ -137,10 +137,9 @@ class Construction:
 
     def _compiled(self, sigma: int, psi, lam, shape):
         flat = len(shape) == 1
-        points = np.empty((math.prod(shape), 2))
-        points[:, 0] = psi if flat else np.broadcast_to(psi, shape).ravel()
-        points[:, 1] = lam if flat else np.broadcast_to(lam, shape).ravel()
-        out = construction()(points, self._params(sigma))
+        if not flat or psi.shape != shape or lam.shape != shape:
+            psi, lam = (np.broadcast_to(a, shape).ravel() for a in (psi, lam))
+        out = construction().at(psi, lam, self._params(sigma))
         e = dict(zip(ROWS, out if flat else out.reshape(len(ROWS), *shape), strict=True))
         e["valid"], e["feasible"] = e["valid"] > 0, e["feasible"] > 0
         e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
@@ -150,9 +149,7 @@ class Construction:
         """A Newton step's rows at a few points (ψ, λ), no ratios held: the objective (f, or
         the size) and, with the bound active, f − cos_bound; NaN where a point is not a design
         that runs (``evaluate``'s, straight from the compiled function's output)."""
-        points = np.empty((len(psi), 2))
-        points[:, 0], points[:, 1] = psi, lam
-        out = construction()(points, self._params(sigma))  # rows ROWS
+        out = construction().at(psi, lam, self._params(sigma))  # rows ROWS
         f, size = out[_F], out[_SIZE]
         rows = np.empty((1 + bound_active, len(psi)))
         rows[0] = f if objective == "f" else size
@@ -221,7 +218,7 @@ class Construction:
 
     def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict]:
         """The design at one point, and its evaluation (numbers; valid and feasible 1 or 0)."""
-        out = construction()(np.array([[psi, lam]]), self._params(sigma))
+        out = construction().at((psi,), (lam,), self._params(sigma))
         one = dict(zip(ROWS, out[:, 0].tolist(), strict=True))
         one["rho"] = [1.0, one.pop("a2"), one.pop("a3"), one.pop("a4")]
         r = self.r

@@ -149,16 +149,25 @@ class Compiled:
 
     def __call__(self, points: np.ndarray, params) -> np.ndarray:
         """The rows (ROWS) at each point (ψ, λ) of ``points`` (n, 2): shape (rows, n)."""
-        n = len(points)
-        if n not in self.buffers:
-            self.buffers[n] = self._buffer(n)
-        x, p, out, run, _ = self.buffers[n]
-        x[:] = points
-        p[:] = params
+        return self.at(points[:, 0], points[:, 1], params)
+
+    def at(self, psi, lam, params) -> np.ndarray:
+        """The rows (ROWS) at the points (ψ_i, λ_i): shape (rows, n). ``params`` is copied
+        into the buffer unless it is the list the buffer last took (kept, so never another
+        list at its address)."""
+        n = len(psi)
+        b = self.buffers.get(n)
+        if b is None:
+            b = self.buffers[n] = self._buffer(n)
+        x, p, out, run = b[:4]
+        x[:, 0], x[:, 1] = psi, lam
+        if params is not b[5]:
+            p[:] = params
+            b[5] = params
         run()
         return out.T.copy()  # the buffer is reused by the next call
 
-    def _buffer(self, width: int) -> tuple:
+    def _buffer(self, width: int) -> list:
         f = self.fn.map(width, [False, True], [False])
         x, p = np.zeros((width, 2)), np.zeros(len(PARAMS))  # x column-major (2, width)
         out = np.zeros((width, len(ROWS)))
@@ -166,7 +175,7 @@ class Compiled:
         buf.set_arg(0, memoryview(x))
         buf.set_arg(1, memoryview(p))
         buf.set_res(0, memoryview(out))
-        return x, p, out, run, buf
+        return [x, p, out, run, buf, None]  # buf holds the bindings run uses; the last params
 
 
 def compiled(bound_tol: float, strict: float, one_way: float) -> Compiled:
