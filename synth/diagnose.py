@@ -97,7 +97,9 @@ def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL
     """The predicted angles of the exact reduced optima at β (max transmission, no bound)
     that meet the time ratio and stroke to ``tol``, one by one (each costs a prediction), or
     None where the reduced solver is not exact there."""
-    problem = replace(v.problem, beta=beta, cos_bound=1.0, objective=MAX_TRANSMISSION, hints=())
+    problem = replace(
+        v.problem, beta=beta, cos_bound=1.0, objective=MAX_TRANSMISSION, hints=(), near=()
+    )
     try:
         answer = m.reduced(problem)
     except Unreachable:

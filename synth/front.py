@@ -7,12 +7,12 @@ import time
 from dataclasses import replace
 from typing import Any
 
-from .candidate import first, rank
+from .candidate import first, first_many, rank
 from .diagnose import diagnose
 from .mechanisms import get
 from .reduced import MAX_TRANSMISSION, MIN_SIZE
 from .results import Candidate, FrontPoint
-from .search import Spec, Targets, search
+from .search import Searched, Spec, Targets, search
 
 PARETO = "pareto"
 MEASURE = "link_length_sum"  # the size the front minimises
@@ -37,26 +37,30 @@ def pareto(specs, t: Targets, max_candidates: int, per_type: int, extras: dict[s
     tops.sort(key=lambda it: rank(MAX_TRANSMISSION)(it[1]))
     out: list[Candidate] = []
     lows: dict[int, Candidate | None] = dict.fromkeys((i for i, _ in tops), None)
+    searched: dict[int, Searched | None] = dict.fromkeys(lows, None)
     if t.bound_deg > 0:  # without a bound there is no smallest design (it locks at 0°)
         small_t = replace(t, objective=MIN_SIZE)
         for i in lows:
             m = get(specs[i].type)
-            lows[i] = first(m, search(m, specs[i], i, small_t, accelerators), small_t, t, extras)
+            searched[i] = search(m, specs[i], i, small_t, accelerators)
+            lows[i] = first(m, searched[i], small_t, t, extras)
     share = _share([_flat(lows[i], top) for i, top in tops], max_candidates, per_type)
     for (i, top), n in zip(tops, share, strict=True):
         if n:
-            out += _front(specs[i], i, top, lows[i], n, t, extras, accelerators)
+            out += _front(specs[i], i, top, lows[i], n, t, extras, accelerators, searched[i])
     return out, infeasible
 
 
 def _front(spec: Spec, i: int, top: Candidate, low: Candidate | None, n: int, t: Targets,
-           extras, accelerators: bool) -> list[Candidate]:  # fmt: skip
+           extras, accelerators: bool, near: Searched | None) -> list[Candidate]:  # fmt: skip
     """n points of one type's front, spread evenly in angle from its smallest design that
     meets the bound (``low``, the min_size optimum) to its best (``top``): the point at angle
     μ is the smallest design whose minimum transmission angle is at least μ (the min_size
     optimum with μ as the bound), so none beats another in both. Without a bound the points
     sit at k/n of the best angle (k = 1 … n). Points found twice (a front that jumps) are
-    dropped, as are points past the budget."""
+    dropped, as are points past the budget. Each point's search starts from the previous
+    one's (``near``, the low end's first): a reduced solver may continue from its optima;
+    the inner points are verified together (``first_many``)."""
     m = get(spec.type)
     if n == 1 or _flat(low, top):
         ends = (MIN_SIZE, MAX_TRANSMISSION) if _flat(low, top) else (MAX_TRANSMISSION,)
@@ -70,13 +74,14 @@ def _front(spec: Spec, i: int, top: Candidate, low: Candidate | None, n: int, t:
         grid = [b * k / n for k in range(1, n)]
         points = []
     points.insert(0, top)  # first: a point found again is kept as the end it is
+    found = []
     for mu in grid:
         if time.monotonic() >= t.deadline:
             break
         at = replace(t, objective=MIN_SIZE, bound_deg=mu)
-        c = first(m, search(m, spec, i, at, accelerators), at, t, extras)
-        if c is not None:
-            points.append(c)
+        near = search(m, spec, i, at, accelerators, near)
+        found.append((near, at))
+    points += [c for c in first_many(m, found, t, extras) if c is not None]
     kept: list[Candidate] = []  # the non-dominated, best angle first
     for c in sorted(points, key=lambda c: (-c.min_transmission_angle_deg, c.size)):
         if all(c.size < k.size * (1 - FLAT) for k in kept):

@@ -56,6 +56,9 @@ class Problem:
     stroke: float = 1.0
     explicit: frozenset[str] = frozenset()  # parameters whose bounds the caller gave
     hints: tuple[Mapping[str, float], ...] = ()  # the optima of the type's other variants
+    # where this variant's optima were at a nearby bound (a front's previous point), in the
+    # solver's own coordinates (``Reduced.at``): a solver may continue from there
+    near: tuple[tuple[float, ...], ...] = ()
 
     @property
     def ratio(self) -> float:
@@ -90,6 +93,7 @@ class Reduced:
 
     designs: list[dict[str, float]] = field(default_factory=list)
     exact: bool = True
+    at: tuple[tuple[float, ...], ...] = ()  # where the solver found them, its coordinates
 
 
 def unreachable(what: str) -> Unreachable:
@@ -148,6 +152,8 @@ def newton(
     n_eq: int,
     scale: np.ndarray,
     iters: int = 30,
+    keep: list | None = None,
+    halvings: int | None = None,
 ) -> np.ndarray | None:
     """A stationary point of ``fn(X)[0]`` on the set where ``fn(X)[1:1 + n_eq]`` = 0, from x0.
 
@@ -156,56 +162,180 @@ def newton(
     root finding), derivatives by central differences over ±``scale`` × 1e-5 (one batch of
     ≤ 9 points a step, so a step costs one vectorised evaluation); a step that leaves the
     designs (or the stencil around it) is halved. Returns None when it does not converge.
+
+    The algebra of a step (a system of at most four unknowns) is done in Python floats:
+    numpy's per-call overhead on such small arrays cost several times the evaluation.
+    ``keep`` (a list) receives ``fn`` at the answer's stencil, for derivatives there;
+    ``halvings`` caps the halvings of a step (by default 30, 8 for root finding).
     """
     d = x0.size
-    h = 1e-5 * np.asarray(scale, dtype=float)
-    offsets = _stencil(d) * h
+    sc = np.broadcast_to(np.asarray(scale, dtype=float), (d,))
+    h = (1e-5 * sc).tolist()
+    offsets = _stencil(d) * (1e-5 * sc)
+    inv = (1.0 / sc).tolist()
     x = np.array(x0, dtype=float)
-    nu, last = None, math.inf
+    nu: list[float] | None = None
+    last = math.inf
     v = fn(x + offsets)
+    if not np.isfinite(v).all():  # later ones are checked as the step is taken
+        return None
     for it in range(iters):
-        if not np.isfinite(v).all():
-            return None
-        plus, minus = v[:, 1 : 1 + 2 * d : 2], v[:, 2 : 2 + 2 * d : 2]
-        grad = (plus - minus) / (2 * h)  # (rows, d)
-        g, jac, eq = grad[0], grad[1 : 1 + n_eq], v[1 : 1 + n_eq, 0]
-        try:
-            if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
-                if it > 12:
-                    return None
-                step = np.linalg.solve(jac, -eq)
-            else:
-                curv = (plus - 2 * v[:, :1] + minus) / h**2  # (rows, d): the Hessians' diagonals
-                if nu is None:  # least-squares multipliers: jac jacᵀ ν = −jac g
-                    nu = np.linalg.solve(jac @ jac.T, -jac @ g) if n_eq else np.zeros(0)
-                weights = np.concatenate([[1.0], nu])  # the Lagrangian's Hessian, row-weighted
-                lag = np.diag(weights @ curv)
-                if d == 2:
-                    pp, pm, mp, mm = v[:, 5:9].T
-                    lag[0, 1] = lag[1, 0] = weights @ (pp - pm - mp + mm) / (4 * h[0] * h[1])
-                kkt = np.block([[lag, jac.T], [jac, np.zeros((n_eq, n_eq))]]) if n_eq else lag
-                sol = np.linalg.solve(kkt, -np.concatenate([g + jac.T @ nu, eq]))
-                step, nu = sol[:d], nu + sol[d:]
-        except np.linalg.LinAlgError:
-            return None
-        for _ in range(30 if n_eq < d else 8):  # a step that leaves the designs is halved
-            v = fn(x + step + offsets)
+        rows = v.tolist()
+        if d == 2 and n_eq == 1:  # the common case (a size on a bound), written out
+            step, nu = _kkt_2_1(rows, h, nu)
+            if step is None:
+                return None
+        else:
+            step, nu = _kkt(rows, h, d, n_eq, nu, it)
+            if step is None:
+                return None
+        dx = np.array(step)
+        for _ in range(halvings or (30 if n_eq < d else 8)):  # a step leaving the designs is halved
+            v = fn(x + dx + offsets)
             if np.isfinite(v).all():
                 break
-            step = step / 2
+            dx = dx / 2
         else:
             return None
-        x = x + step
+        x = x + dx
         # converged where the equalities hold and the step is down to the differences'
         # rounding (~1e-11 × a condition number), or is 1e-6 and converging quadratically (it
         # leaves ~1e-12): a stationary value is off by that squared
-        size = np.max(np.abs(step) / scale)
-        if (np.abs(v[1 : 1 + n_eq, 0]) <= 1e-10).all() and (
-            size <= 1e-8 or (size <= 1e-6 and size <= 1e-2 * last)
-        ):
+        size = max(abs(a) * b for a, b in zip(dx.tolist(), inv, strict=True))
+        held = all(abs(r[0]) <= 1e-10 for r in v[1 : 1 + n_eq].tolist())
+        if held and (size <= 1e-8 or (size <= 1e-6 and size <= 1e-2 * last)):
+            if keep is not None:
+                keep.append(v)
             return x
         last = size
     return None
+
+
+def _kkt_2_1(rows, h, nu):
+    """A step (and the multiplier) in two variables with one equality: ``_kkt`` written out."""
+    s, r = rows[0], rows[1]
+    h0, h1 = h
+    g0, g1 = (s[1] - s[2]) / (2 * h0), (s[3] - s[4]) / (2 * h1)
+    a0, a1 = (r[1] - r[2]) / (2 * h0), (r[3] - r[4]) / (2 * h1)
+    if nu is None:  # the least-squares multiplier
+        aa = a0 * a0 + a1 * a1
+        if not aa:
+            return None, None
+        nu = [-(a0 * g0 + a1 * g1) / aa]
+    n = nu[0]
+    cs, cr = 2 * s[0], 2 * r[0]
+    l00 = (s[1] - cs + s[2]) / (h0 * h0) + n * (r[1] - cr + r[2]) / (h0 * h0)
+    l11 = (s[3] - cs + s[4]) / (h1 * h1) + n * (r[3] - cr + r[4]) / (h1 * h1)
+    l01 = (s[5] - s[6] - s[7] + s[8]) / (4 * h0 * h1) + n * (r[5] - r[6] - r[7] + r[8]) / (
+        4 * h0 * h1
+    )
+    sol = _solve([[l00, l01, a0], [l01, l11, a1], [a0, a1, 0.0]],
+                 [-g0 - a0 * n, -g1 - a1 * n, -r[0]])  # fmt: skip
+    if sol is None:
+        return None, None
+    return sol[:2], [n + sol[2]]
+
+
+def _kkt(rows, h, d: int, n_eq: int, nu, it: int):
+    """A Newton step from the rows at the stencil (central differences: the gradients and the
+    Hessians' diagonals, and for d = 2 the cross term): (step, multipliers), or (None, _)."""
+    grad = [[(r[1 + 2 * i] - r[2 + 2 * i]) / (2 * h[i]) for i in range(d)] for r in rows]
+    g, jac = grad[0], grad[1 : 1 + n_eq]
+    eq = [r[0] for r in rows[1 : 1 + n_eq]]
+    if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
+        if it > 12:
+            return None, nu
+        return _solve(jac, [-e for e in eq]), nu
+    if nu is None:  # least-squares multipliers: jac jacᵀ ν = −jac g
+        jjt = [[_dot(a, b) for b in jac] for a in jac]
+        nu = _solve(jjt, [-_dot(a, g) for a in jac]) if n_eq else []
+        if nu is None:
+            return None, None
+    # the Lagrangian's Hessian (rows weighted 1, ν) and the KKT system
+    kkt = [[0.0] * (d + n_eq) for _ in range(d + n_eq)]
+    rhs = [-x for x in g] + [-e for e in eq]
+    for w, r in zip([1.0, *nu], rows, strict=False):
+        c = 2 * r[0]
+        for i in range(d):
+            kkt[i][i] += w * (r[1 + 2 * i] - c + r[2 + 2 * i]) / (h[i] * h[i])
+        if d == 2:
+            kkt[0][1] += w * (r[5] - r[6] - r[7] + r[8]) / (4 * h[0] * h[1])
+    if d == 2:
+        kkt[1][0] = kkt[0][1]
+    for k in range(n_eq):
+        for i in range(d):
+            kkt[i][d + k] = kkt[d + k][i] = jac[k][i]
+            rhs[i] -= jac[k][i] * nu[k]
+    sol = _solve(kkt, rhs)
+    if sol is None:
+        return None, None
+    return sol[:d], [a + b for a, b in zip(nu, sol[d:], strict=True)]
+
+
+def _solve3(a: list[list[float]], b: list[float]) -> list[float] | None:
+    """``_solve`` for three unknowns, unrolled: the same pivots and operations."""
+    r0, r1, r2 = [*a[0], b[0]], [*a[1], b[1]], [*a[2], b[2]]
+    # column 0: the largest of the three leads
+    if abs(r1[0]) > abs(r0[0]) and abs(r1[0]) >= abs(r2[0]):
+        r0, r1 = r1, r0
+    elif abs(r2[0]) > abs(r0[0]) and abs(r2[0]) > abs(r1[0]):
+        r0, r2 = r2, r0
+    if r0[0] == 0:
+        return None
+    f1, f2 = r1[0] / r0[0], r2[0] / r0[0]
+    if f1:
+        r1 = [r1[0] - f1 * r0[0], r1[1] - f1 * r0[1], r1[2] - f1 * r0[2], r1[3] - f1 * r0[3]]
+    if f2:
+        r2 = [r2[0] - f2 * r0[0], r2[1] - f2 * r0[1], r2[2] - f2 * r0[2], r2[3] - f2 * r0[3]]
+    if abs(r2[1]) > abs(r1[1]):  # column 1
+        r1, r2 = r2, r1
+    if r1[1] == 0:
+        return None
+    f = r2[1] / r1[1]
+    if f:
+        r2 = [r2[0], r2[1] - f * r1[1], r2[2] - f * r1[2], r2[3] - f * r1[3]]
+    if r2[2] == 0:
+        return None
+    x2 = r2[3] / r2[2]
+    x1 = (r1[3] - r1[2] * x2) / r1[1]
+    x0 = (r0[3] - r0[1] * x1 - r0[2] * x2) / r0[0]
+    return [x0, x1, x2]
+
+
+def _dot(a: list[float], b: list[float]) -> float:
+    return sum(x * y for x, y in zip(a, b, strict=True))
+
+
+def _solve(a: list[list[float]], b: list[float]) -> list[float] | None:
+    """x with a x = b, by Gaussian elimination with partial pivoting (LAPACK's getrf/getrs
+    for a handful of unknowns); None where a pivot is exactly zero (a singular system)."""
+    n = len(b)
+    if n == 3:
+        return _solve3(a, b)
+    m = [[*row, rhs] for row, rhs in zip(a, b, strict=True)]
+    for c in range(n):
+        p, big = c, abs(m[c][c])
+        for r in range(c + 1, n):
+            if abs(m[r][c]) > big:
+                p, big = r, abs(m[r][c])
+        if big == 0:
+            return None
+        m[c], m[p] = m[p], m[c]
+        piv = m[c]
+        for r in range(c + 1, n):
+            row = m[r]
+            f = row[c] / piv[c]
+            if f:
+                for k in range(c, n + 1):
+                    row[k] -= f * piv[k]
+    x = [0.0] * n
+    for c in range(n - 1, -1, -1):
+        row = m[c]
+        s = row[n]
+        for k in range(c + 1, n):
+            s -= row[k] * x[k]
+        x[c] = s / row[c]
+    return x
 
 
 @cache

@@ -68,6 +68,7 @@ class Variant:
     fixed: dict[str, float]
     problem: Problem
     exact: bool  # the reduced solver answered it exactly
+    at: tuple[tuple[float, ...], ...] = ()  # where the reduced solver found its optima
 
     @property
     def free(self) -> tuple[str, ...]:
@@ -95,8 +96,11 @@ class Searched:
     reasons: list[Infeasible] = field(default_factory=list)
 
 
-def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool = True) -> Searched:
-    """Every variant's local optima (unverified, predicted), and what closed the others."""
+def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool = True,
+           near: Searched | None = None) -> Searched:  # fmt: skip
+    """Every variant's local optima (unverified, predicted), and what closed the others;
+    ``near``: the search of the same request at a nearby bound (a front's previous point),
+    whose optima a reduced solver may continue from (``Problem.near``)."""
     out = Searched()
     seen: list[dict[str, float]] = []
     hints: list[dict[str, float]] = []  # each variant's optima, stroke units: a start for the next
@@ -107,7 +111,8 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool 
         if violation:
             out.reasons.append(Infeasible(m.type, "FIXED_PARTS_INVALID", violation))
             continue
-        problem = build_problem(m, parts, names, fixed, spec, t, hints=tuple(hints))
+        prev = next((v.at for v in near.variants if v.parts == parts), ()) if near else ()
+        problem = build_problem(m, parts, names, fixed, spec, t, hints=tuple(hints), near=prev)
         try:
             answer = m.reduced(problem) if m.reduced and accelerators else None
         except Unreachable as u:
@@ -116,7 +121,7 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool 
         exact = answer is not None and answer.exact
         if exact:
             hints += answer.designs
-        variant = Variant(parts, names, fixed, problem, exact)
+        variant = Variant(parts, names, fixed, problem, exact, answer.at if exact else ())
         designs = [(scaled(d, t.stroke), "closed_form") for d in (answer or Reduced()).designs]
         if not exact and not variant.free:  # nothing to solve: the fixed parts are the design
             designs = [({}, "closed_form")]

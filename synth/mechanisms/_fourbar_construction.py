@@ -34,9 +34,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import Unreachable
-from ..reduced import Problem, rod, unreachable
+from ..reduced import MIN_SIZE, ONE_WAY, STRICT, Problem, rod, unreachable
+from ._fourbar_native import MAX_WIDTH, ROWS, compiled
 
+_VALID, _F, _SIZE = (ROWS.index(k) for k in ("valid", "f", "size"))
 BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
+
+
+def construction():
+    """This thread's compiled evaluation (``_fourbar_native``)."""
+    return compiled(BOUND_TOL, STRICT, ONE_WAY)
 
 
 @dataclass(frozen=True)
@@ -118,9 +125,62 @@ class Construction:
     def evaluate(self, sigma: int, psi, lam):
         """The designs at (ψ, λ), arrays: valid, feasible (within the bounds), f (the coupler's
         worst cos), size, k (the four-bar's scale), ρ (its links at scale 1, the crank-rocker's
-        order), r5, l, h and the rod's worst cos; a point that is no design is NaN or False."""
+        order), r5, l, h and the rod's worst cos; a point that is no design is NaN or False.
+        A few points (a Newton step's, a design's) are evaluated by the compiled function
+        (``_fourbar_native``), a grid by numpy."""
+        psi, lam = np.asarray(psi, dtype=float), np.asarray(lam, dtype=float)
+        shape = np.broadcast_shapes(psi.shape, lam.shape)
+        if 0 < math.prod(shape) <= MAX_WIDTH:
+            return self._compiled(sigma, psi, lam, shape)
         with np.errstate(all="ignore"):
             return self._evaluate(sigma, psi, lam)
+
+    def _compiled(self, sigma: int, psi, lam, shape):
+        flat = len(shape) == 1
+        if not flat or psi.shape != shape or lam.shape != shape:
+            psi, lam = (np.broadcast_to(a, shape).ravel() for a in (psi, lam))
+        out = construction().at(psi, lam, self._params(sigma))
+        e = dict(zip(ROWS, out if flat else out.reshape(len(ROWS), *shape), strict=True))
+        e["valid"], e["feasible"] = e["valid"] > 0, e["feasible"] > 0
+        e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
+        return e
+
+    def rows_compiled(self, sigma, psi, lam, objective, cos_bound, bound_active) -> np.ndarray:
+        """A Newton step's rows at a few points (ψ, λ), no ratios held: the objective (f, or
+        the size) and, with the bound active, f − cos_bound; NaN where a point is not a design
+        that runs (``evaluate``'s, straight from the compiled function's output)."""
+        out = construction().at(psi, lam, self._params(sigma))  # rows ROWS
+        f, size = out[_F], out[_SIZE]
+        rows = np.empty((1 + bound_active, len(psi)))
+        rows[0] = f if objective == "f" else size
+        if bound_active:
+            rows[1] = f - cos_bound
+        rows[:, ~((out[_VALID] > 0) & np.isfinite(size))] = np.nan
+        return rows
+
+    def _params(self, sigma: int) -> list[float]:
+        """The compiled function's parameters (``_fourbar_native.PARAMS``) for sheet σ, kept
+        per sheet, bounds and rod: a copy of this construction (``copy.copy``, ``holding``)
+        shares the cache but may differ in its rod or its bounds' arrays (replaced, never
+        changed in place)."""
+        key = (sigma, id(self.lo), id(self.hi), self.rod)
+        cache = self.__dict__.setdefault("_param_cache", {})
+        if key not in cache:
+            cache[key] = (self._make_params(sigma), self.lo, self.hi)  # the arrays kept alive
+        return cache[key][0]
+
+    def _make_params(self, sigma: int) -> list[float]:
+        p, r = self.p, self.r
+        sb = sigma * p.beta
+        rod_box = p.box(r.rod) if self.rod else (0.0, 0.0)
+        fixed_h = r.height is not None and r.height in p.fixed
+        h_box = p.bounds.get(r.height, (0.0, 0.0)) if r.height is not None else (0.0, 0.0)
+        return [-math.cos(sb), -math.sin(sb), *self.lo, *self.hi,
+                float(self.set_by is None), *(float(self.set_by == i) for i in range(4)),
+                float(r.swings), p.fixed.get(r.arm, 0.5),
+                float(self.rod), float(p.objective == MIN_SIZE), p.cos_bound, *rod_box,
+                float(r.height is None), float(fixed_h),
+                p.fixed[r.height] if fixed_h else 0.0, *h_box]  # fmt: skip
 
     def _evaluate(self, sigma: int, psi, lam):
         a2, a3, a4, valid = shape(sigma, self.p.beta, psi, lam)
@@ -157,10 +217,10 @@ class Construction:
         return rod(self.p, self.r.rod, self.r.height, r5, psi / 2, f)
 
     def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict]:
-        """The design at one point, and its evaluation."""
-        e = self.evaluate(sigma, np.array([psi]), np.array([lam]))
-        one = {k: float(np.ravel(v)[0]) for k, v in e.items() if k != "rho"}
-        one["rho"] = [float(np.ravel(x)[0]) for x in e["rho"]]
+        """The design at one point, and its evaluation (numbers; valid and feasible 1 or 0)."""
+        out = construction().at((psi,), (lam,), self._params(sigma))
+        one = dict(zip(ROWS, out[:, 0].tolist(), strict=True))
+        one["rho"] = [1.0, one.pop("a2"), one.pop("a3"), one.pop("a4")]
         r = self.r
         out = {n: one["k"] * x for n, x in zip(r.links, one["rho"], strict=True)}
         out[r.arm] = one["r5"]

@@ -25,8 +25,9 @@ import math
 
 import numpy as np
 
-from ..reduced import MAX_TRANSMISSION, Reduced, clip, newton
+from ..reduced import MAX_TRANSMISSION, MIN_SIZE, Reduced, _solve, _stencil, clip, newton
 from ._fourbar_construction import Construction, Roles, worst_cos
+from ._fourbar_native import MAX_WIDTH
 
 __all__ = ["FourBar", "Roles", "worst_cos"]
 
@@ -34,6 +35,11 @@ U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
 GRID = 48
 STEP = (U_HI - U_LO) / (GRID - 1)  # the grid's spacing in u
 NEAR = 0.1  # log: the links this near their bounds may be the ones that bind
+CONTINUE = 8  # Newton steps a front's continuation may take (else the full search runs)
+# halvings of a step a shortcut's Newton may take (a continuation, a hint; both also take
+# at most CONTINUE steps): a start whose steps keep leaving the designs is at their edge,
+# where the grid's search does better
+SHORTCUT = 6
 SLACK = 1e-6  # a design closer to a link's bound than this (log of the scale's range) may be
 # held by that bound, which the Newton steps do not model: IPOPT polishes it
 
@@ -154,7 +160,13 @@ class FourBar(Construction):
         the two sheets; with nothing fixed, no bound given and no rod, σ = −1 only where
         σ = +1 has none (it was never smaller in a survey of 300 random targets; a rod or a
         fixed link can make it smaller). None at all when the best transmission misses the
-        bound."""
+        bound. On a front (``Problem.near``: this variant's optima at the previous point's
+        bound), each sheet's optimum is continued from there (``continued``), and the full
+        search runs only where that fails."""
+        if start is None and self.p.near and not self.ratios and self.p.objective == MIN_SIZE:
+            answer = self.continued(cos_bound)
+            if answer is not None:
+                return answer
         best: list[dict] = []
         if start is None:  # does any coupler transmit well enough? A rod only adds a joint
             # (and a bound no rod meets leaves no feasible design), so ask without it
@@ -167,7 +179,7 @@ class FourBar(Construction):
                 found, _ = self.coupler_optimum()
             best = [found[0]] if found else []
         both = self.rod or bool(self.p.fixed) or bool(self.p.explicit)
-        sheets: list[tuple[list, bool]] = []
+        sheets: list[tuple[int, list, bool]] = []
         for sigma in (1, -1):
             self.missed = None
             found, exact = self.optimum(sigma, "size", cos_bound)
@@ -176,14 +188,106 @@ class FourBar(Construction):
                 # can be closer than the grid tells apart, so this is a start for IPOPT only
                 held, _ = self.bounded(self.missed, "size", cos_bound)
                 found = [held] if held else found
-            sheets.append((found, exact))
+            sheets.append((sigma, found, exact))
             if found and not both:
                 break
-        found = sorted((de for f, _ in sheets for de in f), key=lambda de: de[1]["size"])
+        found = sorted((de for _, f, _ in sheets for de in f), key=lambda de: de[1]["size"])
         if found:
-            exact = all(exact for f, exact in sheets if f)  # then the best alone is the answer
-            return Reduced([d for d, _ in found[: 1 if exact else None]], exact)
+            exact = all(exact for _, f, exact in sheets if f)  # then the best alone is the answer
+            at = ()
+            if exact and not self.ratios and self.p.objective == MIN_SIZE:
+                at = tuple(self._onward(s, f[0][1]["at"], cos_bound, floor=self._floor(s))
+                           for s, f, _ in sheets if f)  # fmt: skip
+                at = () if None in at else at
+            return Reduced([d for d, _ in found[: 1 if exact else None]], exact, at)
         return Reduced([start] if start else best, exact=False)
+
+    def continued(self, cos_bound: float) -> Reduced | None:
+        """The smallest design at this bound from each sheet's optimum at a nearby one
+        (``Problem.near``): Newton's method with the bound active, from there. Accepted only
+        where each ends within the swing's range and the links' bounds, on the bound, at a
+        strict local minimum of the size along it (``_binding_minimum``): a front point
+        (the smallest design that transmits at least at its angle) holds its bound, as the
+        full search finds it. None (the full search then runs) where any does not."""
+        lo, hi = self.psi
+        found = []
+        for sigma, *at in self.p.near:
+            sigma = int(sigma)  # Newton from the prediction, the bound active
+            rows, kept = self._rows(sigma, "size", cos_bound, True, None), []
+            x = newton(rows, _predict(at, cos_bound), 1, np.ones(2), CONTINUE, kept, SHORTCUT)
+            inside = x is not None and lo < x[0] < hi
+            floor = at[-1]  # the least coupler cos on the sheet's grid (NaN: not known)
+            onward = self._onward(sigma, x, cos_bound, kept[0], at, floor) if inside else None
+            if onward is not None:
+                d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
+                if e["feasible"] and abs(e["f"] - cos_bound) <= 1e-9 and e["slack"] > SLACK:
+                    found.append((e["size"], onward, d))
+                    continue
+            # this sheet's optimum moved off its branch (out of the swing's range, onto a
+            # link's bound): its full search, as ``smallest`` runs it. Where no point of its
+            # grid transmits that well (the grid's f, valid points, does not depend on the
+            # bound) and no hint starts it (``hinted``), that search has no start and finds
+            # nothing: it need not run
+            if floor > cos_bound and (sigma != 1 or not self.p.hints):
+                continue
+            self.missed = None
+            got, exact = self.optimum(sigma, "size", cos_bound)
+            if got and not (exact and self.missed is None):
+                return None
+            for d, e in got[:1]:
+                onward = self._onward(sigma, e["at"], cos_bound, floor=self._floor(sigma))
+                if onward is None:
+                    return None
+                found.append((e["size"], onward, d))
+        if not found:
+            return None
+        found.sort(key=lambda f: f[0])
+        return Reduced([found[0][2]], True, tuple(f[1] for f in found))
+
+    def _floor(self, sigma: int) -> float:
+        """The least coupler cos f over the valid points of sheet σ's last grid (``_starts``,
+        no ratios held), NaN where none was evaluated."""
+        return self.__dict__.get("floors", {}).get(sigma, math.nan)
+
+    def _onward(self, sigma: int, x, cos_bound: float, v=None, before=None, floor=math.nan):
+        """Where a front continues from x, a local minimum of the size on the bound
+        (f = cos_bound): (σ, ψ, u, cos_bound, dψ/dc, du/dc, the point before: ψ, u,
+        cos_bound, NaN for none, and the sheet's ``_floor``), with the optimum's tangent in
+        the bound c (the KKT system differentiated: H dx + ∇f dν = 0, ∇f·dx = 1). None where
+        x is not a strict local minimum that holds the bound: the bound's multiplier
+        ν = −∇size·∇f/|∇f|² is positive (a worse transmission would allow a smaller design)
+        and the Lagrangian size + ν f curves upward along the bound's curve (second-order
+        sufficiency), both by central differences on Newton's stencil (``v``: the rows there,
+        if Newton kept them)."""
+        h = 1e-5
+        x = np.asarray(x, dtype=float)
+        if v is None:
+            v = self._rows(sigma, "size", cos_bound, True, None)(x + _stencil(2) * h)
+        if not np.isfinite(v).all():
+            return None
+        size, f = v.tolist()
+        gs = [(size[1 + 2 * i] - size[2 + 2 * i]) / (2 * h) for i in range(2)]
+        gf = [(f[1 + 2 * i] - f[2 + 2 * i]) / (2 * h) for i in range(2)]
+        ff = gf[0] ** 2 + gf[1] ** 2
+        nu = -(gs[0] * gf[0] + gs[1] * gf[1]) / ff if ff > 0 else math.nan
+        if not nu > 0:
+            return None
+        hess = [[0.0, 0.0], [0.0, 0.0]]
+        for w, r in ((1.0, size), (nu, f)):
+            hess[0][0] += w * (r[1] - 2 * r[0] + r[2]) / h**2
+            hess[1][1] += w * (r[3] - 2 * r[0] + r[4]) / h**2
+            hess[0][1] += w * (r[5] - r[6] - r[7] + r[8]) / (4 * h**2)
+        t0, t1 = -gf[1], gf[0]  # the bound's tangent
+        along = t0 * t0 * hess[0][0] + 2 * t0 * t1 * hess[0][1] + t1 * t1 * hess[1][1]
+        scale = (abs(hess[0][0]) + 2 * abs(hess[0][1]) + abs(hess[1][1])) * ff
+        if not along > 1e-6 * scale:
+            return None
+        kkt = [[hess[0][0], hess[0][1], gf[0]], [hess[0][1], hess[1][1], gf[1]], [*gf, 0.0]]
+        dx = _solve(kkt, [0.0, 0.0, 1.0])
+        if dx is None:
+            return None
+        prev = (before[0], before[1], before[2]) if before else (math.nan,) * 3
+        return (float(sigma), float(x[0]), float(x[1]), cos_bound, dx[0], dx[1], *prev, floor)
 
     def optimum(
         self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None, limits=True
@@ -255,10 +359,11 @@ class FourBar(Construction):
             return None
         crank, coupler = (h[n] for n in self.r.links[1:3])
         x0 = np.array([2 * math.asin(min(0.5 / h[self.r.arm], 1.0)), math.log(coupler / crank - 1)])
-        x = self._newton(sigma, x0, objective, self.p.cos_bound, psi_fixed)
+        x = self._newton(sigma, x0, objective, self.p.cos_bound, psi_fixed, shortcut=True)
         if x is None:
             return None
         d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
+        e["at"] = x
         ok = e["feasible"] and e["f"] <= self.p.cos_bound * (1 + 1e-12) and e["slack"] > SLACK
         return (d, e) if ok else None
 
@@ -275,12 +380,16 @@ class FourBar(Construction):
         e = self.evaluate(sigma, psi, 1 + np.exp(u))
         value = e["f"] if objective == "f" else e["size"]
         ok = e["feasible" if limits else "valid"] & ((objective == "f") | (e["f"] <= cos_bound))
-        pts = np.stack(np.broadcast_arrays(psi, u), axis=-1)  # (rows, cols, 2)
         if not self.ratios:
+            if objective == "size" and psi.size > 1:  # a front's later bounds may use it
+                floor = np.min(np.where(e["valid"], e["f"], np.inf))
+                self.__dict__.setdefault("floors", {})[sigma] = float(floor)
             if not np.any(ok):
                 return []
             i, j = np.unravel_index(np.argmin(np.where(ok, value, np.inf)), ok.shape)
-            return [(pts[i, j], float(value[i, j]), False, -math.inf)]
+            start = np.array([psi[min(i, psi.shape[0] - 1), 0], u[0, min(j, u.shape[1] - 1)]])
+            return [(start, float(value[i, j]), False, -math.inf)]
+        pts = np.stack(np.broadcast_arrays(psi, u), axis=-1)  # (rows, cols, 2)
         res = self.residuals(e)
         x = _crossings(res[0], e["valid"], pts)
         if len(x) == 0:
@@ -301,18 +410,18 @@ class FourBar(Construction):
             out += [(y, math.nan, True, -math.inf) for y in _meet(x, bound)]
         return out
 
-    def _newton(self, sigma, x0, objective, cos_bound, psi_fixed, root=False):
+    def _newton(self, sigma, x0, objective, cos_bound, psi_fixed, root=False, shortcut=False):
         """Newton from x0 = (ψ, u) with the ratios (and, for the size, the bound where it
         binds; only the bound from a ``root`` start) as equalities; a swing that leaves its
         range is held at the nearer edge."""
         lo, hi = self.psi
-        x = self._newton_at(sigma, x0, objective, cos_bound, psi_fixed, root)
+        x = self._newton_at(sigma, x0, objective, cos_bound, psi_fixed, root, shortcut)
         if psi_fixed is None and (x is None or not lo <= x[0] <= hi):
             edge = lo if (x if x is not None else x0)[0] < (lo + hi) / 2 else hi
-            x = self._newton_at(sigma, x0, objective, cos_bound, edge, root)
+            x = self._newton_at(sigma, x0, objective, cos_bound, edge, root, shortcut)
         return x
 
-    def _newton_at(self, sigma, x0, objective, cos_bound, psi, root=False):
+    def _newton_at(self, sigma, x0, objective, cos_bound, psi, root=False, shortcut=False):
         """Newton with ψ held (or not); for the size, with the bound binding and, where ratios
         are held (it may then not bind), without it: the smaller design that keeps it."""
         both = objective == "size" and bool(self.ratios) and not root
@@ -328,7 +437,8 @@ class FourBar(Construction):
             y0 = x0 if psi is None else x0[1:]
             if n_eq > y0.size:
                 continue
-            y = newton(rows, y0, n_eq, np.ones(y0.size))
+            limits = (CONTINUE, None, SHORTCUT) if shortcut else (30, None, None)
+            y = newton(rows, y0, n_eq, np.ones(y0.size), *limits)
             if y is None:
                 continue
             x = y if psi is None else np.array([psi, y[0]])
@@ -342,7 +452,10 @@ class FourBar(Construction):
     def _rows(self, sigma, objective, cos_bound, bound_active, psi_fixed):
         def rows(x):
             ps = x[:, 0] if psi_fixed is None else np.full(len(x), psi_fixed)
-            e = self.evaluate(sigma, ps, 1 + np.exp(np.minimum(x[:, -1], 50.0)))
+            lam = 1 + np.exp(np.minimum(x[:, -1], 50.0))
+            if not self.ratios and len(x) <= MAX_WIDTH:  # a Newton step: the compiled rows
+                return self.rows_compiled(sigma, ps, lam, objective, cos_bound, bound_active)
+            e = self.evaluate(sigma, ps, lam)
             out = [e["f"] if objective == "f" else e["size"], *self.residuals(e)]
             if bound_active:
                 out.append(e["f"] - cos_bound)
@@ -350,6 +463,18 @@ class FourBar(Construction):
             return np.where(e["valid"] & np.isfinite(e["size"]), np.array(out), np.nan)
 
         return rows
+
+
+def _predict(at, c: float) -> np.ndarray:
+    """A front's next optimum (ψ, u) at the bound c, from the last one's (``_onward``): its
+    tangent, and where there is a point before it, the quadratic through that point too."""
+    psi, u, c1, dpsi, du, psi0, u0, c0, _ = at
+    d = c - c1
+    x = np.array([psi + dpsi * d, u + du * d])
+    if math.isfinite(c0) and c0 != c1:
+        d0 = c0 - c1  # the curvature that puts the point before on the quadratic
+        x += np.array([psi0 - psi - dpsi * d0, u0 - u - du * d0]) * (d / d0) ** 2
+    return x
 
 
 def _crossings(r: np.ndarray, valid: np.ndarray, pts: np.ndarray) -> np.ndarray:

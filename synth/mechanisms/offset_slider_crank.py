@@ -21,9 +21,9 @@ TR = (π+β)/(π−β); μ_min = acos((r2+|e|)/r3).
 from __future__ import annotations
 
 import math
+import sys
 
 import casadi as ca
-from scipy.optimize import brentq
 
 from ..geometry import leg, sqrt, where
 from ..reduced import (
@@ -37,6 +37,8 @@ from ..reduced import (
 )
 from ..results import TOL
 from ._registry import ROD, Condition, Mechanism, Parameter, register
+
+EPS = sys.float_info.epsilon
 
 
 def position(p, th):
@@ -109,12 +111,15 @@ def reduced(p: Problem) -> Reduced:
             judge(p, facts, design)
         return Reduced([design] if _allowed(p, design) else [])
     designs, seen = [], []
+    solved: dict[tuple[float, float], float | None] = {}  # the signs' boxes often agree
     for sign in (1, -1):
         box = _q_box(p, s, c, sign)
         if box is None:
             continue
         lo, hi = box[0], min(box[1], math.cos(p.beta))
-        q = _optimum(p, s, c, lo, hi) if lo < hi else None
+        if (lo, hi) not in solved:
+            solved[lo, hi] = _optimum(p, s, c, lo, hi) if lo < hi else None
+        q = solved[lo, hi]
         if q is not None and not any(abs(q - o) <= 1e-12 * max(q, o) for o in seen):
             seen.append(q)
             designs.append(_design(p, q, sign, s, c))
@@ -150,7 +155,35 @@ def _optimum(p: Problem, s: float, c: float, lo: float, hi: float) -> float | No
         return None
     if _cos_mu(lo, s, c) <= cb:  # as small as the bound lets it
         return lo
-    return brentq(lambda q: _cos_mu(q, s, c) - cb, lo, star, xtol=1e-300, rtol=1e-15)
+    return _bound_root(s, c, cb, lo, star)
+
+
+def _bound_root(s: float, c: float, cb: float, lo: float, hi: float) -> float:
+    """The q in [lo, hi] where cos μ = cb (cos μ falls through it, once: above cb at lo, at
+    most cb at hi), to machine precision: Newton's method on the closed form's derivative,
+    kept within the bracket (bisection where a step would leave it or stall), in Python
+    floats (scipy's brentq cost ~10 µs of call overhead here, most of a min_size search)."""
+    a, b = lo, hi
+    q = 0.5 * (a + b)
+    for _ in range(100):
+        r, w = math.sqrt(c * c - q), math.sqrt(s * s + q)
+        num = q + s * r
+        f = num / (c * w) - cb
+        if f == 0:
+            return q
+        if f > 0:
+            a = q
+        else:
+            b = q
+        d = ((1 - s / (2 * r)) * w - num / (2 * w)) / (c * w * w)  # d cos μ / dq
+        step = f / d if d else math.nan
+        nxt = q - step
+        if not (a < nxt < b) or not math.isfinite(nxt):
+            nxt = 0.5 * (a + b)
+        if abs(nxt - q) <= 2 * EPS * max(q, 1e-300) or b - a <= 2 * EPS * b:
+            return nxt
+        q = nxt
+    return q
 
 
 def _q_box(p: Problem, s: float, c: float, sign: int) -> tuple[float, float] | None:
