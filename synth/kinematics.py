@@ -61,8 +61,9 @@ def analyze(
     >>> round(a.time_ratio, 5), round(a.stroke, 9)
     (2.73524, 300.0)
     """
-    deg = check(mechanism, params, crank_angles_deg, samples, include)
-    m, p, variant, f, pv, points = _prepared(mechanism, params)
+    check_include(include)
+    deg = curve_angles(crank_angles_deg, samples)
+    m, p, variant, f, pv, points = _prepared(mechanism, params)  # the design checked there
     return _analysis(m, p, variant, f, pv, points, crank_speed, crank_acceleration, deg,
                      include, tolerance)  # fmt: skip
 
@@ -115,7 +116,7 @@ def _found(f: Model, pv: np.ndarray):
 def _analysis(m, p, variant, f, pv, points, crank_speed, crank_acceleration, deg, include,
               tolerance) -> Analysis:  # fmt: skip
     """The analysis of a design whose stationary points are found (``analyze``), with curves
-    at ``deg`` (checked, ``check``; None: none)."""
+    at ``deg`` (checked, ``curve_angles``; None: none)."""
     rows, theta, values = points
     summary = _summary(m, p, f, rows, theta, values)
     if deg is not None:
@@ -282,12 +283,16 @@ def check(
     samples: int | None = None,
     include: Collection[str] = (),
     **_: Any,
-) -> np.ndarray | None:
-    """What ``analyze`` checks before it analyses (its arguments' meaning; the design's
-    validity): the crank angles of the curves asked for, in degrees (None: no curves). Takes
-    (and ignores) ``analyze``'s other arguments."""
-    check_include(include)
+) -> None:
+    """What ``analyze`` checks before it analyses: the design's validity, and the arguments'
+    meaning (``curve_angles``). Takes (and ignores) ``analyze``'s other arguments."""
     get(mechanism).complete(params)
+    check_include(include)
+    curve_angles(crank_angles_deg, samples)
+
+
+def curve_angles(crank_angles_deg: Sequence[float] | None, samples: int | None):
+    """The crank angles of the curves asked for, in degrees (None: no curves), checked."""
     if crank_angles_deg is None and samples is None:
         return None
     if crank_angles_deg is not None and samples is not None:
