@@ -4,12 +4,13 @@ infeasible one, to 1e-12, never worse than the generic multistart; the service a
 request). Timings are printed, never asserted."""
 
 from benchmarks import analysis, overload, service, synthesis
+from synth.mechanisms import all_types
 
 
 def test_synthesis_benchmark_quick():
     out = synthesis.main(["--quick", "--methods", "ours,generic,scipy_slsqp"])
     ours = [r for r in out["summary"] if r["method"] == "ours"]
-    assert len(ours) == 6
+    assert len(ours) == len(all_types())  # every registered type
     for r in ours:
         assert r["success"] == 1.0 and r["refused"] == 1.0, r
         assert r["error_max"] <= 1e-12, r
