@@ -83,7 +83,7 @@ def synthesis_costs(repeats: int) -> list[dict]:
     base = partial(synth.synthesize, **SYNTH_REQUEST)
     base()
     cases = {f"max_candidates {k}": partial(base, max_candidates=k) for k in (1, 5, 20, 50)}
-    cases["generic multistart"] = partial(base, accelerators=False)
+    cases["generic multistart"] = partial(base, solver=synth.Solver(accelerators=False))
     for case, fn in cases.items():
         fn()
         ms, ref = median_ms(fn, base, repeats)
@@ -176,10 +176,10 @@ def default_cases(quick: bool = False) -> list[dict]:
     return out
 
 
-def _request(case: dict, accelerators: bool = True):
+def _request(case: dict, solver: synth.Solver | None = None):
     kinds = None if case["type"] == ALL else [{"type": case["type"]}]
     return partial(synth.synthesize, case["time_ratio"], 1.0, case["bound"], mechanisms=kinds,
-                   objective=case["objective"], accelerators=accelerators)  # fmt: skip
+                   objective=case["objective"], solver=solver or synth.Solver())  # fmt: skip
 
 
 def _best(r: synth.SynthesisResult, objective: str) -> float | None:
@@ -209,7 +209,7 @@ def default_requests(repeats: int, quick: bool = False) -> list[dict]:
                "methods": sorted({c.method for c in r.candidates}),
                "refusals": sorted({i.code for i in r.infeasible})}  # fmt: skip
         if not quick:
-            g = _request(case, accelerators=False)()
+            g = _request(case, synth.Solver(accelerators=False))()
             row["generic_answered"] = bool(g.candidates)
             row["generic_best"] = _best(g, case["objective"])
         out.append(row)

@@ -37,7 +37,7 @@ from synth import search, synthesis
 from synth.diagnose import forget_ranges
 from synth.formulation import Formulation, relevant
 from synth.mechanisms import get
-from synth.solve import MAX_ITER, Built
+from synth.solve import MAX_ITER, Built, multistart
 
 SEED = 6
 DE = {"maxiter": 150, "popsize": 15, "tol": 1e-8}  # bounded: ~1 s per variant with its polish
@@ -76,9 +76,9 @@ def patched(owner: Any, **values: Any) -> Iterator[None]:
 # --- synth: as shipped, and the generic multistart -----------------------------------------
 
 
-def _synth(target: dict[str, Any], accelerators: bool) -> Outcome:
+def _synth(target: dict[str, Any], solver: synth.Solver) -> Outcome:
     forget_ranges()  # each refusal pays its whole scan: no range kept from before
-    r = synth.synthesize(**target, accelerators=accelerators)
+    r = synth.synthesize(**target, solver=solver)
     return Outcome(
         [dict(c.params) for c in r.candidates],
         tuple(c.method for c in r.candidates),
@@ -87,11 +87,11 @@ def _synth(target: dict[str, Any], accelerators: bool) -> Outcome:
 
 
 def ours(target: dict[str, Any]) -> Outcome:
-    return _synth(target, True)
+    return _synth(target, synth.Solver())
 
 
 def generic(target: dict[str, Any]) -> Outcome:
-    return _synth(target, False)
+    return _synth(target, synth.Solver(accelerators=False))
 
 
 @dataclass
@@ -105,9 +105,8 @@ class Solves:
 
 def ipopt_solves(target: dict[str, Any]) -> Solves:
     """``ours`` once more, untimed, counting its fallbacks to IPOPT (search and refusals
-    alike: both go through ``search.multistart``)."""
+    alike: both solve locally by the solver's ``local``, here IPOPT counted)."""
     n = Solves()
-    inner = search.multistart
 
     def counted(b: Built, *args: Any, **kwargs: Any):
         n.calls += 1
@@ -115,10 +114,9 @@ def ipopt_solves(target: dict[str, Any]) -> Solves:
                        f"{b.form.objective}")  # fmt: skip
         start_points = args[5] if len(args) > 5 else kwargs["start_points"]
         n.starts += len(start_points)
-        yield from inner(b, *args, **kwargs)
+        yield from multistart(b, *args, **kwargs)
 
-    with patched(search, multistart=counted):
-        ours(target)
+    _synth(target, synth.Solver(local=counted))
     return n
 
 
@@ -175,21 +173,21 @@ def on_nlp(local: LocalSolve) -> Method:
         t = search.Targets(
             target["time_ratio"], target["stroke"], target["min_transmission_angle_deg"],
             target.get("objective", "max_transmission_angle"), math.inf,
+            synth.Solver(local=_checked(local)),
         )  # fmt: skip
         out = []
-        with patched(search, multistart=_checked(local)):
-            for parts in search.variants(m, spec):
-                if search.fixed_violation(m, parts, spec.fixed):
-                    continue
-                names = relevant(m, parts)
-                fixed = {k: v for k, v in spec.fixed.items() if k in names}
-                problem = search.build_problem(m, parts, names, fixed, spec, t)
-                v = search.Variant(parts, names, fixed, problem, exact=False)
-                found = [x for x, _ in search.ipopt(m, v, spec, t, t.objective)]
-                out += [
-                    {**spec.fixed, **x, **dict.fromkeys(parts, 0.0)}
-                    for x in (found if v.free else [{}])
-                ]
+        for parts in search.variants(m, spec):
+            if search.fixed_violation(m, parts, spec.fixed):
+                continue
+            names = relevant(m, parts)
+            fixed = {k: v for k, v in spec.fixed.items() if k in names}
+            problem = search.build_problem(m, parts, names, fixed, spec, t)
+            v = search.Variant(parts, names, fixed, problem, exact=False)
+            found = [x for x, _ in search.ipopt(m, v, spec, t, t.objective)]
+            out += [
+                {**spec.fixed, **x, **dict.fromkeys(parts, 0.0)}
+                for x in (found if v.free else [{}])
+            ]
         return Outcome(out)
 
     return run

@@ -13,7 +13,7 @@ from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechani
 from .kinematics import analyze, joints
 from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
 from .sweep import sweep
-from .synthesis import Spec, synthesize
+from .synthesis import Solver, Spec, synthesize
 
 try:
     __version__ = version("quickreturn-synth")
@@ -26,6 +26,7 @@ __all__ = [
     "Infeasible",
     "InvalidDesign",
     "InvalidParameters",
+    "Solver",
     "Spec",
     "SweepResult",
     "SynthError",

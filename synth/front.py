@@ -20,7 +20,7 @@ FLAT = 1e-9  # relative: a front whose ends are this close in angle and size is 
 
 
 def pareto(specs, t: Targets, max_candidates: int, per_type: int, extras: dict[str, Any],
-            accelerators: bool):  # fmt: skip
+            ):  # fmt: skip
     """Each type's front, ``max_candidates`` points in all shared among the types (a front of
     one point takes one, none more than ``per_type``), the types in the order of their best
     angle."""
@@ -28,7 +28,7 @@ def pareto(specs, t: Targets, max_candidates: int, per_type: int, extras: dict[s
     tops, infeasible = [], []
     for i, spec in enumerate(specs):
         m = get(spec.type)
-        s = search(m, spec, i, best_t, accelerators)
+        s = search(m, spec, i, best_t)
         top = first(m, s, best_t, t, extras)
         if top is None:
             infeasible.append(diagnose(m, spec, best_t, s))
@@ -42,17 +42,17 @@ def pareto(specs, t: Targets, max_candidates: int, per_type: int, extras: dict[s
         small_t = replace(t, objective=MIN_SIZE)
         for i in lows:
             m = get(specs[i].type)
-            searched[i] = search(m, specs[i], i, small_t, accelerators)
+            searched[i] = search(m, specs[i], i, small_t)
             lows[i] = first(m, searched[i], small_t, t, extras)
     share = _share([_flat(lows[i], top) for i, top in tops], max_candidates, per_type)
     for (i, top), n in zip(tops, share, strict=True):
         if n:
-            out += _front(specs[i], i, top, lows[i], n, t, extras, accelerators, searched[i])
+            out += _front(specs[i], i, top, lows[i], n, t, extras, searched[i])
     return out, infeasible
 
 
 def _front(spec: Spec, i: int, top: Candidate, low: Candidate | None, n: int, t: Targets,
-           extras, accelerators: bool, near: Searched | None) -> list[Candidate]:  # fmt: skip
+           extras, near: Searched | None) -> list[Candidate]:  # fmt: skip
     """n points of one type's front, spread evenly in angle from its smallest design that
     meets the bound (``low``, the min_size optimum) to its best (``top``): the point at angle
     μ is the smallest design whose minimum transmission angle is at least μ (the min_size
@@ -79,7 +79,7 @@ def _front(spec: Spec, i: int, top: Candidate, low: Candidate | None, n: int, t:
         if time.monotonic() >= t.deadline:
             break
         at = replace(t, objective=MIN_SIZE, bound_deg=mu)
-        near = search(m, spec, i, at, accelerators, near)
+        near = search(m, spec, i, at, near)
         found.append((near, at))
     points += [c for c in first_many(m, found, t, extras) if c is not None]
     kept: list[Candidate] = []  # the non-dominated, best angle first

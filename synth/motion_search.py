@@ -236,8 +236,8 @@ _PICK: dict[str, Pick] = {
 }
 
 
-def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accelerators: bool,
-            limit: float | None):  # fmt: skip
+def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any],
+           limit: float | None):  # fmt: skip
     """A motion objective: per type and variant, SLSQP (``local_optima``) from the designs the
     exact solvers give for the request (best-transmitting and smallest), the most promising
     first; the optima and those designs, verified, ranked by the measure (the limit met)."""
@@ -246,10 +246,10 @@ def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accel
     for i, spec in enumerate(specs):
         m = get(spec.type)
         best_t = replace(t, objective=MAX_TRANSMISSION)
-        s = search(m, spec, i, best_t, accelerators)
+        s = search(m, spec, i, best_t)
         pool = list(s.proposals)
         if t.bound_deg > 0:
-            pool += search(m, spec, i, replace(t, objective=MIN_SIZE), accelerators).proposals
+            pool += search(m, spec, i, replace(t, objective=MIN_SIZE)).proposals
         mine = []
         for p in pool:
             c = candidate(m, p, t, s.variants, extras)
@@ -277,8 +277,7 @@ def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accel
         elif not kept:
             least = min(fluctuation(c.motion) for c in mine)
             if t.objective != UNIFORM:  # how uniform it can be: that objective's optimum
-                alone = motion([spec], replace(t, objective=UNIFORM), 1, extras, accelerators,
-                                None)[0]  # fmt: skip
+                alone = motion([spec], replace(t, objective=UNIFORM), 1, extras, None)[0]
                 least = min([least] + [c.objective_value for c in alone])
             infeasible.append(Infeasible(
                 m.type, "FLUCTUATION_UNREACHABLE",

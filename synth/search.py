@@ -15,7 +15,7 @@ Per variant (a slot drive, or a link where a part may be zero):
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -42,12 +42,35 @@ class Spec:
 
 
 @dataclass(frozen=True)
+class Solver:
+    """How a synthesis solves (``synthesize(..., solver=...)``).
+
+    ``accelerators``: each type's exact reduced solver (closed forms, bracketed roots, Newton
+    in at most two variables) first; False solves every type as one without it would be, by
+    the generic path (cold multistart on the formulation), for cross-checks. ``starts``: cold
+    starts per structural variant where the generic path runs (Halton points, the valid ones;
+    the reduced solvers' designs are warm starts beside them). ``local``: the local solve from
+    those starts, with ``solve.multistart``'s signature (built NLP, fixed values, time ratio,
+    cos of the bound, free lengths' bounds, start points, deadline) → (start index, free
+    lengths in stroke units) of each solution; None is IPOPT (``solve.multistart``).
+    """
+
+    accelerators: bool = True
+    starts: int = STARTS
+    local: Callable[..., Iterable[tuple[int, dict[str, float]]]] | None = None
+
+
+DEFAULT = Solver()  # the reduced solvers, then IPOPT from STARTS cold starts where needed
+
+
+@dataclass(frozen=True)
 class Targets:
     time_ratio: float
     stroke: float
     bound_deg: float
     objective: str
     deadline: float
+    solver: Solver = DEFAULT
 
     @property
     def cos_bound(self) -> float:
@@ -96,7 +119,7 @@ class Searched:
     reasons: list[Infeasible] = field(default_factory=list)
 
 
-def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool = True,
+def search(m: Mechanism, spec: Spec, index: int, t: Targets,
            near: Searched | None = None) -> Searched:  # fmt: skip
     """Every variant's local optima (unverified, predicted), and what closed the others;
     ``near``: the search of the same request at a nearby bound (a front's previous point),
@@ -114,7 +137,7 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets, accelerators: bool 
         prev = next((v.at for v in near.variants if v.parts == parts), ()) if near else ()
         problem = build_problem(m, parts, names, fixed, spec, t, hints=tuple(hints), near=prev)
         try:
-            answer = m.reduced(problem) if m.reduced and accelerators else None
+            answer = m.reduced(problem) if m.reduced and t.solver.accelerators else None
         except Unreachable as u:
             out.reasons.append(Infeasible(m.type, u.code, u.reason))
             continue
@@ -214,7 +237,8 @@ def ipopt(
     lo, hi = np.array([v.problem.bounds[k] for k in free], dtype=float).T
     first = [np.clip([d[k] / s for k in free], lo, hi) for d in warm if all(k in d for k in free)]
     pts = []
-    for x0 in starts(lo, hi, lo > 0, 40 * STARTS):
+    n = t.solver.starts
+    for x0 in starts(lo, hi, lo > 0, 40 * n):
         try:
             m.complete(
                 {**fixed, **dict(zip(free, x0 * s, strict=True)), **dict.fromkeys(v.parts, 0.0)}
@@ -222,12 +246,13 @@ def ipopt(
         except SynthError:
             continue
         pts.append(x0)
-        if len(pts) == STARTS:
+        if len(pts) == n:
             break
     fx = np.array([fixed[k] / s for k in b.form.fixed])
     cb = t.cos_bound if cos_bound is None else cos_bound
     out = []
-    for i, sol in multistart(b, fx, t.time_ratio, cb, lo, hi, np.array(first + pts), t.deadline):
+    local = t.solver.local or multistart
+    for i, sol in local(b, fx, t.time_ratio, cb, lo, hi, np.array(first + pts), t.deadline):
         method = "closed_form+ipopt" if i < len(first) else "ipopt"
         out.append(({k: x * s for k, x in sol.items()}, method))
     return out

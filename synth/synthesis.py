@@ -26,14 +26,9 @@ from .motion_search import motion
 from .quality import MOTION_OBJECTIVES
 from .reduced import MAX_TRANSMISSION, MIN_SIZE
 from .results import Candidate, SynthesisResult, Tolerance
-from .search import (
-    Searched,
-    Spec,
-    Targets,
-    search,
-)
+from .search import DEFAULT, Searched, Solver, Spec, Targets, search
 
-__all__ = ["MAX_CANDIDATES", "OBJECTIVES", "Spec", "check", "synthesize"]
+__all__ = ["MAX_CANDIDATES", "OBJECTIVES", "Solver", "Spec", "check", "synthesize"]
 
 OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE, *MOTION_OBJECTIVES)
 MAX_CANDIDATES = 50
@@ -52,7 +47,7 @@ def synthesize(
     include: Collection[str] = (),
     tolerance: Tolerance | None = None,
     max_working_speed_fluctuation: float | None = None,
-    accelerators: bool = True,
+    solver: Solver = DEFAULT,
 ) -> SynthesisResult:
     """Every good design for the targets, verified and ranked (POST /v1/synthesize).
 
@@ -65,8 +60,9 @@ def synthesize(
     both strokes, in ω²·stroke). ``max_working_speed_fluctuation`` (≥ 1) limits that
     fluctuation (with the motion objectives). ``max_candidates`` counts in all; by default it is
     ``PER_TYPE`` (pareto: per type of the request, at most ``MAX_CANDIDATES``).
-    ``accelerators=False`` solves every type as one without a reduced solver would be, by
-    cold multistart IPOPT on the formulation: the generic path, for cross-checks.
+    ``solver`` says how (``Solver``): ``Solver(accelerators=False)`` solves every type as one
+    without a reduced solver would be, by cold multistart IPOPT on the formulation: the
+    generic path, for cross-checks.
     ``include`` and ``tolerance`` add to each candidate what they add to an analysis
     (``synth.analyze``): motion quality, sensitivities, the envelope.
 
@@ -83,17 +79,17 @@ def synthesize(
     if max_candidates is None:
         max_candidates = min(PER_TYPE * (len(specs) if objective == PARETO else 1), MAX_CANDIDATES)
     deadline = t0 + time_budget_ms / 1000
-    targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline)
+    targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline, solver)
     extras = {"include": include, "tolerance": tolerance}
     if objective == PARETO:
-        cands, infeasible = pareto(specs, targets, max_candidates, per_type, extras, accelerators)
+        cands, infeasible = pareto(specs, targets, max_candidates, per_type, extras)
     elif objective in MOTION_OBJECTIVES:
         extras["include"] = sorted({*include, "motion"})  # what the objective measures
         cands, infeasible = motion(
-            specs, targets, max_candidates, extras, accelerators, max_working_speed_fluctuation
+            specs, targets, max_candidates, extras, max_working_speed_fluctuation
         )
     else:
-        cands, infeasible = _single(specs, targets, max_candidates, extras, accelerators)
+        cands, infeasible = _single(specs, targets, max_candidates, extras)
     return SynthesisResult(
         candidates=tuple(cands),
         infeasible=tuple(infeasible),
@@ -102,9 +98,9 @@ def synthesize(
     )
 
 
-def _single(specs, t: Targets, max_candidates: int, extras: dict[str, Any], accelerators: bool):
+def _single(specs, t: Targets, max_candidates: int, extras: dict[str, Any]):
     """One criterion: the best ``max_candidates`` designs of all types, ranked."""
-    searched = [search(get(spec.type), spec, i, t, accelerators) for i, spec in enumerate(specs)]
+    searched = [search(get(spec.type), spec, i, t) for i, spec in enumerate(specs)]
     found, left = _verified(searched, t, max_candidates, extras)
     infeasible = [
         diagnose(get(spec.type), spec, t, s)

@@ -1,5 +1,5 @@
 """Every type's reduced solver against the generic path (cold multistart IPOPT on the same
-formulation, ``accelerators=False``) on random targets: never a worse optimum, and the same
+formulation, ``Solver(accelerators=False)``) on random targets: never a worse optimum, and the same
 one to 1e-9 wherever the generic path finds it.
 
 The targets come from random valid designs (tests/designs.py, analysed by the independent
@@ -16,6 +16,8 @@ import synth
 
 from . import bruteforce
 from .designs import random_designs
+
+GENERIC = synth.Solver(accelerators=False)  # the generic path: the reduced solvers off
 
 QUICK_RETURN = ("offset_slider_crank", "crank_shaper", "whitworth", "crank_rocker_slider",
                 "drag_link_slider")  # fmt: skip
@@ -74,7 +76,7 @@ def compare(mtype, cases, n):
         spec = [{"type": mtype, "fixed": fixed, "bounds": bounds[0] if bounds else {}}]
         args = (tr, stroke, bound, spec, objective)
         ours = best(synth.synthesize(*args, max_candidates=1), objective)
-        generic = best(synth.synthesize(*args, max_candidates=1, accelerators=False), objective)
+        generic = best(synth.synthesize(*args, max_candidates=1, solver=GENERIC), objective)
         if generic is None:
             continue
         if ours is None:

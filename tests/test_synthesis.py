@@ -10,11 +10,13 @@ import math
 import pytest
 
 import synth
-from synth import search
+from synth.solve import multistart
 
 from . import bruteforce
 from . import reference_cases as ref
 from .test_reference_cases import seed002_couplers
+
+GENERIC = synth.Solver(accelerators=False)  # the generic path: the reduced solvers off
 
 
 def assert_meets(c, tr, stroke, bound_deg):
@@ -172,7 +174,7 @@ def test_a_fixed_follower_with_two_links_at_their_bounds_is_answered_exactly(tr,
     targets drag_link_slider/f007 and f086. The answer must be the generic multistart's."""
     mechs = [{"type": "drag_link_slider", "fixed": {"follower": follower}}]
     (c,) = synth.synthesize(tr, stroke, 0.0, mechs, max_candidates=1).candidates
-    (g,) = synth.synthesize(tr, stroke, 0.0, mechs, max_candidates=1, accelerators=False).candidates
+    (g,) = synth.synthesize(tr, stroke, 0.0, mechs, max_candidates=1, solver=GENERIC).candidates
     assert c.method == "closed_form"
     assert c.min_transmission_angle_deg >= g.min_transmission_angle_deg - 1e-9
     assert_meets(c, tr, stroke, 0.0)
@@ -205,17 +207,16 @@ def test_the_best_angle_in_a_refusal_is_over_every_variant():
 
 
 @pytest.mark.parametrize("mtype", ["crank_rocker_slider", "drag_link_slider"])
-def test_a_bound_no_rod_meets_is_refused_without_ipopt(mtype, monkeypatch):
+def test_a_bound_no_rod_meets_is_refused_without_ipopt(mtype):
     """min_size at 89.9°: no rod is long enough, so the rod variant's grid had no start and
     its answer was inexact; IPOPT searched, then diagnosed (200–300 ms for a refusal). A rod
     only adds a joint: the best coupler without it already misses the bound. The angle is
     the generic path's (IPOPT's)."""
     spec = [{"type": mtype}]
-    generic = synth.synthesize(1.6, 1.0, 89.9, spec, objective="min_size", accelerators=False)
+    generic = synth.synthesize(1.6, 1.0, 89.9, spec, objective="min_size", solver=GENERIC)
     runs = []
-    inner = search.multistart
-    monkeypatch.setattr(search, "multistart", lambda *a, **k: runs.append(1) or inner(*a, **k))
-    (why,) = synth.synthesize(1.6, 1.0, 89.9, spec, objective="min_size").infeasible
+    counted = synth.Solver(local=lambda *a, **k: runs.append(1) or multistart(*a, **k))
+    (why,) = synth.synthesize(1.6, 1.0, 89.9, spec, objective="min_size", solver=counted).infeasible
     assert why.code == "TRANSMISSION_UNREACHABLE" and not runs
     (other,) = generic.infeasible
     assert why.best_transmission_angle_deg == pytest.approx(
