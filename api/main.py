@@ -1,4 +1,5 @@
-"""The ASGI app: ``uvicorn api.main:app``. One handler turns synth's domain errors into HTTP."""
+"""The ASGI app: ``uvicorn api.main:app``. Its handlers turn synth's domain errors, placed in
+the request by the routers, into 422s, and every other refusal into FastAPI's shape."""
 
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager

@@ -1,7 +1,9 @@
-"""Domain errors: misuse and designs that cannot run. Turned into HTTP in one handler (api.main).
+"""Domain errors: misuse and designs that cannot run. The API places them in the request and
+answers a 422 (api.routers.common, api.main).
 
-Every error carries ``loc`` (the parameter or field names it concerns) and a message that states
-the condition with its numbers, so a caller can fix the input without reading the code.
+Every error carries ``loc`` (the argument it concerns, as a Python caller names it: a parameter,
+or a path such as ``("mechanisms", 0, "bounds", "crank")``) and a message that states the
+condition with its numbers, so a caller can fix the input without reading the code.
 """
 
 from __future__ import annotations
