@@ -76,7 +76,7 @@ SYNTHESIZE = {
 }
 
 SWEEP = {
-    "seed002_fig5": Example(
+    "drag_link_project_fig5": Example(
         summary="Podhorodeski et al. (2005), Fig. 5: the adjustable coupler's range",
         value={
             "mechanism": {"type": "drag_link_slider", "params": DRAG_LINK},

@@ -66,19 +66,19 @@ def test_unknown_type_is_404_with_the_known_types(client):
     assert "known types: scotch_yoke" in err["msg"]
 
 
-def test_analyze_seed000_table(client):
-    body = {"mechanism": design("crank_shaper", **ref.SEED000_PARAMS), "samples": 36}
+def test_analyze_slotted_lever_lab_table(client):
+    body = {"mechanism": design("crank_shaper", **ref.SLOTTED_LEVER_LAB_PARAMS), "samples": 36}
     r = client.post("/v1/analyze", json=body)
     assert r.status_code == 200
     out = r.json()
-    x = ref.SEED000_SCALE_ZERO + np.array(out["curves"]["position"])
-    np.testing.assert_allclose(x, ref.SEED000_THEORY[:-1], atol=0.005 + 1e-9)
+    x = ref.SLOTTED_LEVER_LAB_SCALE_ZERO + np.array(out["curves"]["position"])
+    np.testing.assert_allclose(x, ref.SLOTTED_LEVER_LAB_THEORY[:-1], atol=0.005 + 1e-9)
     assert out["time_ratio"] == pytest.approx(1.38340, abs=5e-6)
     assert out["extremes"]["max"]["crank_angle_deg"] == pytest.approx(104.48, abs=0.005)
     assert out["grashof"] is None and out["reversals"] == 2
 
 
-def test_analyze_seed003_scotch_yoke(client):
+def test_analyze_slotted_link_lab_scotch_yoke(client):
     body = {"mechanism": design("scotch_yoke", crank=35.0), "crank_angles_deg": [20.0]}
     out = client.post("/v1/analyze", json=body).json()
     assert 35.0 - out["curves"]["position"][0] == pytest.approx(2.11, abs=0.005)
@@ -87,7 +87,7 @@ def test_analyze_seed003_scotch_yoke(client):
     assert out["time_ratio"] == pytest.approx(1.0) and out["transmission"]["min_deg"] == 90.0
 
 
-def test_analyze_seed002_at_60deg(client):
+def test_analyze_drag_link_project_at_60deg(client):
     p = {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504}
     body = {"mechanism": design("drag_link_slider", **p), "crank_speed": 10.0,
             "crank_angles_deg": [60.0]}  # fmt: skip
@@ -141,7 +141,7 @@ def test_invalid_design_names_each_parameter(client):
     assert detail[0]["type"] == "invalid_design"
 
 
-def test_synthesize_seed002(client):
+def test_synthesize_drag_link_project(client):
     spec = {"type": "drag_link_slider", "fixed": {**ref.DRAG_LINK_FIXED, "connecting_rod": 0.3}}
     body = {"time_ratio": 1.5, "stroke": 0.3, "mechanisms": [spec]}
     out = client.post("/v1/synthesize", json=body).json()
@@ -201,7 +201,7 @@ def test_synthesize_infeasible_is_200_with_reasons(client):
     assert out["infeasible"][0]["code"] == "TIME_RATIO_UNREACHABLE"
 
 
-def test_sweep_seed002_fig5(client):
+def test_sweep_drag_link_project_fig5(client):
     body = {"mechanism": design("drag_link_slider", **ref.DRAG_LINK_PROJECT, coupler=0.3),
             "vary": "coupler", "start": 0.1, "stop": 0.5, "points": 41}  # fmt: skip
     out = client.post("/v1/sweep", json=body).json()

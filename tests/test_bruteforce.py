@@ -26,7 +26,7 @@ def rel(a, b):
 
 # ------------------------------------------------------------------ reference cases
 # the slotted-lever lab handout, Table 1, theory column (X = 70 + s), crank angle 0, 10, …, 360°
-SEED000 = [
+SLOTTED_LEVER_LAB_TABLE = [
     70.00,
     78.36,
     86.58,
@@ -68,10 +68,10 @@ SEED000 = [
 LAB = dict(crank=40, pivot_distance=160, lever=240, ram_link=0)
 
 
-def test_seed000_table_and_extremes():
+def test_slotted_lever_lab_table_and_extremes():
     th = np.radians(np.arange(0, 361, 10))
     x = 70 + bf.position("crank_shaper", LAB, th)
-    assert np.max(np.abs(x - SEED000)) <= 0.005 + 1e-9
+    assert np.max(np.abs(x - SLOTTED_LEVER_LAB_TABLE)) <= 0.005 + 1e-9
     r = bf.simulate("crank_shaper", LAB)
     assert 70 + r["s_max"] == pytest.approx(130.0, abs=1e-12)
     assert 70 + r["s_min"] == pytest.approx(10.0, abs=1e-12)
@@ -104,7 +104,7 @@ def test_crank_shaper_ex2_lever_inclination():
     assert p["ram_link"] == 0
 
 
-def test_whitworth_seed004_ex3():
+def test_whitworth_textbook_example3():
     r = bf.simulate("whitworth", dict(crank=75, pivot_distance=50, lever=150, connecting_rod=200))
     assert round(r["time_ratio"], 5) == 2.73524
     assert round(D(2 * math.pi - r["working_angle"]), 2) == 96.38
@@ -113,7 +113,7 @@ def test_whitworth_seed004_ex3():
         bf.simulate("whitworth", dict(crank=75, pivot_distance=50, lever=150, connecting_rod=135))
 
 
-def test_scotch_yoke_seed003():
+def test_scotch_yoke_slotted_link_lab():
     p = dict(crank=35)
     th = np.radians(np.arange(0, 361, 10))
     x = 35 - bf.position("scotch_yoke", p, th)  # x = r(1 - cos)
@@ -145,7 +145,7 @@ PROJECT = dict(ground=0.1, crank=0.225, follower=0.275, follower_arm=0.15, conne
 @pytest.mark.parametrize("coupler, mu", [(0.2504, 27.01), (0.1544, 9.09)])
 def test_drag_link_project(coupler, mu):
     exact = drag_link_coupler(0.1, 0.225, 0.275, 1.5)
-    # eq. (13) gives 0.154344 / 0.250428: the seed's "0.1544" is its own rounding slip
+    # eq. (13) gives 0.154344 / 0.250428: the paper's "0.1544" is its own rounding slip
     assert np.allclose(exact, [0.1544, 0.2504], atol=1e-4)
     # the printed 4-decimal coupler: loose (the coupler is rounded; 0.1544 gives 9.15 deg)
     r = bf.simulate("drag_link_slider", dict(PROJECT, coupler=coupler))
@@ -167,7 +167,7 @@ def test_drag_link_fig5_range():
     }
     c_min = min(tr, key=tr.get)
     assert 1.4295 < tr[c_min] < 1.4305 and 0.18 < c_min < 0.195
-    # r3 = 0.40 is the Grashof change point (dyad straight at theta = 0); the seed prints 5.538,
+    # r3 = 0.40 is the Grashof change point (dyad straight at theta = 0); the paper prints 5.538,
     # its eqs. (3)-(5) give 3.538
     r = bf.simulate("drag_link_slider", dict(PROJECT, coupler=0.4))
     assert round(r["time_ratio"], 3) == 3.538

@@ -92,7 +92,7 @@ def test_drag_link_pins_are_on_its_circuit(params):
     assert np.all(cross(ao4, ab) >= -1e-12 * size**2)
 
 
-def test_seed002_drawing_at_90_degrees():
+def test_drag_link_project_drawing_at_90_degrees():
     p = {"ground": 0.1, "crank": 0.225, "coupler": 0.2504, "follower": 0.275,
          "follower_arm": 0.15, "connecting_rod": 0.3}  # fmt: skip
     j = synth.joints("drag_link_slider", p, [90.0])

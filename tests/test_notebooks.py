@@ -1,6 +1,6 @@
 """Every notebook runs top to bottom in a fresh kernel from this environment, so none can rot.
 
-The notebooks check their own claims (``assert`` in their cells: the seed tables to 0.01, the
+The notebooks check their own claims (``assert`` in their cells: the sources' tables to 0.01, the
 couplers, the round trips), so executing them is the test. They are committed without outputs.
 """
 

@@ -1,6 +1,6 @@
 """Named regression tests for what the numerical-stability suite (test_stress.py) found.
 
-The referee is the 50-digit closed form (tests/exact.py) or the seed's own equations, never
+The referee is the 50-digit closed form (tests/exact.py) or the source's own equations, never
 synth's code.
 """
 

@@ -14,7 +14,7 @@ from synth.solve import multistart
 
 from . import bruteforce
 from . import reference_cases as ref
-from .test_reference_cases import seed002_couplers
+from .test_reference_cases import podhorodeski_couplers
 
 GENERIC = synth.Solver(accelerators=False)  # the generic path: the reduced solvers off
 
@@ -32,13 +32,13 @@ def assert_meets(c, tr, stroke, bound_deg):
 PROJECT = {"type": "drag_link_slider", "fixed": {**ref.DRAG_LINK_FIXED, "connecting_rod": 0.3}}
 
 
-def test_seed002_project_gives_exactly_the_two_couplers():
+def test_drag_link_project_project_gives_exactly_the_two_couplers():
     r = synth.synthesize(ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 0.0, mechanisms=[PROJECT])
     assert r.complete and not r.infeasible
     couplers = sorted(c.params["coupler"] for c in r.candidates)
     assert len(couplers) == 2
     # eqs. (7)–(13) written out in the reference test, against the printed 0.1544 / 0.2504
-    assert couplers == pytest.approx(seed002_couplers(ref.DRAG_LINK_TR), rel=1e-12)
+    assert couplers == pytest.approx(podhorodeski_couplers(ref.DRAG_LINK_TR), rel=1e-12)
     assert couplers == pytest.approx(ref.DRAG_LINK_COUPLERS, abs=1e-4)
     for c in r.candidates:
         assert c.params["follower_arm"] == pytest.approx(0.15, rel=1e-12)
@@ -48,7 +48,7 @@ def test_seed002_project_gives_exactly_the_two_couplers():
     assert [round(c.min_transmission_angle_deg, 2) for c in r.candidates] == [27.01, 9.09]
 
 
-def test_seed002_project_with_a_20deg_bound_keeps_only_the_long_coupler():
+def test_drag_link_project_project_with_a_20deg_bound_keeps_only_the_long_coupler():
     r = synth.synthesize(ref.DRAG_LINK_TR, ref.DRAG_LINK_STROKE, 20.0, mechanisms=[PROJECT])
     (c,) = r.candidates
     assert c.params["coupler"] == pytest.approx(0.2504, abs=1e-4)
