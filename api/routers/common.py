@@ -53,7 +53,8 @@ async def run(
     """Run ``op`` on the engine (see ``Engine.run`` for ``inline`` and ``deadline``) once its
     checks pass; a domain error goes where ``locate`` places it in the request body."""
     try:
-        CHECKS[op](**kwargs)
+        if not inline:  # inline, the operation itself raises the same at once
+            CHECKS[op](**kwargs)
         return await engine.run(op, inline, deadline, **kwargs)
     except SynthError as e:
         raise Located(e, locate(e)) from None
