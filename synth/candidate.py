@@ -12,28 +12,19 @@ from .quality import MOTION_OBJECTIVES, measure
 from .reduced import MAX_TRANSMISSION, MIN_SIZE
 from .results import Candidate, Family
 from .search import Proposal, Searched, Targets, Variant
-from .verify import verify, verify_many
-
-_UNCHECKED = object()
+from .verify import verify
 
 
 def candidate(
-    m: Mechanism,
-    p: Proposal,
-    t: Targets,
-    variants: list[Variant],
-    extras: dict[str, Any],
-    checked: Any = _UNCHECKED,
+    m: Mechanism, p: Proposal, t: Targets, variants: list[Variant], extras: dict[str, Any]
 ) -> Candidate | None:
     """The proposal as a candidate if the forward analysis finds that it meets the targets;
-    ``extras`` (include, tolerance) are added to its analysis. ``checked``: its verification
-    (``verify``'s answer), where it was verified with others (``first_many``)."""
+    ``extras`` (include, tolerance) are added to its analysis."""
     try:
         params = m.complete(p.params)
     except SynthError:
         return None
-    if checked is _UNCHECKED:
-        checked = verify(m.type, params, t.time_ratio, t.stroke, t.bound_deg, **extras)
+    checked = verify(m.type, params, t.time_ratio, t.stroke, t.bound_deg, **extras)
     if checked is None:
         return None
     a, residuals = checked
@@ -114,36 +105,6 @@ def first(m: Mechanism, s: Searched, t: Targets, asked: Targets, extras) -> Cand
         if c is not None:
             return c
     return None
-
-
-def first_many(
-    m: Mechanism, found: list[tuple[Searched, Targets]], asked: Targets, extras
-) -> list[Candidate | None]:
-    """``first`` of several searches of one type (a front's points): the best proposal of
-    each verified together (``verify_many``), then, where one fails, the rest of its search's
-    proposals in order, as ``first`` would."""
-    ranked = [sorted(s.proposals, key=predicted_rank(t.objective)) for s, t in found]
-    heads, params = [], []
-    for k, ps in enumerate(ranked):
-        try:
-            params.append(m.complete(ps[0].params) if ps else None)
-        except SynthError:
-            params.append(None)
-        if params[-1] is not None:
-            heads.append(k)
-    a = asked
-    checks = verify_many(m.type, [params[k] for k in heads], a.time_ratio, a.stroke,
-                         a.bound_deg, **extras)  # fmt: skip
-    checked = dict(zip(heads, checks, strict=True))
-    out: list[Candidate | None] = []
-    for k, ((s, _), ps) in enumerate(zip(found, ranked, strict=True)):
-        c = None
-        for j, p in enumerate(ps):
-            c = candidate(m, p, asked, s.variants, extras, checked.get(k) if j == 0 else _UNCHECKED)
-            if c is not None:
-                break
-        out.append(c)
-    return out
 
 
 def predicted_rank(objective: str):

@@ -7,7 +7,7 @@ import time
 from dataclasses import replace
 from typing import Any
 
-from .candidate import first, first_many, rank
+from .candidate import first, rank
 from .diagnose import diagnose
 from .mechanisms import get
 from .reduced import MAX_TRANSMISSION, MIN_SIZE
@@ -59,8 +59,7 @@ def _front(spec: Spec, i: int, top: Candidate, low: Candidate | None, n: int, t:
     optimum with μ as the bound), so none beats another in both. Without a bound the points
     sit at k/n of the best angle (k = 1 … n). Points found twice (a front that jumps) are
     dropped, as are points past the budget. Each point's search starts from the previous
-    one's (``near``, the low end's first): a reduced solver may continue from its optima;
-    the inner points are verified together (``first_many``)."""
+    one's (``near``, the low end's first): a reduced solver may continue from its optima."""
     m = get(spec.type)
     if n == 1 or _flat(low, top):
         ends = (MIN_SIZE, MAX_TRANSMISSION) if _flat(low, top) else (MAX_TRANSMISSION,)
@@ -81,7 +80,7 @@ def _front(spec: Spec, i: int, top: Candidate, low: Candidate | None, n: int, t:
         at = replace(t, objective=MIN_SIZE, bound_deg=mu)
         near = search(m, spec, i, at, near)
         found.append((near, at))
-    points += [c for c in first_many(m, found, t, extras) if c is not None]
+    points += [c for c in (first(m, s, at, t, extras) for s, at in found) if c is not None]
     kept: list[Candidate] = []  # the non-dominated, best angle first
     for c in sorted(points, key=lambda c: (-c.min_transmission_angle_deg, c.size)):
         if all(c.size < k.size * (1 - FLAT) for k in kept):

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from . import quality
-from .errors import InvalidDesign, InvalidParameters, SynthError
+from .errors import InvalidDesign, InvalidParameters
 from .mechanisms import Mechanism, get
 from .mechanisms._fourbar import grashof_class
 from .model import Model, model
@@ -31,7 +31,7 @@ from .results import (
     Tolerance,
     Transmission,
 )
-from .roots import TWO_PI, stationary_points, stationary_points_many
+from .roots import TWO_PI, stationary_points
 
 MAX_CURVE_POINTS = 100_000
 INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis adds only when asked
@@ -63,61 +63,7 @@ def analyze(
     """
     check_include(include)
     deg = curve_angles(crank_angles_deg, samples)
-    m, p, variant, f, pv, points = _prepared(mechanism, params)  # the design checked there
-    return _analysis(m, p, variant, f, pv, points, crank_speed, crank_acceleration, deg,
-                     include, tolerance)  # fmt: skip
-
-
-def analyze_many(
-    mechanism: str,
-    designs: Sequence[Mapping[str, float]],
-    *,
-    include: Collection[str] = (),
-    tolerance: Tolerance | None = None,
-) -> list[Analysis | SynthError]:
-    """``analyze`` of several designs of one type (a front's points), each in its place or
-    the error it raises: the same analysis, the stationary points of the designs that share
-    a structural variant found together (``roots.stationary_points_many``)."""
-    check_include(include)
-    m = get(mechanism)
-    out: list = [None] * len(designs)
-    groups: dict[frozenset[str], list] = {}
-    for i, params in enumerate(designs):
-        try:
-            p = m.complete(params)
-        except SynthError as e:
-            out[i] = e
-            continue
-        variant = m.variant(p)
-        groups.setdefault(variant, []).append((i, p, np.array([p[n] for n in m.names], float)))
-    for variant, group in groups.items():
-        f = model(m, variant)
-        pvs = [pv for _, _, pv in group]
-        found = stationary_points_many(f, pvs) if len(pvs) > 1 else [_found(f, pvs[0])]
-        for (i, p, pv), points in zip(group, found, strict=True):
-            if isinstance(points, SynthError):
-                out[i] = points
-                continue
-            try:
-                out[i] = _analysis(m, p, variant, f, pv, points, 1.0, 0.0, None, include,
-                                   tolerance)  # fmt: skip
-            except SynthError as e:
-                out[i] = e
-    return out
-
-
-def _found(f: Model, pv: np.ndarray):
-    try:
-        return stationary_points(f, pv)
-    except SynthError as e:
-        return e
-
-
-def _analysis(m, p, variant, f, pv, points, crank_speed, crank_acceleration, deg, include,
-              tolerance) -> Analysis:  # fmt: skip
-    """The analysis of a design whose stationary points are found (``analyze``), with curves
-    at ``deg`` (checked, ``curve_angles``; None: none)."""
-    rows, theta, values = points
+    m, p, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)  # checked there
     summary = _summary(m, p, f, rows, theta, values)
     if deg is not None:
         summary["curves"] = _curves(f, pv, crank_speed, crank_acceleration, deg)

@@ -21,7 +21,6 @@ from .mechanisms._fourbar_construction import construction
 from .native import native
 
 GRID = 128  # samples per revolution that bracket the stationary points
-MAX_PAIRS = 8 * GRID  # the most (θ, p) pairs a call evaluates through a buffer
 
 _local = threading.local()
 
@@ -105,7 +104,6 @@ class _Batched:
         out = ca.densify(out)  # structural zeros (a fixed pivot, a constant row) as numbers
         self.fn = native(ca.Function(name, [th, pv], [out], {"cse": True}))
         self.buffers: dict[int, tuple] = {}
-        self.pair_buffers: dict[int, tuple] = {}
 
     def __call__(self, theta, pv: np.ndarray) -> np.ndarray:
         theta = np.atleast_1d(theta)
@@ -119,30 +117,7 @@ class _Batched:
         run()
         return out.T.copy()  # the buffer is reused by the next call
 
-    def pairs(self, theta: np.ndarray, pvs: np.ndarray) -> np.ndarray:
-        """out at each θ with its own parameters (row i of ``pvs``), as columns: several
-        designs in one call, each column the same numbers as a call for its design alone
-        (the same compiled function, mapped)."""
-        n = theta.size
-        if n > MAX_PAIRS:
-            return self.fn(theta[None, :], pvs.T).full()
-        if n not in self.pair_buffers:
-            self.pair_buffers[n] = self._buffer(n, pairs=True)
-        x, p, out, run, _ = self.pair_buffers[n]
-        x[:], p[:] = theta, pvs
-        run()
-        return out.T.copy()
-
-    def _buffer(self, width: int, pairs: bool = False) -> tuple:
-        if pairs:  # θ and p both per column; p (width, params) row-major is column-major
-            f = self.fn.map(width, [False, False], [False])
-            x, p = np.zeros(width), np.zeros((width, self.fn.nnz_in(1)))
-            out = np.zeros((width, self.fn.nnz_out(0)))
-            buf, run = f.buffer()
-            buf.set_arg(0, memoryview(x))
-            buf.set_arg(1, memoryview(p))
-            buf.set_res(0, memoryview(out))
-            return x, p, out, run, buf
+    def _buffer(self, width: int) -> tuple:
         f = self.fn.map(width, [False, True], [False])
         x, p = np.zeros(width), np.zeros(self.fn.nnz_in(1))
         out = np.zeros((width, self.fn.nnz_out(0)))  # column-major (rows, width)
