@@ -21,6 +21,7 @@ from .mechanisms._fourbar_construction import construction
 from .native import native
 
 GRID = 128  # samples per revolution that bracket the stationary points
+POLISH_STEPS = 8  # safeguarded Newton steps a compiled polish takes (``Polisher``)
 
 _local = threading.local()
 
@@ -52,11 +53,14 @@ class Model:
         base = "_".join((m.type, *sorted(variant)))  # one symbol per compiled library
         self.name = f"{base}_{kind}"
         self.fn = _Batched(self.name, th, pv, ca.vertcat(g, g1, g2))
+        self.polish = Polisher(f"{self.name}_polish", th, pv, g1, g2)
         self._rows = (th, pv, ca.vertcat(g, g1))
-        self.dead = None
+        self.dead = self.dead_polish = None
         if kind == "kinematics" and m.dead_centres is not None:
             h = m.dead_centres(p, th)
-            self.dead = _Batched(f"{base}_dead_centres", th, pv, ca.vertcat(h, ca.jacobian(h, th)))
+            dh = ca.jacobian(h, th)
+            self.dead = _Batched(f"{base}_dead_centres", th, pv, ca.vertcat(h, dh))
+            self.dead_polish = Polisher(f"{base}_dead_centres_polish", th, pv, h, dh)
 
     def __call__(self, theta: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, ...]:
         """g, g', g'' at each θ: arrays of shape (rows, len(θ))."""
@@ -128,6 +132,53 @@ class _Batched:
         return x, p, out, run, buf  # buf holds the bindings run uses
 
 
+class Polisher:
+    """Roots of one row each of d(θ) (d′ its derivative), from brackets where it changes sign:
+    ``POLISH_STEPS`` safeguarded Newton steps (bisection where Newton leaves the bracket)
+    unrolled into one compiled function, mapped over the roots, each with its own row and
+    parameters. A call replaces the several evaluations and the Python loop of a step-by-step
+    iteration; the caller checks convergence and finishes the others (``roots._rtsafe``)."""
+
+    def __init__(self, name: str, th: ca.SX, pv: ca.SX, d: ca.SX, d1: ca.SX) -> None:
+        w = ca.SX.sym("w", d.numel())  # the root's row, one-hot
+        row = ca.Function("row", [th, pv, w], [ca.dot(w, d), ca.dot(w, d1)])
+        x = x0 = ca.SX.sym("x0")
+        lo, hi, rising = ca.SX.sym("lo"), ca.SX.sym("hi"), ca.SX.sym("rising")
+        a, b, fx, step = lo, hi, ca.SX(0), ca.SX(0)
+        for _ in range(POLISH_STEPS):
+            fx, dfx = row(x, pv, w)
+            on_lo = rising * fx < 0  # on lo's side of the root
+            a, b = ca.if_else(on_lo, x, a), ca.if_else(on_lo, b, x)
+            xn = x - fx / dfx
+            nxt = ca.if_else(ca.logic_and(xn >= a, xn <= b), xn, 0.5 * (a + b))
+            x, step = nxt, nxt - x
+        out = ca.vertcat(x, step, fx, b - a)
+        fn = ca.Function(name, [x0, lo, hi, rising, w, pv], [out], {"cse": True})
+        self.fn, self.rows, self.np = native(fn), d.numel(), pv.numel()
+        self.buffers: dict[int, tuple] = {}
+
+    def __call__(self, x0, lo, hi, rising, rows, pv) -> np.ndarray:
+        """(x, the last step, d at the point before it, the bracket's width) per root: shape
+        (4, n). ``rows``: each root's row; ``pv``: the parameters, (n, p) or shared (p,)."""
+        n = len(x0)
+        if n not in self.buffers:
+            f = self.fn.map(n)
+            args = [np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
+                    np.zeros((n, self.rows)), np.zeros((n, self.np))]  # fmt: skip
+            out = np.zeros((n, 4))  # column-major (4, n)
+            buf, run = f.buffer()
+            for i, a in enumerate(args):
+                buf.set_arg(i, memoryview(a))
+            buf.set_res(0, memoryview(out))
+            self.buffers[n] = (args, out, run, buf)  # buf holds the bindings run uses
+        (a0, a1, a2, a3, w, p), out, run, _ = self.buffers[n]
+        a0[:], a1[:], a2[:], a3[:], p[:] = x0, lo, hi, rising, pv
+        w[:] = 0.0
+        w[np.arange(n), rows] = 1.0
+        run()
+        return out.T.copy()
+
+
 def model(m: Mechanism, variant: frozenset[str], kind: str = "kinematics") -> Model:
     """The compiled model, cached per thread: CasADi functions are never shared by threads."""
     cache: dict[tuple, Model] = _local.__dict__.setdefault("models", {})
@@ -146,9 +197,11 @@ def compile_all() -> None:
         for k in range(len(optional) + 1):
             for parts, kind in itertools.product(itertools.combinations(optional, k), KINDS):
                 f = Model(m, frozenset(parts), kind)
-                for fn in (f.fn.fn, f._dp.fn, f.dead and f.dead.fn):
+                fns = (f.fn.fn, f._dp.fn, f.polish.fn, f.dead and f.dead.fn,
+                       f.dead_polish and f.dead_polish.fn)  # fmt: skip
+                for fn in fns:
                     if fn is not None and fn.class_name() != "External":
                         raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.native)")
-    fn = construction().fn  # the four-bar types' reduced synthesis
-    if fn.class_name() != "External":
-        raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.native)")
+    for fn in (construction().fn, construction().taylor_fn):  # the four-bars' reduced synthesis
+        if fn.class_name() != "External":
+            raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.native)")

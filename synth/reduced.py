@@ -10,8 +10,8 @@ stated problem, and an empty answer proves that no design exists. Anything it ca
 (``None``, or not ``exact``) goes to IPOPT, warm-started from the designs it did find.
 
 This module holds what the solvers share: the problem, the answer, the rule for a connecting
-rod, and Newton's method on a Lagrangian with central-difference derivatives (one batch of
-points per step).
+rod, and Newton's method on a Lagrangian (exact derivatives where a solver compiles them,
+else central differences).
 """
 
 from __future__ import annotations
@@ -146,102 +146,94 @@ def intersect(*intervals: tuple[float, float]) -> tuple[float, float] | None:
     return (lo, hi) if lo <= hi else None
 
 
+# A point's local model: the values of a problem's rows (the objective, then the equalities),
+# their gradients and their Hessians, in Python floats; None where the point is not a design
+Taylor = tuple[list[float], list[list[float]], list[list[list[float]]]]
+
+
 def newton(
-    fn: Callable[[np.ndarray], np.ndarray],
+    local: Callable[[list[float]], Taylor | None],
     x0: np.ndarray,
     n_eq: int,
-    scale: np.ndarray,
     iters: int = 30,
     keep: list | None = None,
     halvings: int | None = None,
 ) -> np.ndarray | None:
-    """A stationary point of ``fn(X)[0]`` on the set where ``fn(X)[1:1 + n_eq]`` = 0, from x0.
-
-    ``fn`` maps points (m, d) to values (1 + n_eq, m), NaN where a point is not a design.
-    Newton's method on the Lagrangian's stationarity and the equalities (with n_eq = d it is
-    root finding), derivatives by central differences over ±``scale`` × 1e-5 (one batch of
-    ≤ 9 points a step, so a step costs one vectorised evaluation); a step that leaves the
-    designs (or the stencil around it) is halved. Returns None when it does not converge.
+    """A stationary point of the first row on the set where the next ``n_eq`` rows are 0,
+    from x0: Newton's method on the Lagrangian's stationarity and the equalities (with n_eq =
+    d it is root finding), on the rows' values, gradients and Hessians (``local``: exact where
+    the problem compiles them, else ``differences``). A step that leaves the designs is
+    halved. Returns None when it does not converge.
 
     The algebra of a step (a system of at most four unknowns) is done in Python floats:
     numpy's per-call overhead on such small arrays cost several times the evaluation.
-    ``keep`` (a list) receives ``fn`` at the answer's stencil, for derivatives there;
-    ``halvings`` caps the halvings of a step (by default 30, 8 for root finding).
+    ``keep`` (a list) receives ``local`` at the answer, for derivatives there; ``halvings``
+    caps the halvings of a step (by default 30, 8 for root finding).
     """
     d = x0.size
-    sc = np.broadcast_to(np.asarray(scale, dtype=float), (d,))
-    h = (1e-5 * sc).tolist()
-    offsets = _stencil(d) * (1e-5 * sc)
-    inv = (1.0 / sc).tolist()
-    x = np.array(x0, dtype=float)
+    x = [float(a) for a in x0]
+    t = local(x)
+    if t is None:
+        return None
     nu: list[float] | None = None
     last = math.inf
-    v = fn(x + offsets)
-    if not np.isfinite(v).all():  # later ones are checked as the step is taken
-        return None
     for it in range(iters):
-        rows = v.tolist()
-        if d == 2 and n_eq == 1:  # the common case (a size on a bound), written out
-            step, nu = _kkt_2_1(rows, h, nu)
-            if step is None:
-                return None
-        else:
-            step, nu = _kkt(rows, h, d, n_eq, nu, it)
-            if step is None:
-                return None
-        dx = np.array(step)
+        step, nu = _step(t, d, n_eq, nu, it)
+        if step is None:
+            return None
         for _ in range(halvings or (30 if n_eq < d else 8)):  # a step leaving the designs is halved
-            v = fn(x + dx + offsets)
-            if np.isfinite(v).all():
+            y = [a + b for a, b in zip(x, step, strict=True)]
+            t = local(y)
+            if t is not None:
                 break
-            dx = dx / 2
+            step = [a / 2 for a in step]
         else:
             return None
-        x = x + dx
-        # converged where the equalities hold and the step is down to the differences'
-        # rounding (~1e-11 × a condition number), or is 1e-6 and converging quadratically (it
-        # leaves ~1e-12): a stationary value is off by that squared
-        size = max(abs(a) * b for a, b in zip(dx.tolist(), inv, strict=True))
-        held = all(abs(r[0]) <= 1e-10 for r in v[1 : 1 + n_eq].tolist())
+        x = y
+        # converged where the equalities hold and the step is down to the derivatives'
+        # rounding (~1e-11 × a condition number with differences), or is 1e-6 and converging
+        # quadratically (it leaves ~1e-12): a stationary value is off by that squared
+        size = max(abs(a) for a in step)
+        held = all(abs(r) <= 1e-10 for r in t[0][1 : 1 + n_eq])
         if held and (size <= 1e-8 or (size <= 1e-6 and size <= 1e-2 * last)):
             if keep is not None:
-                keep.append(v)
-            return x
+                keep.append(t)
+            return np.array(x)
         last = size
     return None
 
 
-def _kkt_2_1(rows, h, nu):
-    """A step (and the multiplier) in two variables with one equality: ``_kkt`` written out."""
-    s, r = rows[0], rows[1]
-    h0, h1 = h
-    g0, g1 = (s[1] - s[2]) / (2 * h0), (s[3] - s[4]) / (2 * h1)
-    a0, a1 = (r[1] - r[2]) / (2 * h0), (r[3] - r[4]) / (2 * h1)
-    if nu is None:  # the least-squares multiplier
-        aa = a0 * a0 + a1 * a1
-        if not aa:
-            return None, None
-        nu = [-(a0 * g0 + a1 * g1) / aa]
-    n = nu[0]
-    cs, cr = 2 * s[0], 2 * r[0]
-    l00 = (s[1] - cs + s[2]) / (h0 * h0) + n * (r[1] - cr + r[2]) / (h0 * h0)
-    l11 = (s[3] - cs + s[4]) / (h1 * h1) + n * (r[3] - cr + r[4]) / (h1 * h1)
-    l01 = (s[5] - s[6] - s[7] + s[8]) / (4 * h0 * h1) + n * (r[5] - r[6] - r[7] + r[8]) / (
-        4 * h0 * h1
-    )
-    sol = _solve([[l00, l01, a0], [l01, l11, a1], [a0, a1, 0.0]],
-                 [-g0 - a0 * n, -g1 - a1 * n, -r[0]])  # fmt: skip
-    if sol is None:
-        return None, None
-    return sol[:2], [n + sol[2]]
+def differences(fn: Callable[[np.ndarray], np.ndarray], d: int, h: float = 1e-5):
+    """``newton``'s ``local`` by central differences of ``fn``, which maps points (m, d) to
+    rows (r, m), NaN where a point is not a design: one batch of ≤ 9 points (``_stencil``) a
+    call; a point is no design where any point of its stencil is not."""
+    offsets = _stencil(d) * h
+
+    def local(x: list[float]) -> Taylor | None:
+        v = fn(np.array(x) + offsets)
+        if not np.isfinite(v).all():
+            return None
+        rows = v.tolist()
+        grads = [[(r[1 + 2 * i] - r[2 + 2 * i]) / (2 * h) for i in range(d)] for r in rows]
+        hess = []
+        for r in rows:
+            c = 2 * r[0]
+            m = [[0.0] * d for _ in range(d)]
+            for i in range(d):
+                m[i][i] = (r[1 + 2 * i] - c + r[2 + 2 * i]) / (h * h)
+            if d == 2:
+                m[0][1] = m[1][0] = (r[5] - r[6] - r[7] + r[8]) / (4 * h * h)
+            hess.append(m)
+        return [r[0] for r in rows], grads, hess
+
+    return local
 
 
-def _kkt(rows, h, d: int, n_eq: int, nu, it: int):
-    """A Newton step from the rows at the stencil (central differences: the gradients and the
-    Hessians' diagonals, and for d = 2 the cross term): (step, multipliers), or (None, _)."""
-    grad = [[(r[1 + 2 * i] - r[2 + 2 * i]) / (2 * h[i]) for i in range(d)] for r in rows]
-    g, jac = grad[0], grad[1 : 1 + n_eq]
-    eq = [r[0] for r in rows[1 : 1 + n_eq]]
+def _step(t: Taylor, d: int, n_eq: int, nu, it: int):
+    """A Newton step from a point's local model: (step, multipliers), or (None, _)."""
+    vals, grads, hess = t
+    g, jac = grads[0], grads[1 : 1 + n_eq]
+    eq = vals[1 : 1 + n_eq]
     if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
         if it > 12:
             return None, nu
@@ -254,14 +246,10 @@ def _kkt(rows, h, d: int, n_eq: int, nu, it: int):
     # the Lagrangian's Hessian (rows weighted 1, ν) and the KKT system
     kkt = [[0.0] * (d + n_eq) for _ in range(d + n_eq)]
     rhs = [-x for x in g] + [-e for e in eq]
-    for w, r in zip([1.0, *nu], rows, strict=False):
-        c = 2 * r[0]
+    for w, m in zip([1.0, *nu], hess, strict=False):
         for i in range(d):
-            kkt[i][i] += w * (r[1 + 2 * i] - c + r[2 + 2 * i]) / (h[i] * h[i])
-        if d == 2:
-            kkt[0][1] += w * (r[5] - r[6] - r[7] + r[8]) / (4 * h[0] * h[1])
-    if d == 2:
-        kkt[1][0] = kkt[0][1]
+            for j in range(d):
+                kkt[i][j] += w * m[i][j]
     for k in range(n_eq):
         for i in range(d):
             kkt[i][d + k] = kkt[d + k][i] = jac[k][i]

@@ -45,12 +45,12 @@ def stationary_points(
     lo, hi = grid[k], grid[k] + widths[k]
     scale = np.max(np.abs(np.where(np.isfinite(g1), g1, 0)), axis=1)[rows]
 
-    nr, idx = g1.shape[0], np.arange(rows.size)
+    nr = g1.shape[0]
 
-    def derivatives(x):  # g', g'' of each root's own row
-        return f.fn(x, pv).reshape(3, nr, -1)[1:, rows, idx]
+    def derivatives(x, rows):  # g', g'' of each root's own row
+        return f.fn(x, pv).reshape(3, nr, -1)[1:, rows, np.arange(rows.size)]
 
-    x = _rtsafe(derivatives, lo, hi, g1[rows, k], nxt[rows, k], scale)
+    x = _polish(f.polish, derivatives, rows, lo, hi, g1[rows, k], nxt[rows, k], scale, pv)
     if f.dead is not None:
         x = _dead_centres(f, pv, rows, x, TWO_PI / n)
     rows = np.concatenate([rows, zr])
@@ -75,6 +75,29 @@ def _widths(grid: np.ndarray) -> np.ndarray:
 def _next(a: np.ndarray) -> np.ndarray:
     """Each column's successor around the revolution: np.roll(a, -1, axis=1), 4× cheaper."""
     return np.concatenate((a[:, 1:], a[:, :1]), axis=1)
+
+
+def _polish(polisher, fd, rows, lo, hi, f_lo, f_hi, scale, pv) -> np.ndarray:
+    """The roots of each one's row of fd (x, rows -> (value, derivative), vectorised) in the
+    brackets [lo, hi], where it changes sign from f_lo to f_hi, to machine precision: the
+    compiled Newton steps (``model.Polisher``) from the secant point, and ``_rtsafe`` for
+    any they leave unfinished (a kink, a slow start)."""
+    if rows.size == 0:
+        return np.empty(0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x0 = lo + (hi - lo) * f_lo / (f_lo - f_hi)
+    x0 = np.where(np.isfinite(x0), x0, 0.5 * (lo + hi))
+    x, step, fx, width = polisher(x0, lo, hi, np.where(f_lo < 0, 1.0, -1.0), rows, pv)
+    tol = EPS4 * np.maximum(1.0, np.abs(x))
+    # finished like ``_rtsafe``: on a root, a closed bracket, or a Newton step down to
+    # rounding where the function is ~0 too (at a kink it jumps across 0)
+    done = (fx == 0) | (width <= tol) | ((np.abs(step) <= tol) & (np.abs(fx) <= 1e-12 * scale))
+    if not done.all():
+        left = np.nonzero(~done)[0]
+        r = rows[left]
+        x[left] = _rtsafe(lambda y: fd(y, r), lo[left], hi[left], f_lo[left], f_hi[left],
+                          scale[left])  # fmt: skip
+    return x
 
 
 def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
@@ -134,7 +157,9 @@ def _dead_centres(f: Model, pv, rows, x, width: float) -> np.ndarray:
     ok = np.sign(h_lo) * np.sign(h_hi) < 0
     scale = np.maximum(np.abs(h_lo), np.abs(h_hi))[ok]
     x = x.copy()
-    x[on_s[ok]] = _rtsafe(lambda y: f.dead(y, pv), lo[ok], hi[ok], h_lo[ok], h_hi[ok], scale)
+    zero = np.zeros(np.count_nonzero(ok), dtype=int)
+    x[on_s[ok]] = _polish(f.dead_polish, lambda y, _: f.dead(y, pv), zero, lo[ok], hi[ok],
+                          h_lo[ok], h_hi[ok], scale, pv)  # fmt: skip
     return x
 
 

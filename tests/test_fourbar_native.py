@@ -72,3 +72,57 @@ def test_compiled_construction_matches_numpy(mtype):
     if mtype == "drag_link_slider":  # its rod always fits: on the line, any length reaches
         del checked["no rod"]
     assert min(checked.values()) > 20, checked  # every case was met
+
+
+@pytest.mark.parametrize("mtype", sorted(ROLES))
+def test_newton_derivatives_match_differences_of_numpy(mtype):
+    """Newton's exact local model (the compiled Taylor function, in (ψ, u), λ = 1 + e^u)
+    against central differences of the numpy evaluation, at points where two step sizes agree
+    (away from the kinks of a max or a bound)."""
+    rng = np.random.default_rng(11)
+    checked = 0
+
+    def numpy_rows(fb, sigma, x):
+        with np.errstate(all="ignore"):
+            e = fb._evaluate(sigma, np.array([x[0]]), 1 + np.exp(np.array([x[1]])))
+        return np.array([float(np.asarray(e["size"]).ravel()[0]),
+                         float(np.asarray(e["f"]).ravel()[0])])  # fmt: skip
+
+    def differences(fb, sigma, x, h):
+        grad, hess = np.zeros((2, 2)), np.zeros((2, 2, 2))
+        at = {}
+        for i in (-1, 0, 1):
+            for j in (-1, 0, 1):
+                at[i, j] = numpy_rows(fb, sigma, x + h * np.array([i, j]))
+        grad[:, 0] = (at[1, 0] - at[-1, 0]) / (2 * h)
+        grad[:, 1] = (at[0, 1] - at[0, -1]) / (2 * h)
+        hess[:, 0, 0] = (at[1, 0] - 2 * at[0, 0] + at[-1, 0]) / h**2
+        hess[:, 1, 1] = (at[0, 1] - 2 * at[0, 0] + at[0, -1]) / h**2
+        hess[:, 0, 1] = hess[:, 1, 0] = (at[1, 1] - at[1, -1] - at[-1, 1] + at[-1, -1]) / (4 * h**2)
+        return grad, hess
+
+    for p in problems(mtype, rng, 60):
+        try:
+            fb = FourBar(p, ROLES[mtype])
+        except Unreachable:
+            continue
+        if fb.ratios:  # with ratios held Newton differences the numpy evaluation itself
+            continue
+        for sigma in (1, -1):
+            local = fb._rows(sigma, "size", 0.5, True, None)
+            for _ in range(6):
+                x = np.array([rng.uniform(*fb.psi), rng.uniform(-4, 3)])
+                t = local(x.tolist())
+                if t is None:
+                    continue
+                (size, f_c), grads, hess = t
+                np.testing.assert_allclose([size, f_c + 0.5], numpy_rows(fb, sigma, x), rtol=1e-11)
+                g1, h1 = differences(fb, sigma, x, 1e-4)
+                g2, h2 = differences(fb, sigma, x, 5e-5)
+                if not (np.allclose(g1, g2, rtol=1e-6, atol=1e-9)
+                        and np.allclose(h1, h2, rtol=1e-3, atol=1e-6)):  # fmt: skip
+                    continue  # a kink within the stencil
+                np.testing.assert_allclose(grads, g2, rtol=1e-6, atol=1e-8)
+                np.testing.assert_allclose(hess, h2, rtol=1e-3, atol=1e-5)
+                checked += 1
+    assert checked > 40, checked

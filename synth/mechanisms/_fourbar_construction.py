@@ -37,7 +37,6 @@ from ..errors import Unreachable
 from ..reduced import MIN_SIZE, ONE_WAY, STRICT, Problem, rod, unreachable
 from ._fourbar_native import MAX_WIDTH, ROWS, compiled
 
-_VALID, _F, _SIZE = (ROWS.index(k) for k in ("valid", "f", "size"))
 BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
 
 
@@ -144,19 +143,6 @@ class Construction:
         e["valid"], e["feasible"] = e["valid"] > 0, e["feasible"] > 0
         e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
         return e
-
-    def rows_compiled(self, sigma, psi, lam, objective, cos_bound, bound_active) -> np.ndarray:
-        """A Newton step's rows at a few points (ψ, λ), no ratios held: the objective (f, or
-        the size) and, with the bound active, f − cos_bound; NaN where a point is not a design
-        that runs (``evaluate``'s, straight from the compiled function's output)."""
-        out = construction().at(psi, lam, self._params(sigma))  # rows ROWS
-        f, size = out[_F], out[_SIZE]
-        rows = np.empty((1 + bound_active, len(psi)))
-        rows[0] = f if objective == "f" else size
-        if bound_active:
-            rows[1] = f - cos_bound
-        rows[:, ~((out[_VALID] > 0) & np.isfinite(size))] = np.nan
-        return rows
 
     def _params(self, sigma: int) -> list[float]:
         """The compiled function's parameters (``_fourbar_native.PARAMS``) for sheet σ, kept

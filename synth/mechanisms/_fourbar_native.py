@@ -40,11 +40,30 @@ _local = threading.local()
 
 
 def _function(bound_tol: float, strict: float, one_way: float) -> ca.Function:
+    """The rows (``ROWS``) at x = (ψ, λ)."""
     x = ca.SX.sym("x", 2)
     p = ca.SX.sym("p", len(PARAMS))
+    out = _rows(x[0], x[1], p, bound_tol, strict, one_way)
+    return native(ca.Function("fourbar_construction", [x, p], [out], {"cse": True}))
+
+
+def _taylor(bound_tol: float, strict: float, one_way: float) -> ca.Function:
+    """At y = (ψ, u), λ = 1 + e^u (Newton's coordinates): valid, f, the size, their gradients
+    (TAYLOR) and Hessians (ψψ, ψu, uu), by automatic differentiation."""
+    y = ca.SX.sym("y", 2)
+    p = ca.SX.sym("p", len(PARAMS))
+    rows = _rows(y[0], 1 + ca.exp(ca.fmin(y[1], 50.0)), p, bound_tol, strict, one_way)
+    f, size = rows[ROWS.index("f")], rows[ROWS.index("size")]
+    (hf, gf), (hs, gs) = ca.hessian(f, y), ca.hessian(size, y)
+    out = ca.vertcat(rows[ROWS.index("valid")], f, size, gf, gs,
+                     hf[0, 0], hf[0, 1], hf[1, 1], hs[0, 0], hs[0, 1], hs[1, 1])  # fmt: skip
+    return native(ca.Function("fourbar_construction_taylor", [y, p], [out], {"cse": True}))
+
+
+def _rows(psi, lam, p, bound_tol: float, strict: float, one_way: float) -> ca.SX:
+    """The rows (``ROWS``) at (ψ, λ), symbolic."""
     q = {n: p[i] for i, n in enumerate(PARAMS)}
     nan, inf = ca.SX(math.nan), ca.SX(math.inf)
-    psi, lam = x[0], x[1]
     er, ei = q["ep_r"], q["ep_i"]
     # z1 = (1 − e^{iψ}) / ((1 − λ) e^{iφ} − (1 + λ) e^{iψ})
     cp, sp = ca.cos(psi), ca.sin(psi)
@@ -136,8 +155,7 @@ def _function(bound_tol: float, strict: float, one_way: float) -> ca.Function:
     l_fin = ca.logic_or(ca.logic_not(rod), l_ok)
     feasible = ca.logic_and(feasible, l_fin)
     size = k * (1 + a2 + a3 + a4) + r5 + ca.if_else(l_fin, l, 0.0)
-    out = ca.vertcat(valid, feasible, f, size, k, a2, a3, a4, r5, l, h_out, rc, slack)
-    return native(ca.Function("fourbar_construction", [x, p], [out], {"cse": True}))
+    return ca.vertcat(valid, feasible, f, size, k, a2, a3, a4, r5, l, h_out, rc, slack)
 
 
 class Compiled:
@@ -145,7 +163,22 @@ class Compiled:
 
     def __init__(self, bound_tol: float, strict: float, one_way: float) -> None:
         self.fn = _function(bound_tol, strict, one_way)
+        self.taylor_fn = _taylor(bound_tol, strict, one_way)
         self.buffers: dict[int, tuple] = {}
+        self._taylor = None
+
+    def taylor(self, psi: float, u: float, params) -> list[float]:
+        """``_taylor``'s outputs at one point (ψ, u), a list (``params`` as for ``at``)."""
+        if self._taylor is None:
+            self._taylor = self._buffer(1, self.taylor_fn, self.taylor_fn.nnz_out(0))
+        b = self._taylor
+        x, p, out, run = b[:4]
+        x[0, 0], x[0, 1] = psi, u
+        if params is not b[5]:
+            p[:] = params
+            b[5] = params
+        run()
+        return out[0].tolist()
 
     def __call__(self, points: np.ndarray, params) -> np.ndarray:
         """The rows (ROWS) at each point (ψ, λ) of ``points`` (n, 2): shape (rows, n)."""
@@ -167,10 +200,10 @@ class Compiled:
         run()
         return out.T.copy()  # the buffer is reused by the next call
 
-    def _buffer(self, width: int) -> list:
-        f = self.fn.map(width, [False, True], [False])
+    def _buffer(self, width: int, fn: ca.Function | None = None, rows: int = len(ROWS)) -> list:
+        f = (fn or self.fn).map(width, [False, True], [False])
         x, p = np.zeros((width, 2)), np.zeros(len(PARAMS))  # x column-major (2, width)
-        out = np.zeros((width, len(ROWS)))
+        out = np.zeros((width, rows))
         buf, run = f.buffer()
         buf.set_arg(0, memoryview(x))
         buf.set_arg(1, memoryview(p))

@@ -25,9 +25,8 @@ import math
 
 import numpy as np
 
-from ..reduced import MAX_TRANSMISSION, MIN_SIZE, Reduced, _solve, _stencil, clip, newton
-from ._fourbar_construction import Construction, Roles, worst_cos
-from ._fourbar_native import MAX_WIDTH
+from ..reduced import MAX_TRANSMISSION, MIN_SIZE, Reduced, _solve, clip, differences, newton
+from ._fourbar_construction import Construction, Roles, construction, worst_cos
 
 __all__ = ["FourBar", "Roles", "worst_cos"]
 
@@ -214,7 +213,7 @@ class FourBar(Construction):
         for sigma, *at in self.p.near:
             sigma = int(sigma)  # Newton from the prediction, the bound active
             rows, kept = self._rows(sigma, "size", cos_bound, True, None), []
-            x = newton(rows, _predict(at, cos_bound), 1, np.ones(2), CONTINUE, kept, SHORTCUT)
+            x = newton(rows, _predict(at, cos_bound), 1, CONTINUE, kept, SHORTCUT)
             inside = x is not None and lo < x[0] < hi
             floor = at[-1]  # the least coupler cos on the sheet's grid (NaN: not known)
             onward = self._onward(sigma, x, cos_bound, kept[0], at, floor) if inside else None
@@ -249,7 +248,7 @@ class FourBar(Construction):
         no ratios held), NaN where none was evaluated."""
         return self.__dict__.get("floors", {}).get(sigma, math.nan)
 
-    def _onward(self, sigma: int, x, cos_bound: float, v=None, before=None, floor=math.nan):
+    def _onward(self, sigma: int, x, cos_bound: float, t=None, before=None, floor=math.nan):
         """Where a front continues from x, a local minimum of the size on the bound
         (f = cos_bound): (σ, ψ, u, cos_bound, dψ/dc, du/dc, the point before: ψ, u,
         cos_bound, NaN for none, and the sheet's ``_floor``), with the optimum's tangent in
@@ -257,26 +256,18 @@ class FourBar(Construction):
         x is not a strict local minimum that holds the bound: the bound's multiplier
         ν = −∇size·∇f/|∇f|² is positive (a worse transmission would allow a smaller design)
         and the Lagrangian size + ν f curves upward along the bound's curve (second-order
-        sufficiency), both by central differences on Newton's stencil (``v``: the rows there,
-        if Newton kept them)."""
-        h = 1e-5
-        x = np.asarray(x, dtype=float)
-        if v is None:
-            v = self._rows(sigma, "size", cos_bound, True, None)(x + _stencil(2) * h)
-        if not np.isfinite(v).all():
+        sufficiency), from the local model at x (``t``: Newton's there, if it kept it)."""
+        x = [float(a) for a in x]
+        if t is None:
+            t = self._rows(sigma, "size", cos_bound, True, None)(x)
+        if t is None:
             return None
-        size, f = v.tolist()
-        gs = [(size[1 + 2 * i] - size[2 + 2 * i]) / (2 * h) for i in range(2)]
-        gf = [(f[1 + 2 * i] - f[2 + 2 * i]) / (2 * h) for i in range(2)]
+        _, (gs, gf), (hs, hf) = t
         ff = gf[0] ** 2 + gf[1] ** 2
         nu = -(gs[0] * gf[0] + gs[1] * gf[1]) / ff if ff > 0 else math.nan
         if not nu > 0:
             return None
-        hess = [[0.0, 0.0], [0.0, 0.0]]
-        for w, r in ((1.0, size), (nu, f)):
-            hess[0][0] += w * (r[1] - 2 * r[0] + r[2]) / h**2
-            hess[1][1] += w * (r[3] - 2 * r[0] + r[4]) / h**2
-            hess[0][1] += w * (r[5] - r[6] - r[7] + r[8]) / (4 * h**2)
+        hess = [[hs[i][j] + nu * hf[i][j] for j in range(2)] for i in range(2)]
         t0, t1 = -gf[1], gf[0]  # the bound's tangent
         along = t0 * t0 * hess[0][0] + 2 * t0 * t1 * hess[0][1] + t1 * t1 * hess[1][1]
         scale = (abs(hess[0][0]) + 2 * abs(hess[0][1]) + abs(hess[1][1])) * ff
@@ -287,7 +278,7 @@ class FourBar(Construction):
         if dx is None:
             return None
         prev = (before[0], before[1], before[2]) if before else (math.nan,) * 3
-        return (float(sigma), float(x[0]), float(x[1]), cos_bound, dx[0], dx[1], *prev, floor)
+        return (float(sigma), x[0], x[1], cos_bound, dx[0], dx[1], *prev, floor)
 
     def optimum(
         self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None, limits=True
@@ -438,7 +429,7 @@ class FourBar(Construction):
             if n_eq > y0.size:
                 continue
             limits = (CONTINUE, None, SHORTCUT) if shortcut else (30, None, None)
-            y = newton(rows, y0, n_eq, np.ones(y0.size), *limits)
+            y = newton(rows, y0, n_eq, *limits)
             if y is None:
                 continue
             x = y if psi is None else np.array([psi, y[0]])
@@ -450,19 +441,41 @@ class FourBar(Construction):
         return None if best is None else best[1]
 
     def _rows(self, sigma, objective, cos_bound, bound_active, psi_fixed):
+        """Newton's ``local`` for x = (ψ, u), or (u,) with ψ held: the objective (f, or the
+        size), the ratios' residuals and, with the bound active, f − cos_bound. Exact (the
+        compiled ``taylor``) where no ratio is held; else central differences of ``evaluate``."""
+        if not self.ratios:
+            return self._taylor(sigma, objective, cos_bound, bound_active, psi_fixed)
+
         def rows(x):
             ps = x[:, 0] if psi_fixed is None else np.full(len(x), psi_fixed)
-            lam = 1 + np.exp(np.minimum(x[:, -1], 50.0))
-            if not self.ratios and len(x) <= MAX_WIDTH:  # a Newton step: the compiled rows
-                return self.rows_compiled(sigma, ps, lam, objective, cos_bound, bound_active)
-            e = self.evaluate(sigma, ps, lam)
+            e = self.evaluate(sigma, ps, 1 + np.exp(np.minimum(x[:, -1], 50.0)))
             out = [e["f"] if objective == "f" else e["size"], *self.residuals(e)]
             if bound_active:
                 out.append(e["f"] - cos_bound)
             # Newton may cross a bound on its way: only a design that cannot run stops it
             return np.where(e["valid"] & np.isfinite(e["size"]), np.array(out), np.nan)
 
-        return rows
+        return differences(rows, 1 if psi_fixed is not None else 2)
+
+    def _taylor(self, sigma, objective, cos_bound, bound_active, psi_fixed):
+        params, taylor = self._params(sigma), construction().taylor
+        one = psi_fixed is not None  # only u moves: its entries
+
+        def local(x):
+            valid, f, size, f0, f1, s0, s1, f00, f01, f11, s00, s01, s11 = taylor(
+                psi_fixed if one else x[0], x[-1], params
+            )
+            if not (valid > 0 and math.isfinite(size)):
+                return None
+            fg, fh = ([f1], [[f11]]) if one else ([f0, f1], [[f00, f01], [f01, f11]])
+            sg, sh = ([s1], [[s11]]) if one else ([s0, s1], [[s00, s01], [s01, s11]])
+            first = (f, fg, fh) if objective == "f" else (size, sg, sh)
+            if not bound_active:
+                return [first[0]], [first[1]], [first[2]]
+            return [first[0], f - cos_bound], [first[1], fg], [first[2], fh]
+
+        return local
 
 
 def _predict(at, c: float) -> np.ndarray:
