@@ -100,6 +100,8 @@ def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL
     problem = replace(
         v.problem, beta=beta, cos_bound=1.0, objective=MAX_TRANSMISSION, hints=(), near=()
     )
+    if m.reduced is None:
+        return None
     try:
         answer = m.reduced(problem)
     except Unreachable:

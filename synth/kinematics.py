@@ -95,6 +95,17 @@ def motion_terms(
     return quality.motion_terms(m, variant, f, pv, st, gradient)
 
 
+def worst_transmission(mechanism: str, params: Mapping[str, float]) -> tuple[float, ...]:
+    """Each transmission joint's crank angle (radians) where its |cos μ| is largest, in the
+    type's order; raises SynthError for a design that does not run."""
+    _, _, _, f, _, (rows, theta, values) = _prepared(mechanism, params)
+    out = []
+    for j in range(1, len(f.names) + 1):
+        k = np.nonzero(rows == j)[0]
+        out.append(float(theta[k[np.argmax(np.abs(values[k]))]]) if k.size else 0.0)
+    return tuple(out)
+
+
 def _prepared(mechanism: str, params: Mapping[str, float]):
     """The completed design, its variant's compiled model, its parameter vector, and the
     stationary points of its rows (the dead centres and transmission extremes)."""

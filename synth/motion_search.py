@@ -245,6 +245,13 @@ def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any],
     infeasible = []
     for i, spec in enumerate(specs):
         m = get(spec.type)
+        if m.facts is None:  # its constraints are the closed forms' (``formulation``)
+            infeasible.append(Infeasible(
+                m.type, "OBJECTIVE_UNSUPPORTED",
+                f"{m.type} has no closed forms, on which the motion objectives' search stands;"
+                " ask for pareto, max_transmission_angle or min_size",
+            ))  # fmt: skip
+            continue
         best_t = replace(t, objective=MAX_TRANSMISSION)
         s = search(m, spec, i, best_t)
         pool = list(s.proposals)

@@ -9,7 +9,8 @@ Per variant (a slot drive, or a link where a part may be zero):
 3. where it cannot take the problem or certify its answer, IPOPT solves the formulation,
    warm-started from the reduced designs and from the generic path's deterministic cold
    starts (those alone for a type without a reduced solver);
-4. every design is predicted by the type's closed forms (``facts``).
+4. every design is predicted by the type's closed forms (``facts``; without them, by the
+   analysis).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import numpy as np
 
 from .errors import SynthError, Unreachable
 from .formulation import relevant
+from .kinematics import analyze
 from .mechanisms import Mechanism
 from .mechanisms._registry import ROUNDING
 from .reduced import Problem, Reduced, agree
@@ -184,8 +186,8 @@ def scaled(d: dict[str, float], s: float) -> dict[str, float]:
 
 
 def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float, float] | None:
-    """(time ratio, stroke, min transmission°, size) by the type's closed forms; None for a
-    design that does not run."""
+    """(time ratio, stroke, min transmission°, size) by the type's closed forms (without them,
+    by the analysis); None for a design that does not run."""
     try:
         if all(k in params for k in m.names):  # a design the solvers built: check it only
             p = dict(params)
@@ -194,6 +196,12 @@ def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float
             p = m.complete(params)
     except SynthError:
         return None
+    if m.facts is None:  # no closed forms: the analysis (verification repeats it)
+        try:
+            a = analyze(m.type, p)
+        except SynthError:
+            return None
+        return a.time_ratio, a.stroke, a.transmission.min_deg, m.size(p)
     f = m.facts(p)
     if any(float(t) < -ROUNDING for t in f.get("one_way", ())):
         return None  # the slider turns back within a swing: the closed forms do not hold

@@ -10,6 +10,7 @@ clock, no random seed: the same request gives the same starts), lengths spread i
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from collections.abc import Iterator
@@ -19,10 +20,13 @@ import casadi as ca
 import numpy as np
 from scipy.stats import qmc
 
+from .errors import SynthError
 from .formulation import Formulation, formulate
+from .kinematics import analyze, worst_transmission
 from .mechanisms import Mechanism
 
 MAX_ITER = 200
+EXCHANGES = 6  # solves per start where a type's transmission is sampled (``formulation``)
 MAX_WALL_S = 60.0  # one solve, a last resort: the request's deadline stops it (``_Deadline``)
 DEADLINE_STEP = 20  # iterations between two looks at the deadline (a few ms; 3% of the time)
 IPOPT = {
@@ -111,30 +115,90 @@ def multistart(
     """Solve from each start until the deadline; yield the converged, polished solutions (the
     free parameters, in stroke units) with the index of their start."""
     form = b.form
-    pv = np.concatenate([fixed, [tr, cos_bound]])
+    pv = np.concatenate([fixed, [tr, cos_bound], form.angles])
     if not form.holds(pv):
         return  # the fixed parts alone break a constraint: no start can help
     n_free = len(form.free)
-    lbx = np.concatenate([lo, [-np.inf] * form.n_extra])
-    ubx = np.concatenate([hi, [np.inf] * form.n_extra])
+    lbx, ubx = np.concatenate([lo, form.extra_lb]), np.concatenate([hi, form.extra_ub])
     for i, x0 in enumerate(start_points):
         if time.monotonic() >= deadline:
             return
-        x0 = np.concatenate([x0, [1.0] * form.n_extra])
-        b.deadline.at = deadline
-        sol = b.solver(x0=x0, p=pv, lbx=lbx, ubx=ubx, lbg=form.lbg, ubg=form.ubg)
-        status = b.solver.stats()["return_status"]
-        if status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
-            continue
-        x = polish(form.equalities, np.asarray(sol["x"]).ravel()[:n_free], pv, lo, hi)
+        x = np.concatenate([x0, _extra_start(form, fixed, x0)])
+        lbg, ubg = _independent(form, x, pv)
+        for _ in range(EXCHANGES if form.joints else 1):
+            b.deadline.at = deadline
+            sol = b.solver(x0=x, p=pv, lbx=lbx, ubx=ubx, lbg=lbg, ubg=ubg)
+            status = b.solver.stats()["return_status"]
+            if status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
+                x = None
+                break
+            x = polish(form.equalities, np.asarray(sol["x"]).ravel(), pv, lbx, ubx)
+            if x is None or not form.joints or not _exchange(form, fixed, x, pv):
+                break
         if x is not None:
-            yield i, dict(zip(form.free, x, strict=True))
+            yield i, dict(zip(form.free, x[:n_free], strict=True))
+
+
+def _design(form: Formulation, fixed: np.ndarray, free: np.ndarray) -> dict[str, float]:
+    return {**dict(zip(form.fixed, fixed, strict=True)), **dict(zip(form.free, free, strict=True)),
+            **dict.fromkeys(form.variant, 0.0)}  # fmt: skip
+
+
+def _extra_start(form: Formulation, fixed: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """Starts for the variables after the free parameters: the epigraph's t at 1, and without
+    closed forms the start design's dead centres (θa, δ) by its analysis."""
+    out = [1.0] * form.n_extra
+    if form.angles.size:
+        try:
+            a = analyze(form.mtype, _design(form, fixed, x0))
+            lo, hi = (math.radians(a.extremes[k].crank_angle_deg) for k in ("min", "max"))
+            out[:2] = [lo, (hi - lo) % (2 * math.pi)]
+        except SynthError:
+            out[:2] = [0.0, math.pi]
+    return np.array(out)
+
+
+def _independent(form: Formulation, x: np.ndarray, pv: np.ndarray):
+    """The constraints' bounds, with an equality left free where it depends on the others at
+    the start x (kinematics alone: a symmetric linkage's second dead centre follows from its
+    first at time ratio 1, and IPOPT stalls on the redundant row); tried in the order stroke,
+    time ratio, then the dead centres. With closed forms, the formulation's own."""
+    if not form.angles.size:
+        return form.lbg, form.ubg
+    jac = np.asarray(form.equalities(x, pv)[1])
+    if not np.all(np.isfinite(jac)):
+        return form.lbg, form.ubg
+    n = jac.shape[0]
+    order = [0, n - 1, *range(1, n - 1)] if n > 3 else list(range(n))
+    kept: list[int] = []
+    tol = 1e-9 * max(1.0, float(np.abs(jac).max()))
+    for i in order:
+        if np.linalg.matrix_rank(jac[[*kept, i]], tol=tol) > len(kept):
+            kept.append(i)
+    lbg, ubg = form.lbg.copy(), form.ubg.copy()
+    free = [i for i in range(n) if i not in kept]
+    lbg[free], ubg[free] = -np.inf, np.inf
+    return lbg, ubg
+
+
+def _exchange(form: Formulation, fixed: np.ndarray, x: np.ndarray, pv: np.ndarray) -> bool:
+    """Put each joint's worst angle (the analysis's, of the solution x) among the sampled
+    angles ``pv`` holds; whether any moved (then the solve runs again from x)."""
+    try:
+        worst = worst_transmission(form.mtype, _design(form, fixed, x[: len(form.free)]))
+    except SynthError:
+        return False
+    slots = pv[pv.size - form.joints :]
+    moved = any(abs(w - s) > 1e-14 for w, s in zip(worst, slots, strict=True))
+    slots[:] = worst
+    return moved
 
 
 def polish(
     eq: ca.Function, x: np.ndarray, pv: np.ndarray, lo: np.ndarray, hi: np.ndarray
 ) -> np.ndarray | None:
-    """A few minimum-norm Newton steps onto the equalities (IPOPT stops at ~1e-10)."""
+    """A few minimum-norm Newton steps onto the equalities (IPOPT stops at ~1e-10), every
+    variable within its bounds."""
     for _ in range(4):
         r, jac = (np.asarray(v) for v in eq(x, pv))
         r = r.ravel()

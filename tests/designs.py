@@ -2,11 +2,20 @@
 
 Each generator builds a design from dimensionless shape ratios and a random overall scale, so
 the set spans sizes from 1e-2 to 1e3 and shapes from gentle to near the validity limits.
+
+A type these generators do not know (a new module of synth.mechanisms) gets designs drawn from
+its registry record: every parameter log-uniform within its default bounds (a signed one
+uniform, a part that may be zero zero half the time), kept where synth accepts the design.
 """
 
 from __future__ import annotations
 
+import zlib
+
 import numpy as np
+
+from synth.errors import SynthError
+from synth.mechanisms import get
 
 from .bruteforce import TYPES
 
@@ -72,12 +81,39 @@ def _drag_link_slider(rng):
 GENERATORS = {t: globals()[f"_{t}"] for t in TYPES}
 
 
+def _from_registry(mtype: str):
+    """A generator for a type without its own: see the module's docstring."""
+    m = get(mtype)
+
+    def draw(rng):
+        for _ in range(10_000):
+            p = {}
+            for q in m.parameters:
+                lo, hi = q.bounds
+                if q.zero_means and rng.random() < 0.5:
+                    p[q.name] = 0.0
+                elif q.signed:
+                    p[q.name] = rng.uniform(-hi, hi)
+                else:
+                    p[q.name] = float(np.exp(rng.uniform(np.log(lo), np.log(hi))))
+            try:
+                m.complete(p)
+            except SynthError:
+                continue
+            return p
+        raise AssertionError(f"no valid {mtype} in 10 000 draws within its default bounds")
+
+    return draw
+
+
 def random_designs(mtype: str, n: int, seed: int = 0) -> list[dict[str, float]]:
     """n random valid designs of one type, each scaled by 10**U(-2, 3)."""
-    rng = np.random.default_rng([seed, TYPES.index(mtype)])
+    index = TYPES.index(mtype) if mtype in TYPES else zlib.crc32(mtype.encode())
+    rng = np.random.default_rng([seed, index])
+    generate = GENERATORS.get(mtype) or _from_registry(mtype)
     out = []
     for _ in range(n):
-        p = GENERATORS[mtype](rng)
+        p = generate(rng)
         scale = 10 ** rng.uniform(-2, 3)
         out.append({k: v * scale for k, v in p.items()})
     return out

@@ -4,14 +4,21 @@ Every design is built from dimensionless shape numbers and a scale of 1e-6 … 1
 shape numbers drawn to reach the limits: a time ratio → 1⁺ (offset → 0, crank/pivot → 0) and
 → its maximum (crank/pivot → 1: crank_shaper ↔ whitworth), the Grashof equality (the
 coupler exactly at a limit), rods exactly or barely long enough (dead points), link ratios
-from 1e-3 to 1e3. Nothing here uses synth.
+from 1e-3 to 1e3. Nothing here uses synth, but for a type these strategies do not know (a
+new module of synth.mechanisms): its parameters are drawn from its registry record, each
+log-uniform within its default bounds (a signed one uniform, a part that may be zero zero
+half the time), and kept where synth accepts the design.
 """
 
 from __future__ import annotations
 
 import math
 
+from hypothesis import assume
 from hypothesis import strategies as st
+
+from synth.errors import SynthError
+from synth.mechanisms import get
 
 
 def log_uniform(lo: float, hi: float) -> st.SearchStrategy[float]:
@@ -98,8 +105,26 @@ SHAPES = {f.__name__: f for f in (scotch_yoke, offset_slider_crank, crank_shaper
 
 
 @st.composite
+def from_registry(draw, mtype: str):
+    """A design of a type without its own strategy (see the module's docstring)."""
+    m = get(mtype)
+    p = {}
+    for q in m.parameters:
+        lo, hi = q.bounds
+        if q.zero_means and draw(st.booleans()):
+            p[q.name] = 0.0
+        else:
+            p[q.name] = draw(st.floats(-hi, hi) if q.signed else log_uniform(lo, hi))
+    try:
+        m.complete(p)
+    except SynthError:
+        assume(False)
+    return p
+
+
+@st.composite
 def design(draw, mtype: str):
     """A design of ``mtype`` at a scale of 1e-6 … 1e6."""
-    shape = draw(SHAPES[mtype]())
+    shape = draw(SHAPES[mtype]() if mtype in SHAPES else from_registry(mtype))
     scale = draw(log_uniform(1e-6, 1e6))
     return {k: v * scale for k, v in shape.items()}

@@ -22,6 +22,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 import synth
 from synth.errors import InvalidParameters
+from synth.mechanisms import all_types
 from synth.results import Tolerance
 
 from . import bruteforce
@@ -146,7 +147,7 @@ def derivative(mtype, p, name, scale):
     return None
 
 
-@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("mtype", all_types())
 def test_sensitivities_match_central_differences(mtype):
     checked = 0
     for p in random_designs(mtype, N, seed=17):
@@ -194,7 +195,7 @@ def test_unknown_inclusions_are_refused():
         synth.analyze("scotch_yoke", {"crank": 1.0}, include=["curvature"])
 
 
-@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("mtype", all_types())
 def test_the_envelope_holds_every_pin_path_sampled_densely(mtype):
     angles = np.arange(100_000) * (360 / 100_000)
     for p in random_designs(mtype, 40 if STRESS else 8, seed=19):

@@ -21,10 +21,10 @@ REFERENCES = {
 
 
 def test_the_six_types_in_contract_order():
-    assert all_types() == TYPES
+    assert all_types()[: len(TYPES)] == TYPES  # then any other, by its module's name
 
 
-@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("mtype", all_types())
 def test_module_documents_its_maths(mtype):
     m = get(mtype)
     doc = __import__(m.position.__module__, fromlist=["_"]).__doc__
@@ -35,7 +35,7 @@ def test_module_documents_its_maths(mtype):
     assert len(names) == len(set(names))
 
 
-@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("mtype", all_types())
 def test_same_code_on_floats_sx_and_mx(mtype):
     m = get(mtype)
     for p in random_designs(mtype, 5, seed=4):
@@ -51,6 +51,8 @@ def test_same_code_on_floats_sx_and_mx(mtype):
             fn = ca.Function("f", [th, pv], out)
             got = [float(v) for v in fn.call([theta, list(full.values())])]
             np.testing.assert_allclose(got, floats, rtol=1e-14, atol=1e-14)
+        if m.facts is None:  # closed forms are optional
+            continue
         facts = m.facts(full)
         assert all(math.isfinite(float(v)) for v in facts["transmission_cos"])
         assert abs(float(facts["beta"])) < math.pi and float(facts["stroke"]) > 0

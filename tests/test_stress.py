@@ -20,6 +20,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import synth
+from synth.mechanisms import all_types
 
 from . import bruteforce, exact
 from .designs import TYPES
@@ -185,7 +186,7 @@ def close(a, ref, tol: float) -> bool:
     return ok
 
 
-@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("mtype", all_types())
 @given(data=st.data())
 def test_scale_invariance(mtype, data):
     p = data.draw(design(mtype))
@@ -215,7 +216,7 @@ def test_offset_mirror_invariance(data):
         assert b.transmission.min_deg == pytest.approx(a.transmission.min_deg, abs=1e-9)
 
 
-@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("mtype", all_types())
 @given(p=st.lists(log_uniform(1e-6, 1e6), min_size=7, max_size=7),
        zero=st.booleans())  # fmt: skip
 def test_any_numbers_give_an_answer_or_a_domain_error(mtype, p, zero):
@@ -231,7 +232,7 @@ def test_any_numbers_give_an_answer_or_a_domain_error(mtype, p, zero):
             assert np.all(np.isfinite(arr))
 
 
-@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("mtype", all_types())
 @settings(max_examples=min(settings().max_examples, 200))
 @given(data=st.data())
 def test_synthesis_round_trip_at_the_edges(mtype, data):

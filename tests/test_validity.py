@@ -9,7 +9,7 @@ import synth
 from synth.errors import InvalidDesign, InvalidParameters, UnknownMechanism
 from synth.mechanisms import all_types, get
 
-from .designs import TYPES, random_designs
+from .designs import random_designs
 
 # (type, design that breaks exactly the named condition, condition, message pattern)
 BROKEN = [
@@ -141,7 +141,7 @@ def test_conditioning_flags_a_change_point_and_a_dead_point():
     assert ok.validity_margin == pytest.approx((0.225 + 0.2504 - 0.1 - 0.275) / 0.3)
 
 
-@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("mtype", all_types())
 def test_a_condition_names_every_parameter_its_margin_moves(mtype):
     """Each condition's parameters (where its 422 points) are exactly those that move its
     margin: each length nudged by 1e-6 relative on random designs, one at a time. The review's
