@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from .errors import SynthError
 from .mechanisms import Mechanism
 from .quality import MOTION_OBJECTIVES, measure
 from .reduced import MAX_TRANSMISSION, MIN_SIZE
@@ -20,14 +19,11 @@ def candidate(
 ) -> Candidate | None:
     """The proposal as a candidate if the forward analysis finds that it meets the targets;
     ``extras`` (include, tolerance) are added to its analysis."""
-    try:
-        params = m.complete(p.params)
-    except SynthError:
-        return None
-    checked = verify(m.type, params, t.time_ratio, t.stroke, t.bound_deg, **extras)
+    checked = verify(m.type, p.params, t.time_ratio, t.stroke, t.bound_deg, **extras)
     if checked is None:
         return None
     a, residuals = checked
+    params = a.params  # completed and checked by the analysis
     size = m.size(params)
     mu = a.transmission.min_deg
     limits = {}

@@ -232,6 +232,8 @@ def differences(fn: Callable[[np.ndarray], np.ndarray], d: int, h: float = 1e-5)
 def _step(t: Taylor, d: int, n_eq: int, nu, it: int):
     """A Newton step from a point's local model: (step, multipliers), or (None, _)."""
     vals, grads, hess = t
+    if d == 2 and n_eq == 1:  # the common case (a size on a bound), written out
+        return _step_2_1(vals, grads, hess, nu)
     g, jac = grads[0], grads[1 : 1 + n_eq]
     eq = vals[1 : 1 + n_eq]
     if n_eq == d:  # the equalities alone fix the point: quadratic convergence or none
@@ -258,6 +260,24 @@ def _step(t: Taylor, d: int, n_eq: int, nu, it: int):
     if sol is None:
         return None, None
     return sol[:d], [a + b for a, b in zip(nu, sol[d:], strict=True)]
+
+
+def _step_2_1(vals, grads, hess, nu):
+    """``_step`` in two variables with one equality: the same system, unrolled."""
+    (g0, g1), (a0, a1) = grads[0], grads[1]
+    if nu is None:  # the least-squares multiplier
+        aa = a0 * a0 + a1 * a1
+        if not aa:
+            return None, None
+        nu = [-(a0 * g0 + a1 * g1) / aa]
+    n = nu[0]
+    (s00, s01), (_, s11) = hess[0]
+    (r00, r01), (_, r11) = hess[1]
+    sol = _solve3([[s00 + n * r00, s01 + n * r01, a0], [s01 + n * r01, s11 + n * r11, a1],
+                   [a0, a1, 0.0]], [-g0 - a0 * n, -g1 - a1 * n, -vals[1]])  # fmt: skip
+    if sol is None:
+        return None, None
+    return sol[:2], [n + sol[2]]
 
 
 def _solve3(a: list[list[float]], b: list[float]) -> list[float] | None:
