@@ -20,7 +20,7 @@ from pydantic import (
 )
 
 from synth import results
-from synth.kinematics import INCLUDE, MAX_CURVE_POINTS
+from synth.kinematics import ANALYSIS_INCLUDE, INCLUDE, MAX_CURVE_POINTS
 from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.sweep import MAX_POINTS
 from synth.synthesis import MAX_CANDIDATES
@@ -120,17 +120,28 @@ class ToleranceSpec(BaseModel):
         return self
 
 
+_INCLUDES = {
+    "motion": "motion (cutting-speed fluctuation over the working stroke, peak accelerations "
+    "per stroke)",
+    "sensitivities": "sensitivities (first-order derivatives of time ratio, stroke and minimum "
+    "transmission angle to every parameter)",
+    "envelope": "envelope (the box the frame must hold: every pivot and every pin's path)",
+    "pins": "pins (with crank_angles_deg or samples: curves.pins, every pin of the type's "
+    "drawing at the curves' angles)",
+}
+
+
+def _include(names: tuple[str, ...]) -> str:
+    *most, last = (_INCLUDES[k] for k in names)
+    return f"computed only when asked: {', '.join(most)} and {last}"
+
+
 class Extras(BaseModel):
     """What an analysis adds only when asked: to the analysis, or to each candidate."""
 
     model_config = STRICT
     include: list[Literal[INCLUDE]] = Field(  # type: ignore[valid-type]
-        [],
-        max_length=len(INCLUDE),
-        description="computed only when asked: motion (cutting-speed fluctuation over the "
-        "working stroke, peak accelerations per stroke), sensitivities (first-order "
-        "derivatives of time ratio, stroke and minimum transmission angle to every parameter) "
-        "and envelope (the box the frame must hold: every pivot and every pin's path)",
+        [], max_length=len(INCLUDE), description=_include(INCLUDE)
     )
     tolerance: ToleranceSpec | None = Field(
         None,
@@ -140,6 +151,12 @@ class Extras(BaseModel):
 
 
 class AnalyzeRequest(Extras):
+    # an analysis also has its curves' pins (a candidate has no curves)
+    include: list[Literal[ANALYSIS_INCLUDE]] = Field(  # type: ignore[valid-type]
+        [],
+        max_length=len(ANALYSIS_INCLUDE),
+        description=_include(ANALYSIS_INCLUDE),
+    )
     mechanism: Design
     crank_speed: float = Field(1.0, ge=-1e6, le=1e6, description="ω, rad/s")
     crank_acceleration: float = Field(0.0, ge=-1e9, le=1e9, description="α, rad/s²")
@@ -274,6 +291,12 @@ class MechanismInfo(BaseModel):
         description="where the type comes from: short citations, in full "
         "in the project's docs/references.md"
     )
+    drawing: list[tuple[str, str, str]] = Field(
+        default_factory=list,
+        description="how to draw a design: the straight members as [name, pin, pin], between "
+        "the pins /v1/analyze gives with include pins; named by the parameter that is their "
+        "length where one is (a part that is 0 is not drawn)",
+    )
 
     @classmethod
     def of(cls, m: Mechanism) -> MechanismInfo:
@@ -298,7 +321,15 @@ class MechanismInfo(BaseModel):
             validity=[c.text for c in m.conditions],
             quick_return=m.quick_return,
             sources=list(m.sources),
+            drawing=[tuple(d) for d in m.drawing],
         )
+
+
+class PinPath(BaseModel):
+    """One pin at each of the curves' crank angles."""
+
+    x: list[float]
+    y: list[float]
 
 
 class Curves(BaseModel):
@@ -309,12 +340,18 @@ class Curves(BaseModel):
     velocity: list[float]
     acceleration: list[float]
     transmission_deg: list[float]
+    pins: dict[str, PinPath] | None = Field(
+        None,
+        description="when include has pins: every pin of the type's drawing (the crank pivot "
+        "at the origin, x along the ground line), by name in the drawing's order, x and y at "
+        "each crank_angle_deg",
+    )
 
 
 # what an analysis answers only when asked, and a field's meaning where its name needs one
 _ANALYSIS_NOTES = {
     "reversals": "slider reversals per revolution (2: a clean design)",
-    "curves": "with crank_angles_deg or samples",
+    "curves": "with crank_angles_deg or samples (their pins when include has pins)",
     "motion": "when include has motion",
     "sensitivities": "when include has sensitivities, or with a tolerance",
     "envelope": "when include has envelope",

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -27,6 +28,7 @@ from .results import (
     Curves,
     Extreme,
     Joint,
+    PinPath,
     Stroke,
     Tolerance,
     Transmission,
@@ -34,7 +36,9 @@ from .results import (
 from .roots import TWO_PI, stationary_points
 
 MAX_CURVE_POINTS = 100_000
-INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis adds only when asked
+INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis or a candidate adds when asked
+# an analysis also adds its curves' pins when asked (they need the curves' angles)
+ANALYSIS_INCLUDE = (*INCLUDE, "pins")
 
 
 def analyze(
@@ -53,20 +57,24 @@ def analyze(
     Curves are computed only when asked: at exactly ``crank_angles_deg``, or at ``samples``
     evenly spaced angles (0° included, 360° not). So are ``include``'s ``"motion"`` (speed
     fluctuation and peak accelerations), ``"sensitivities"`` (to every length; also with a
-    ``tolerance``, which adds the worst-case deviations) and ``"envelope"`` (the box the frame
-    must hold).
+    ``tolerance``, which adds the worst-case deviations), ``"envelope"`` (the box the frame
+    must hold) and ``"pins"`` (the curves' ``pins``: every pin of the type's drawing at the
+    curves' angles, as ``joints`` gives them; only with curves).
 
     >>> a = analyze("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
     ...                           "connecting_rod": 200})
     >>> round(a.time_ratio, 5), round(a.stroke, 9)
     (2.73524, 300.0)
     """
-    check_include(include)
-    deg = curve_angles(crank_angles_deg, samples)
+    deg = _asked(mechanism, include, crank_angles_deg, samples)
     m, p, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)  # checked there
     summary = _summary(m, p, f, rows, theta, values)
     if deg is not None:
-        summary["curves"] = _curves(f, pv, crank_speed, crank_acceleration, deg)
+        curves = _curves(f, pv, crank_speed, crank_acceleration, deg)
+        if "pins" in include:
+            xy = _pins(model(m, variant, "pins"), pv, deg)
+            curves = replace(curves, pins={k: PinPath(x, y) for k, (x, y) in xy.items()})
+        summary["curves"] = curves
     if "envelope" in include:
         summary["envelope"] = quality.envelope(m, variant, p, pv)
     if {"motion", "sensitivities"} & set(include) or tolerance is not None:
@@ -117,13 +125,41 @@ def _prepared(mechanism: str, params: Mapping[str, float]):
     return m, p, variant, f, pv, stationary_points(f, pv)
 
 
-def check_include(include: Collection[str]) -> None:
-    """Raise InvalidParameters for anything ``include`` names that an analysis cannot add."""
-    unknown = sorted(set(include) - set(INCLUDE))
+def check_include(include: Collection[str], allowed: Sequence[str] = INCLUDE) -> None:
+    """Raise InvalidParameters for anything ``include`` names that is not ``allowed``: by
+    default what a candidate's analysis can add (``ANALYSIS_INCLUDE`` for an analysis's)."""
+    unknown = sorted(set(include) - set(allowed))
     if unknown:
         raise InvalidParameters(
-            f"include: unknown {', '.join(map(repr, unknown))}; choose from {', '.join(INCLUDE)}",
+            f"include: unknown {', '.join(map(repr, unknown))}; choose from {', '.join(allowed)}",
             ("include",),
+        )
+
+
+def _asked(
+    mechanism: str,
+    include: Collection[str],
+    crank_angles_deg: Sequence[float] | None,
+    samples: int | None,
+) -> np.ndarray | None:
+    """The curves' angles (``curve_angles``), once ``include`` is checked against them: pins
+    need angles to be at, and a drawing."""
+    check_include(include, ANALYSIS_INCLUDE)
+    deg = curve_angles(crank_angles_deg, samples)
+    if "pins" in include and deg is None:
+        msg = "include 'pins' needs crank_angles_deg or samples (the angles the pins are wanted at)"
+        raise InvalidParameters(msg, ("include",))
+    check_drawn(mechanism, include)
+    return deg
+
+
+def check_drawn(mechanism: str, include: Collection[str]) -> None:
+    """Raise InvalidParameters where ``include`` asks for what needs the type's pins (its
+    drawing: ``pins``, the ``envelope``) and the type has none."""
+    needs = [k for k in ("pins", "envelope") if k in include]
+    if needs and get(mechanism).joints is None:
+        raise InvalidParameters(
+            f"include {needs[0]!r}: {mechanism} has no drawing yet", ("include",)
         )
 
 
@@ -159,12 +195,21 @@ def joints(
     if m.joints is None:
         raise InvalidParameters(f"{mechanism} has no drawing yet", ("mechanism",))
     p = m.complete(params)
-    f = model(m, m.variant(p), "pins")
-    theta = np.radians(np.asarray(crank_angles_deg, dtype=float).ravel())
-    if theta.size == 0:
+    deg = np.asarray(crank_angles_deg, dtype=float).ravel()
+    if deg.size == 0:
         return {}
-    g = f(theta, np.array([p[n] for n in m.names], dtype=float))[0]
-    return {k: g[2 * i : 2 * i + 2].T.copy() for i, k in enumerate(f.names)}
+    pv = np.array([p[n] for n in m.names], dtype=float)
+    xy = _pins(model(m, m.variant(p), "pins"), pv, deg)
+    return {k: np.column_stack(v) for k, v in xy.items()}
+
+
+def _pins(f: Model, pv: np.ndarray, deg: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Each pin's x and y at each crank angle (degrees), {pin: (x, y)}, from the compiled
+    ``pins`` model ``f``; empty arrays for no angles."""
+    if deg.size == 0:
+        return {k: (np.empty(0), np.empty(0)) for k in f.names}
+    g = f(np.radians(deg), pv)[0]
+    return {k: (g[2 * i].copy(), g[2 * i + 1].copy()) for i, k in enumerate(f.names)}
 
 
 def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -> dict:
@@ -242,10 +287,10 @@ def check(
     **_: Any,
 ) -> None:
     """What ``analyze`` checks before it analyses: the design's validity, and the arguments'
-    meaning (``curve_angles``). Takes (and ignores) ``analyze``'s other arguments."""
+    meaning (``curve_angles``, and ``include`` with them). Takes (and ignores) ``analyze``'s
+    other arguments."""
     get(mechanism).complete(params)
-    check_include(include)
-    curve_angles(crank_angles_deg, samples)
+    _asked(mechanism, include, crank_angles_deg, samples)
 
 
 def curve_angles(crank_angles_deg: Sequence[float] | None, samples: int | None):

@@ -60,12 +60,23 @@ NEAR_LIMIT = 1e-3
 
 
 @dataclass(frozen=True)
+class PinPath:
+    """One pin of the type's drawing (``synth.joints``) at each of the curves' crank angles."""
+
+    x: np.ndarray
+    y: np.ndarray
+
+
+@dataclass(frozen=True)
 class Curves:
     crank_angle_deg: np.ndarray
     position: np.ndarray
     velocity: np.ndarray
     acceleration: np.ndarray
     transmission_deg: np.ndarray
+    # only when asked (include "pins"): every pin of the drawing, named and ordered as
+    # ``synth.joints`` gives them
+    pins: dict[str, PinPath] | None = None
 
 
 @dataclass(frozen=True)
@@ -172,8 +183,15 @@ class Analysis:
             if out[k] is None:
                 del out[k]
         if self.curves is not None:
-            out["curves"] = {k: np.asarray(v).tolist() for k, v in out["curves"].items()}
+            out["curves"] = {k: _lists(v) for k, v in out["curves"].items() if v is not None}
         return out
+
+
+def _lists(v: Any) -> Any:
+    """Arrays as lists, in mappings too (the curves' pins)."""
+    if isinstance(v, dict):
+        return {k: _lists(x) for k, x in v.items()}
+    return np.asarray(v).tolist()
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ from .candidate import candidate, predicted_rank, rank
 from .diagnose import diagnose
 from .errors import InvalidParameters
 from .front import PARETO, pareto
-from .kinematics import check_include
+from .kinematics import check_drawn, check_include
 from .mechanisms import all_types, get
 from .motion_search import motion
 from .quality import MOTION_OBJECTIVES
@@ -162,6 +162,8 @@ def check(
     _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
     _check_limit(max_working_speed_fluctuation, objective)
     check_include(include)
+    for s in specs:
+        check_drawn(s.type, include)
     if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
         raise InvalidParameters(
             f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)

@@ -13,6 +13,7 @@ from api.config import Settings
 from api.engine import Engine
 from api.main import app
 from api.routers.common import engine
+from synth.kinematics import ANALYSIS_INCLUDE
 from synth.mechanisms import all_types, get
 
 from . import bruteforce
@@ -125,6 +126,55 @@ def test_analyze_includes_motion_and_tolerances_when_asked(client):
     # the crank pin's circle holds everything: the yoke's pin travels along its diameter
     assert out["envelope"] == {"x": [-35.0, 35.0], "y": [-35.0, 35.0], "width": 70.0,
                                "height": 70.0, "link_length_sum": 35.0}  # fmt: skip
+
+
+def test_analyze_gives_the_pins_at_the_curves_angles_when_asked(client):
+    p = {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504}
+    body = {"mechanism": design("drag_link_slider", **p), "crank_angles_deg": [0, 90, 180],
+            "include": ["pins"]}  # fmt: skip
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 200, r.text
+    pins = r.json()["curves"]["pins"]
+    j = synth.joints("drag_link_slider", p, [0.0, 90.0, 180.0])
+    assert list(pins) == list(j) == ["O2", "A", "O4", "B", "C", "D"]  # the drawing's order
+    for name, xy in j.items():
+        assert set(pins[name]) == {"x", "y"}
+        assert len(pins[name]["x"]) == len(pins[name]["y"]) == 3
+        assert pins[name] == {"x": xy[:, 0].tolist(), "y": xy[:, 1].tolist()}, name
+    assert pins["A"]["x"][0] == p["crank"] and pins["A"]["y"][1] == p["crank"]
+
+
+def test_analyze_pins_without_angles_is_422_at_include(client):
+    body = {"mechanism": design("scotch_yoke", crank=35.0), "include": ["pins"]}
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 422, r.text
+    (d,) = r.json()["detail"]
+    assert d["loc"][-1] == "include" and d["loc"] == ["body", "include"]
+    assert "needs crank_angles_deg or samples" in d["msg"]
+
+
+def test_analyze_has_no_pins_unless_asked(client):
+    body = {"mechanism": design("scotch_yoke", crank=35.0), "samples": 4,
+            "include": ["motion", "envelope"]}  # fmt: skip
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 200, r.text
+    assert "pins" not in r.json()["curves"] and '"pins"' not in r.text
+    asked = client.post("/v1/analyze", json={**body, "include": ["pins"]})
+    assert list(asked.json()["curves"]["pins"]) == ["O2", "B", "yoke"]  # the same, asked
+
+
+def test_the_openapi_shows_the_pins_for_an_analysis_only(client):
+    schemas = client.get("/openapi.json").json()["components"]["schemas"]
+    include = schemas["AnalyzeRequest"]["properties"]["include"]
+    assert include["items"]["enum"] == ["motion", "sensitivities", "envelope", "pins"]
+    assert "pins (with crank_angles_deg or samples" in include["description"]
+    pins = schemas["Curves"]["properties"]["pins"]
+    assert {"$ref": "#/components/schemas/PinPath"} in [
+        s.get("additionalProperties") for s in pins["anyOf"]
+    ]
+    assert set(schemas["PinPath"]["required"]) == {"x", "y"}
+    # a candidate has no curves: synthesis does not offer them
+    assert "pins" not in schemas["SynthesizeRequest"]["properties"]["include"]["items"]["enum"]
 
 
 def test_invalid_design_names_each_parameter(client):
@@ -253,6 +303,7 @@ BAD = [
      "tolerance"),
     ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"relative": "nan"}), "relative"),
     ("/v1/analyze", with_(ANALYZE, ["include"], ["curvature"]), "include"),
+    ("/v1/analyze", with_(ANALYZE, ["include"], ["pins"]), "include"),
     ("/v1/synthesize", {**SYNTH, "time_ratio": 0.5}, "time_ratio"),
     ("/v1/synthesize", {**SYNTH, "time_ratio": "NaN"}, "time_ratio"),
     ("/v1/synthesize", {**SYNTH, "stroke": -1.0}, "stroke"),
@@ -268,6 +319,7 @@ BAD = [
     ("/v1/synthesize", {**SYNTH, "max_working_speed_fluctuation": "NaN",
                         "objective": "min_peak_acceleration"}, "max_working_speed_fluctuation"),
     ("/v1/synthesize", {**SYNTH, "include": ["colour"]}, "include"),
+    ("/v1/synthesize", {**SYNTH, "include": ["pins"]}, "include"),
     ("/v1/synthesize", {**SYNTH, "tolerance": {"relative": -1e-3}}, "tolerance"),
     ("/v1/synthesize", {**SYNTH, "stroke_mm": 1.0}, "stroke_mm"),
     ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "fixed": {"rod": 1.0}}]}, "rod"),
@@ -300,7 +352,7 @@ def test_an_analysis_answers_every_field_synth_gives(client):
     """Everything synth.analyze returns for a request that asks for everything reaches the
     client, value for value: a field added to synth.Analysis is served, not dropped."""
     params = {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0}
-    everything = ["motion", "sensitivities", "envelope"]
+    everything = list(ANALYSIS_INCLUDE)
     body = {"mechanism": {"type": "whitworth", "params": params}, "samples": 4,
             "include": everything, "tolerance": {"relative": 1e-3}}  # fmt: skip
     r = client.post("/v1/analyze", json=body)

@@ -1,12 +1,18 @@
 """Pin positions for drawings: every link keeps its length, the slider is where the analysis
-puts it, pins on a lever lie on it, and the four-bar's pin is on its circuit."""
+puts it, pins on a lever lie on it, and the four-bar's pin is on its circuit. An analysis's
+pins (include "pins") are the same, at exactly its curves' angles, and only when asked."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 import synth
+from synth import kinematics
+from synth.kinematics import check
+from synth.mechanisms import all_types, get
+from synth.mechanisms._registry import _REGISTRY
 
 from .designs import random_designs
 
@@ -110,3 +116,95 @@ def test_an_invalid_design_has_no_drawing():
     with pytest.raises(synth.InvalidDesign):
         synth.joints("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
                                    "connecting_rod": 135}, [0.0])  # fmt: skip
+
+
+# --- the analysis's pins (include "pins"): the same pins, at exactly the curves' angles -----
+
+
+@pytest.mark.parametrize("mtype", [t for t in all_types() if get(t).joints is not None])
+def test_an_analysis_pins_are_the_joints_at_its_angles(mtype):
+    for params in random_designs(mtype, 5, seed=11):
+        for angles in ({"crank_angles_deg": ANGLES}, {"samples": 7}):
+            a = synth.analyze(mtype, params, include=["pins"], **angles)
+            deg = a.curves.crank_angle_deg
+            j = synth.joints(mtype, params, deg)
+            assert list(a.curves.pins) == list(j)  # every pin, in the drawing's order
+            for name, path in a.curves.pins.items():
+                assert path.x.shape == path.y.shape == deg.shape
+                assert np.array_equal(np.column_stack([path.x, path.y]), j[name]), name
+
+
+@pytest.mark.parametrize("params", random_designs("drag_link_slider", 10, seed=5))
+def test_an_analysis_pins_follow_the_drag_link_geometry(params):
+    """Against geometry written here: the crank pin on its circle at each asked angle, the
+    pivots where the drawing puts them, every link as long as the design says."""
+    p = get("drag_link_slider").complete(params)
+    deg = np.array([-30.0, 0.0, 37.5, 90.0, 200.0, 400.0])
+    a = synth.analyze("drag_link_slider", p, crank_angles_deg=deg, include=["pins"])
+    pins = {k: np.column_stack([v.x, v.y]) for k, v in a.curves.pins.items()}
+    assert list(pins) == ["O2", "A", "O4", "B", "C", "D"]
+    size = max(p.values())
+    th = np.radians(deg)
+    np.testing.assert_allclose(pins["O2"], 0.0, rtol=0, atol=0)
+    np.testing.assert_allclose(pins["O4"], [[p["ground"], 0.0]] * deg.size, rtol=0, atol=0)
+    np.testing.assert_allclose(
+        pins["A"], p["crank"] * np.column_stack([np.cos(th), np.sin(th)]), rtol=0,
+        atol=1e-15 * size,
+    )  # fmt: skip
+    for u, v, length in LINKS["drag_link_slider"]:
+        d = np.hypot(*(pins[u] - pins[v]).T)
+        np.testing.assert_allclose(d, p[length], rtol=1e-12, atol=0, err_msg=length)
+    # the slider's pin on the x axis, where the curves put the slider
+    np.testing.assert_allclose(pins["D"][:, 1], 0.0, rtol=0, atol=0)
+    np.testing.assert_allclose(pins["D"][:, 0], a.curves.position, rtol=0, atol=1e-12 * size)
+
+
+SHAPER = {"crank": 40.0, "pivot_distance": 160.0, "lever": 240.0}
+
+
+def test_pins_need_the_curves_angles():
+    for call in (synth.analyze, check):
+        with pytest.raises(synth.InvalidParameters) as e:
+            call("crank_shaper", SHAPER, include=["pins"])
+        assert e.value.loc == ("include",)
+        assert "needs crank_angles_deg or samples" in e.value.msg
+
+
+def test_pins_need_a_drawing(monkeypatch):
+    undrawn = replace(get("scotch_yoke"), type="undrawn_yoke", joints=None)
+    monkeypatch.setitem(_REGISTRY, undrawn.type, undrawn)
+    check("undrawn_yoke", {"crank": 1.0}, samples=4, include=["motion"])  # pins only
+    for call in (synth.analyze, check):
+        for what in ("pins", "envelope"):  # the envelope is the pins' box
+            with pytest.raises(synth.InvalidParameters) as e:
+                call("undrawn_yoke", {"crank": 1.0}, samples=4, include=[what])
+            assert e.value.loc == ("include",)
+            assert f"include {what!r}: undrawn_yoke has no drawing" in e.value.msg
+    with pytest.raises(synth.InvalidParameters, match="undrawn_yoke has no drawing"):
+        synth.synthesize(1.0, 2.0, mechanisms=[{"type": "undrawn_yoke"}], include=["envelope"])
+
+
+def test_pins_only_when_asked(monkeypatch):
+    def never(*_):
+        raise AssertionError("pins computed without being asked")
+
+    monkeypatch.setattr(kinematics, "_pins", never)
+    a = synth.analyze("crank_shaper", SHAPER, samples=8, include=["motion", "envelope"])
+    assert a.curves.pins is None
+    assert "pins" not in a.to_dict()["curves"]
+    with pytest.raises(AssertionError, match="without being asked"):  # the guard does guard
+        synth.analyze("crank_shaper", SHAPER, samples=8, include=["pins"])
+
+
+def test_pins_in_the_dict_are_lists_by_pin():
+    a = synth.analyze("crank_shaper", SHAPER, crank_angles_deg=[0.0, 90.0], include=["pins"])
+    out = a.to_dict()["curves"]["pins"]
+    j = synth.joints("crank_shaper", SHAPER, [0.0, 90.0])
+    assert out == {k: {"x": v[:, 0].tolist(), "y": v[:, 1].tolist()} for k, v in j.items()}
+
+
+def test_a_candidate_has_no_pins_to_include():
+    """Pins come with curves, and a candidate has none: synthesis refuses to include them."""
+    with pytest.raises(synth.InvalidParameters) as e:
+        synth.synthesize(1.6, 300.0, 20.0, include=["pins"])
+    assert e.value.loc == ("include",) and "'pins'" in e.value.msg

@@ -67,3 +67,20 @@ def test_curves_only_where_asked():
     assert list(b.curves.crank_angle_deg) == [0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0]
     assert "curves" not in synth.analyze("crank_shaper", p).to_dict()
     assert len(b.to_dict()["curves"]["position"]) == 8
+
+
+@pytest.mark.parametrize("mtype", all_types())
+def test_a_drawings_members_are_as_long_as_their_parameters(mtype):
+    """A drawing's member named by a parameter is that long at every crank angle (the pins
+    from synth.joints), or not drawn where the part is 0."""
+    m = get(mtype)
+    if not m.drawing:
+        return
+    pins = set(synth.joints(mtype, m.complete(random_designs(mtype, 1, seed=2)[0]), [0.0]))
+    assert {pin for _, a, b in m.drawing for pin in (a, b)} <= pins
+    for p in random_designs(mtype, 10, seed=3):
+        full = m.complete(p)
+        j = synth.joints(mtype, full, np.linspace(0, 360, 7))
+        for name, a, b in m.drawing:
+            if name in full and full[name] != 0:
+                np.testing.assert_allclose(np.hypot(*(j[a] - j[b]).T), full[name], rtol=1e-12)

@@ -20,6 +20,11 @@ RULES = [
      ("/v1/analyze", {"mechanism": {"type": "crank_shaper", "params": SHAPER},
                       "crank_angles_deg": [0.0], "samples": 4}),
      ["body", "samples"]),
+    ("pins are at the curves' angles",
+     lambda: synth.analyze("crank_shaper", SHAPER, include=["pins"]),
+     ("/v1/analyze", {"mechanism": {"type": "crank_shaper", "params": SHAPER},
+                      "include": ["pins"]}),
+     ["body", "include"]),
     ("a part is fixed or bounded, not both",
      lambda: synth.synthesize(1.6, 300.0, mechanisms=[
          {"type": "whitworth", "fixed": {"lever": 150.0}, "bounds": {"lever": (100.0, 200.0)}}]),

@@ -26,7 +26,8 @@ async def analyze(
 ) -> AnalyzeResponse:
     """Time ratio, stroke, dead centres, strokes and transmission angles of a design; curves at
     exactly ``crank_angles_deg`` or at ``samples`` evenly spaced angles, and only then; motion
-    quality and sensitivities only when ``include`` names them (or a ``tolerance`` is given)."""
+    quality, sensitivities, the envelope and the curves' pins only when ``include`` names them
+    (or, for sensitivities, a ``tolerance`` is given)."""
     points = len(body.crank_angles_deg or ()) + (body.samples or 0)
     a = await run_design(
         engine,

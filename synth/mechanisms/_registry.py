@@ -120,6 +120,9 @@ class Mechanism:
     # the pin positions {name: (x, y)} at crank angle θ, named as in the module docstring, the
     # slider's pin last, in CasADi maths (for drawings, and the envelope the frame must hold)
     joints: Callable[[Params, Any], dict[str, tuple[Any, Any]]] | None = None
+    # how to draw it: the straight members between two of those pins, (name, pin, pin), named
+    # by the parameter that is their length where one is (a part that is 0 is not drawn)
+    drawing: tuple[tuple[str, str, str], ...] = ()
     # a family of equal designs the targets leave (synthesis reports it, synth.results.Family)
     scale: Scale | None = None
 

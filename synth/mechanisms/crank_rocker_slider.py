@@ -176,5 +176,13 @@ register(
         reduced=lambda p: FourBar(p, ROLES).solve(),
         scale=fourbar_scale("rocker"),
         joints=joints,
+        drawing=(
+            ("ground", "O2", "O4"),
+            ("crank", "O2", "A"),
+            ("coupler", "A", "D"),
+            ("rocker", "O4", "D"),
+            ("rocker_arm", "O4", "C"),
+            ("connecting_rod", "C", "R"),
+        ),
     )
 )

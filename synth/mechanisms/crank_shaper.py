@@ -214,5 +214,11 @@ register(
             reach=lambda p: p["lever"] / (1 + p["pivot_distance"] / p["crank"]),  # block on lever
         ),
         joints=joints,
+        drawing=(
+            ("pivot_distance", "O2", "O4"),
+            ("crank", "O2", "B"),
+            ("lever", "O4", "P"),
+            ("ram_link", "P", "R"),
+        ),
     )
 )

@@ -177,5 +177,13 @@ register(
         reduced=reduced,
         scale=fourbar_scale("follower"),
         joints=joints,
+        drawing=(
+            ("ground", "O2", "O4"),
+            ("crank", "O2", "A"),
+            ("coupler", "A", "B"),
+            ("follower", "O4", "B"),
+            ("follower_arm", "O4", "C"),
+            ("connecting_rod", "C", "D"),
+        ),
     )
 )

@@ -281,5 +281,6 @@ register(
         facts=facts,
         reduced=reduced,
         joints=joints,
+        drawing=(("crank", "O2", "B"), ("coupler", "B", "C")),
     )
 )

@@ -73,5 +73,6 @@ register(
         facts=facts,
         reduced=reduced,
         joints=joints,
+        drawing=(("crank", "O2", "B"),),
     )
 )

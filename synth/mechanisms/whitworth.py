@@ -160,5 +160,11 @@ register(
             "the time ratio sets pivot_distance/crank and the stroke sets the lever alone",
         ),
         joints=joints,
+        drawing=(
+            ("pivot_distance", "O2", "O4"),
+            ("crank", "O2", "B"),
+            ("lever", "O4", "P"),
+            ("connecting_rod", "P", "R"),
+        ),
     )
 )
