@@ -3,11 +3,13 @@ the request by the routers, into 422s, and every other refusal into FastAPI's sh
 
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from pathlib import Path
 
 from fastapi import FastAPI, Request
 from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse, Response
+from fastapi.responses import JSONResponse, RedirectResponse, Response
+from fastapi.staticfiles import StaticFiles
 from fastapi_offline import FastAPIOffline
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
@@ -35,13 +37,21 @@ app = FastAPIOffline(  # /docs and /redoc load their scripts from this service, 
     title="Quick-return mechanism synthesis",
     version=synth.__version__,
     description="Dimensional synthesis and analysis of quick-return mechanisms: time ratio, "
-    "stroke and minimum transmission angle to verified link lengths.",
+    "stroke and minimum transmission angle to verified link lengths. A playground in the "
+    "browser, served by this service: [/app/](/app/).",
     lifespan=lifespan,
     swagger_ui_parameters={"validatorUrl": None},  # no badge from validator.swagger.io
 )
 for module in (mechanisms, analyze, synthesize, sweep):
     app.include_router(module.router)
 app.add_middleware(Gate)
+# the playground: a page and its script and style, nothing from another origin
+app.mount("/app", StaticFiles(directory=Path(__file__).parent / "static", html=True), name="app")
+
+
+@app.get("/", include_in_schema=False)
+def root() -> RedirectResponse:
+    return RedirectResponse("/app/")
 
 
 @app.get("/health", response_model=Health, tags=["service"])

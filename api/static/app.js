@@ -1,0 +1,557 @@
+// The playground: a page of the service that calls its REST API (no other origin, no build step).
+// Synthesis, analysis and sweep views; the chosen design drawn to scale and animated from the
+// pin positions the analysis gives at the frames drawn, with its curves at the same angles.
+"use strict";
+
+const BASE = new URL("..", location.href); // the service's root: this page is at /app/
+const FRAMES = 72; // drawn frames per crank revolution
+const COLORS = ["#1f5fbf", "#d9730d", "#2e8b57", "#8e44ad", "#b0131f", "#555", "#008b8b"];
+const SVGNS = "http://www.w3.org/2000/svg";
+// the strokes' and dead centres' colours (literal: an exported drawing carries them)
+const WORKING = "#1f5fbf", RETURN = "#d9730d", DEAD = "#b0131f";
+let TYPES = {}; // type -> /v1/mechanisms record
+let current = null; // the design shown: {type, params, analysis, curves, bound}
+let timer = null;
+let frame = 0;
+
+const $ = (id) => document.getElementById(id);
+const fmt = (x, d = 6) => (x === null || x === undefined ? "–" : Number(x).toPrecision(d));
+
+async function api(path, body) {
+  const init = body === undefined ? {} : {
+    method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify(body),
+  };
+  const r = await fetch(new URL(path, BASE), init);
+  let data = {};
+  try { data = await r.json(); } catch (e) { data = { detail: [{ loc: [], msg: `HTTP ${r.status}` }] }; }
+  return { ok: r.ok, status: r.status, data };
+}
+
+function el(tag, attrs = {}, text) {
+  const ns = ["svg", "g", "line", "circle", "polyline", "path", "text", "rect"].includes(tag);
+  const e = ns ? document.createElementNS(SVGNS, tag) : document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) e.setAttribute(k, v);
+  if (text !== undefined) e.textContent = text;
+  return e;
+}
+
+// ---- errors at the fields they name ------------------------------------------------------
+
+function clearErrors(form) {
+  for (const p of form.querySelectorAll(".error")) p.textContent = "";
+  for (const f of form.querySelectorAll("[aria-invalid]")) f.removeAttribute("aria-invalid");
+}
+
+function fieldError(id, msg, formError) {
+  const field = $(id);
+  let box = $(`${id}-error`);
+  if (field && !box) { // a field without its own box (advanced bounds): one next to it
+    box = el("p", { class: "error", id: `${id}-error`, role: "alert" });
+    field.insertAdjacentElement("afterend", box);
+  }
+  if (!field || !box) {
+    $(formError).textContent += (($(formError).textContent ? " " : "") + msg);
+    return;
+  }
+  field.setAttribute("aria-invalid", "true");
+  field.setAttribute("aria-describedby", box.id);
+  box.textContent = box.textContent ? `${box.textContent} ${msg}` : msg;
+}
+
+function showErrors(detail, idOf, formError) {
+  for (const e of detail || []) fieldError(idOf(e.loc || []) || "", e.msg, formError);
+}
+
+// ---- the synthesis view -------------------------------------------------------------------
+
+function num(id) {
+  const f = $(id);
+  if (!f || f.value.trim() === "") return null;
+  const x = Number(f.value);
+  return Number.isFinite(x) ? x : f.value; // not a number: the service says so at the field
+}
+
+function buildTypes() {
+  const box = $("types");
+  for (const [t, m] of Object.entries(TYPES)) {
+    const row = el("div");
+    const cb = el("input", { type: "checkbox", name: "type", value: t, id: `type-${t}` });
+    cb.checked = m.quick_return;
+    row.append(cb, el("label", { for: `type-${t}` }, ` ${m.title}`));
+    const adv = el("details", { id: `adv-${t}` });
+    adv.append(el("summary", {}, `${t}: fixed parts and bounds`));
+    const grid = el("div", { class: "fields" });
+    grid.append(el("span", {}, "parameter"), el("span", {}, "fixed"), el("span", {}, "min"), el("span", {}, "max"));
+    for (const p of m.parameters) {
+      grid.append(el("span", {}, `${p.name} (${p.symbol})`));
+      for (const k of ["fixed", "min", "max"]) {
+        grid.append(el("input", { id: `${t}-${p.name}-${k}`, type: "number", step: "any",
+          "aria-label": `${t} ${p.name} ${k}` }));
+      }
+    }
+    adv.append(grid);
+    box.append(row, adv);
+  }
+}
+
+function synthRequest() {
+  const stroke = num("stroke");
+  const mechanisms = [];
+  for (const cb of document.querySelectorAll("input[name=type]:checked")) {
+    const t = cb.value;
+    const spec = { type: t };
+    const fixed = {}, bounds = {};
+    for (const p of TYPES[t].parameters) {
+      const f = num(`${t}-${p.name}-fixed`);
+      const lo = num(`${t}-${p.name}-min`), hi = num(`${t}-${p.name}-max`);
+      if (f !== null) fixed[p.name] = f;
+      if (lo !== null || hi !== null) {
+        const s = typeof stroke === "number" ? stroke : 1;
+        bounds[p.name] = [lo ?? p.bounds[0] * s, hi ?? p.bounds[1] * s];
+      }
+    }
+    if (Object.keys(fixed).length) spec.fixed = fixed;
+    if (Object.keys(bounds).length) spec.bounds = bounds;
+    mechanisms.push(spec);
+  }
+  const body = { time_ratio: num("time_ratio"), stroke, objective: $("objective").value };
+  const bound = num("bound");
+  if (bound !== null) body.min_transmission_angle_deg = bound;
+  if (mechanisms.length) body.mechanisms = mechanisms;
+  return body;
+}
+
+function synthFieldId(loc) {
+  const where = loc[0] === "body" ? loc.slice(1) : loc;
+  const top = { time_ratio: "time_ratio", stroke: "stroke", min_transmission_angle_deg: "bound",
+    objective: "objective" };
+  if (where.length === 1 && top[where[0]]) return top[where[0]];
+  if (where[0] === "mechanisms" && typeof where[1] === "number") {
+    const t = document.querySelectorAll("input[name=type]:checked")[where[1]]?.value;
+    const kind = where.find((x) => x === "fixed" || x === "bounds");
+    const name = where[where.length - 1];
+    if (t && kind && typeof name === "string") return `${t}-${name}-${kind === "fixed" ? "fixed" : "min"}`;
+  }
+  return null;
+}
+
+async function synthesize(choose = 0) {
+  const form = $("synth-form");
+  clearErrors(form);
+  const body = synthRequest();
+  saveState("synthesize", synthState());
+  $("synth-status").textContent = "Synthesising…";
+  const r = await api("v1/synthesize", body);
+  $("synth-status").textContent = "";
+  const tbody = $("candidates").querySelector("tbody");
+  tbody.replaceChildren();
+  $("refusals").replaceChildren();
+  if (!r.ok) {
+    showErrors(r.data.detail, synthFieldId, "form-error");
+    return;
+  }
+  const cands = r.data.candidates;
+  cands.forEach((c, i) => {
+    const tr = el("tr", { "data-index": i, "data-type": c.type });
+    const links = Object.entries(c.params).map(([k, v]) => `${k} = ${fmt(v, 7)}`).join(", ");
+    const btn = el("button", { type: "button", class: "choose",
+      "aria-label": `Show candidate ${i + 1}, ${c.type}` }, "Show");
+    btn.addEventListener("click", () => choose_(cands, i, body));
+    tr.append(el("td", {}, c.type), el("td", {}, fmt(c.min_transmission_angle_deg, 6)),
+      el("td", {}, fmt(c.size, 6)), el("td", {}, links), el("td", {}, c.method));
+    const last = el("td"); last.append(btn); tr.append(last);
+    tbody.append(tr);
+  });
+  for (const why of r.data.infeasible) {
+    $("refusals").append(el("li", { "data-type": why.type }, `${why.type}: ${why.code} — ${why.reason}`));
+  }
+  frontPlot(cands, body);
+  if (cands.length) choose_(cands, Math.min(choose, cands.length - 1), body);
+}
+
+function choose_(cands, i, body) {
+  for (const tr of $("candidates").querySelectorAll("tbody tr")) {
+    tr.classList.toggle("chosen", Number(tr.dataset.index) === i);
+  }
+  const c = cands[i];
+  saveState("synthesize", { ...synthState(), choose: String(i) });
+  showDesign(c.type, c.params, body.min_transmission_angle_deg || 0);
+}
+
+function synthState() {
+  const s = { tr: $("time_ratio").value, stroke: $("stroke").value, bound: $("bound").value,
+    objective: $("objective").value,
+    types: [...document.querySelectorAll("input[name=type]:checked")].map((x) => x.value).join(",") };
+  for (const f of $("types").querySelectorAll("input[type=number]")) if (f.value !== "") s[f.id] = f.value;
+  return s;
+}
+
+function loadSynthState(q) {
+  const set = (id, k) => { if (q.has(k)) $(id).value = q.get(k); };
+  set("time_ratio", "tr"); set("stroke", "stroke"); set("bound", "bound"); set("objective", "objective");
+  if (q.has("types")) {
+    const on = new Set(q.get("types").split(","));
+    for (const cb of document.querySelectorAll("input[name=type]")) cb.checked = on.has(cb.value);
+  }
+  for (const [k, v] of q) {
+    const f = $(k);
+    if (f && f.closest("#types") && f.type === "number") { f.value = v; f.closest("details").open = true; }
+  }
+}
+
+// ---- the analysis and sweep views ---------------------------------------------------------
+
+async function exampleDesign(t) {
+  // a valid design of the type, from the synthesis itself (no list of types here)
+  const tr = TYPES[t].quick_return ? 1.6 : 1.0;
+  const r = await api("v1/synthesize", { time_ratio: tr, stroke: 1, mechanisms: [{ type: t }],
+    objective: "max_transmission_angle" });
+  return r.ok && r.data.candidates.length ? r.data.candidates[0].params : {};
+}
+
+async function paramInputs(prefix, t, values) {
+  const box = $(`${prefix}-params`);
+  box.replaceChildren();
+  const v = values || await exampleDesign(t);
+  for (const p of TYPES[t].parameters) {
+    const id = `${prefix}-param-${p.name}`;
+    box.append(el("label", { for: id }, `${p.name} (${p.symbol})`));
+    const input = el("input", { id, type: "number", step: "any" });
+    if (v[p.name] !== undefined) input.value = v[p.name];
+    box.append(input, el("p", { class: "error", id: `${id}-error`, role: "alert" }));
+  }
+  if (prefix === "s") {
+    const vary = $("s-vary");
+    vary.replaceChildren(...TYPES[t].parameters.map((p) => el("option", { value: p.name }, p.name)));
+    if (values && values.__vary) vary.value = values.__vary;
+    setSweepRange();
+  }
+}
+
+function designOf(prefix) {
+  const t = $(`${prefix}-type`).value;
+  const params = {};
+  for (const p of TYPES[t].parameters) {
+    const x = num(`${prefix}-param-${p.name}`);
+    if (x !== null) params[p.name] = x;
+  }
+  return { type: t, params };
+}
+
+function designFieldId(prefix) {
+  return (loc) => {
+    const i = loc.indexOf("params");
+    if (i >= 0 && typeof loc[i + 1] === "string") return `${prefix}-param-${loc[i + 1]}`;
+    const last = loc[loc.length - 1];
+    if (prefix === "s" && ["vary", "start", "stop", "points"].includes(last)) return `s-${last}`;
+    return null;
+  };
+}
+
+async function analyzeView() {
+  const form = $("analyze-form");
+  clearErrors(form);
+  const d = designOf("a");
+  saveState("analyze", { type: d.type, ...d.params });
+  await showDesign(d.type, d.params, 0, (detail) => showErrors(detail, designFieldId("a"), "a-form-error"));
+}
+
+function setSweepRange() {
+  const v = num(`s-param-${$("s-vary").value}`);
+  if (typeof v === "number" && v !== 0) {
+    $("s-start").value = Number((0.5 * v).toPrecision(6));
+    $("s-stop").value = Number((1.5 * v).toPrecision(6));
+  }
+}
+
+async function sweepView() {
+  const form = $("sweep-form");
+  clearErrors(form);
+  const d = designOf("s");
+  const body = { mechanism: d, vary: $("s-vary").value, start: num("s-start"), stop: num("s-stop"),
+    points: num("s-points") };
+  saveState("sweep", { type: d.type, ...d.params, __vary: body.vary, __start: $("s-start").value,
+    __stop: $("s-stop").value, __points: $("s-points").value });
+  const r = await api("v1/sweep", body);
+  const svg = $("sweep-plot");
+  svg.replaceChildren();
+  if (!r.ok) { showErrors(r.data.detail, designFieldId("s"), "s-form-error"); return; }
+  const s = r.data;
+  plot(svg, s.values, [
+    { ys: s.time_ratio, color: COLORS[0], label: "time ratio" },
+    { ys: s.min_transmission_angle_deg, color: COLORS[1], label: "min. transmission (°)", right: true },
+  ], { xlabel: s.vary, shade: s.valid_interval });
+}
+
+// ---- one design: drawing, animation, curves -------------------------------------------------
+
+function pinsOf(curves) {
+  // {pin: {x: [...], y: [...]}} at the curve's angles
+  return curves.pins || {};
+}
+
+async function showDesign(type, params, bound, onError) {
+  const summary = await api("v1/analyze", { mechanism: { type, params } });
+  if (!summary.ok) {
+    if (onError) onError(summary.data.detail);
+    $("detail").hidden = true;
+    return;
+  }
+  const a = summary.data;
+  const tmin = a.extremes.min.crank_angle_deg, tmax = a.extremes.max.crank_angle_deg;
+  const angles = [...Array(FRAMES).keys()].map((k) => (k * 360) / FRAMES).concat([tmin, tmax]);
+  const r = await api("v1/analyze", { mechanism: { type, params }, crank_angles_deg: angles,
+    include: TYPES[type].drawing.length ? ["pins"] : [] });
+  if (!r.ok) { if (onError) onError(r.data.detail); return; }
+  current = { type, params: a.params, analysis: a, curves: r.data.curves, bound };
+  $("detail").hidden = false;
+  $("detail-title").textContent = `${TYPES[type].title}`;
+  $("detail-summary").textContent = `time ratio ${fmt(a.time_ratio, 8)}, stroke ${fmt(a.stroke, 8)}, ` +
+    `minimum transmission angle ${fmt(a.transmission.min_deg, 6)}°` +
+    (a.conditioning.flags.length ? ` (${a.conditioning.flags.join(", ")})` : "");
+  drawLinkage();
+  curvePlots();
+  setFrame(0);
+  play(true);
+}
+
+function phase(theta) {
+  // "working" or "return" for a crank angle, from the analysis's strokes
+  const a = current.analysis;
+  const start = a.working_stroke.direction > 0 ? a.extremes.min.crank_angle_deg : a.extremes.max.crank_angle_deg;
+  const into = (((theta - start) % 360) + 360) % 360;
+  return into < a.working_stroke.crank_angle_deg ? "working" : "return";
+}
+
+function drawLinkage() {
+  const svg = $("linkage");
+  svg.replaceChildren();
+  const pins = pinsOf(current.curves);
+  const names = Object.keys(pins);
+  if (!names.length) return;
+  let xs = [], ys = [];
+  for (const n of names) { xs = xs.concat(pins[n].x); ys = ys.concat(pins[n].y); }
+  const xmin = Math.min(...xs), xmax = Math.max(...xs), ymin = Math.min(...ys), ymax = Math.max(...ys);
+  const pad = 0.08 * Math.max(xmax - xmin, ymax - ymin, 1e-12);
+  svg.setAttribute("viewBox", `${xmin - pad} ${-(ymax + pad)} ${xmax - xmin + 2 * pad} ${ymax - ymin + 2 * pad}`);
+  svg.setAttribute("preserveAspectRatio", "xMidYMid meet");
+  const world = el("g", { transform: "scale(1,-1)", id: "world" });
+  svg.append(world);
+  const drawing = TYPES[current.type].drawing;
+  const crank = drawing.find((d) => d[0] === "crank");
+  const stroke = { "vector-effect": "non-scaling-stroke" };
+  // the crank pin's path, coloured by stroke, and the dead centres
+  if (crank) {
+    const [, c, p] = crank;
+    for (let k = 0; k < FRAMES; k++) {
+      const k2 = (k + 1) % FRAMES, th = (k * 360) / FRAMES;
+      world.append(el("line", { ...stroke, class: `path ${phase(th + 180 / FRAMES)}`,
+        x1: pins[p].x[k], y1: pins[p].y[k], x2: pins[p].x[k2], y2: pins[p].y[k2],
+        stroke: phase(th + 180 / FRAMES) === "working" ? WORKING : RETURN, "stroke-width": 3 }));
+    }
+    for (const k of [FRAMES, FRAMES + 1]) {
+      world.append(el("line", { ...stroke, class: "dead-centre", x1: pins[c].x[k], y1: pins[c].y[k],
+        x2: pins[p].x[k], y2: pins[p].y[k], stroke: DEAD, "stroke-dasharray": "4 3", "stroke-width": 1.5 }));
+    }
+  }
+  const slider = names[names.length - 1]; // the slider's pin is the drawing's last
+  for (const k of [FRAMES, FRAMES + 1]) {
+    world.append(el("circle", { class: "dead-centre", cx: pins[slider].x[k], cy: pins[slider].y[k],
+      r: pad * 0.12, fill: DEAD }));
+  }
+  world.append(el("polyline", { ...stroke, class: "slider-path", fill: "none", stroke: "#bbb",
+    points: pins[slider].x.slice(0, FRAMES).map((x, k) => `${x},${pins[slider].y[k]}`).join(" ") }));
+  const moving = el("g", { id: "moving" });
+  for (const [name, a, b] of drawing) {
+    if (current.params[name] === 0) continue; // a part left out (a slot drive)
+    moving.append(el("line", { ...stroke, class: "member", "data-name": name, "data-from": a, "data-to": b,
+      stroke: name === "crank" ? WORKING : "#333", "stroke-width": 3, "stroke-linecap": "round" }));
+  }
+  for (const n of names) {
+    moving.append(el("circle", { class: "pin", "data-name": n, r: pad * 0.08, fill: "#fff",
+      stroke: "#333", ...stroke }));
+  }
+  world.append(moving);
+}
+
+function setFrame(k) {
+  frame = ((k % FRAMES) + FRAMES) % FRAMES;
+  $("angle").value = frame;
+  const th = (frame * 360) / FRAMES;
+  $("angle-out").textContent = `${th}° (${phase(th)} stroke)`;
+  const pins = pinsOf(current.curves);
+  for (const line of document.querySelectorAll("#linkage line.member")) {
+    const a = pins[line.dataset.from], b = pins[line.dataset.to];
+    line.setAttribute("x1", a.x[frame]); line.setAttribute("y1", a.y[frame]);
+    line.setAttribute("x2", b.x[frame]); line.setAttribute("y2", b.y[frame]);
+    if (line.dataset.name === "crank") line.setAttribute("stroke", phase(th) === "working" ? WORKING : RETURN);
+  }
+  for (const c of document.querySelectorAll("#linkage circle.pin")) {
+    const p = pins[c.dataset.name];
+    c.setAttribute("cx", p.x[frame]); c.setAttribute("cy", p.y[frame]);
+  }
+  for (const cur of document.querySelectorAll("#detail .cursor")) {
+    cur.setAttribute("x1", cur.dataset.scale * th + Number(cur.dataset.offset));
+    cur.setAttribute("x2", cur.getAttribute("x1"));
+  }
+}
+
+function play(on) {
+  clearInterval(timer);
+  timer = on ? setInterval(() => setFrame(frame + 1), 80) : null;
+  $("play").textContent = on ? "Pause" : "Play";
+  $("play").setAttribute("aria-pressed", String(on));
+}
+
+function curvePlots() {
+  const c = current.curves;
+  const th = c.crank_angle_deg.slice(0, FRAMES);
+  const a = current.analysis;
+  const dead = [a.extremes.min.crank_angle_deg, a.extremes.max.crank_angle_deg];
+  const common = { xlabel: "crank angle (°)", vlines: dead, cursor: true, phases: true };
+  plot($("plot-position"), th, [{ ys: c.position.slice(0, FRAMES), color: COLORS[0], label: "position" }], common);
+  plot($("plot-velocity"), th, [{ ys: c.velocity.slice(0, FRAMES), color: COLORS[0], label: "velocity (ω = 1)" }], common);
+  plot($("plot-acceleration"), th, [{ ys: c.acceleration.slice(0, FRAMES), color: COLORS[0], label: "acceleration (ω = 1)" }], common);
+  plot($("plot-transmission"), th, [{ ys: c.transmission_deg.slice(0, FRAMES), color: COLORS[0], label: "transmission angle (°)" }],
+    { ...common, hlines: current.bound > 0 ? [{ y: current.bound, label: `bound ${current.bound}°` }] : [] });
+}
+
+// A small line plot in an SVG: series against xs (a second scale on the right for `right`
+// series), dashed vertical lines, horizontal lines, shaded x intervals, a cursor.
+function plot(svg, xs, series, opts = {}) {
+  svg.replaceChildren();
+  const W = 400, H = 180, L = 46, R = series.some((s) => s.right) ? 46 : 10, T = 18, B = 26;
+  svg.setAttribute("viewBox", `0 0 ${W} ${H}`);
+  const finite = (v) => v.filter((y) => y !== null && Number.isFinite(y));
+  const range = (v) => { const f = finite(v); const lo = Math.min(...f), hi = Math.max(...f); return hi > lo ? [lo, hi] : [lo - 1, hi + 1]; };
+  const [x0, x1] = range(xs);
+  const sx = (x) => L + ((x - x0) / (x1 - x0)) * (W - L - R);
+  const scale = (ys, extra = []) => { const [a, b] = range(ys.concat(extra)); return (y) => H - B - ((y - a) / (b - a)) * (H - T - B); };
+  for (const [lo, hi] of opts.shade || []) {
+    svg.append(el("rect", { class: "valid", x: sx(lo), y: T, width: Math.max(sx(hi) - sx(lo), 1), height: H - T - B, fill: "#e8f3e8" }));
+  }
+  if (opts.phases && current) {
+    for (let k = 0; k < xs.length; k++) {
+      if (phase(xs[k]) === "return") svg.append(el("rect", { x: sx(xs[k]), y: H - B, width: (W - L - R) / xs.length + 0.5, height: 4, fill: RETURN }));
+      else svg.append(el("rect", { x: sx(xs[k]), y: H - B, width: (W - L - R) / xs.length + 0.5, height: 4, fill: WORKING }));
+    }
+  }
+  svg.append(el("line", { x1: L, y1: H - B, x2: W - R, y2: H - B, stroke: "#999" }));
+  svg.append(el("line", { x1: L, y1: T, x2: L, y2: H - B, stroke: "#999" }));
+  svg.append(el("text", { x: L, y: H - 6 }, fmt(x0, 4)), el("text", { x: W - R - 30, y: H - 6 }, fmt(x1, 4)));
+  if (opts.xlabel) svg.append(el("text", { x: (W - 60) / 2, y: H - 6 }, opts.xlabel));
+  series.forEach((s, i) => {
+    const extra = (opts.hlines || []).map((h) => h.y);
+    const sy = scale(s.ys, extra);
+    const [lo, hi] = range(s.ys.concat(extra));
+    const xl = s.right ? W - R + 2 : 2;
+    svg.append(el("text", { x: xl, y: T + 8 + 12 * (s.right ? 1 : 0) }, fmt(hi, 4)), el("text", { x: xl, y: H - B - 2 }, fmt(lo, 4)));
+    svg.append(el("text", { x: L + 4 + 150 * i, y: 12, fill: s.color }, s.label));
+    const pts = [];
+    s.ys.forEach((y, k) => { if (y !== null && Number.isFinite(y)) pts.push(`${sx(xs[k])},${sy(y)}`); });
+    svg.append(el("polyline", { points: pts.join(" "), fill: "none", stroke: s.color, "stroke-width": 1.5, class: "series" }));
+    for (const h of opts.hlines || []) {
+      svg.append(el("line", { class: "bound", x1: L, x2: W - R, y1: sy(h.y), y2: sy(h.y), stroke: DEAD, "stroke-dasharray": "5 3" }));
+      svg.append(el("text", { x: W - R - 70, y: sy(h.y) - 3 }, h.label));
+    }
+  });
+  for (const v of opts.vlines || []) {
+    svg.append(el("line", { class: "dead-centre", x1: sx(v), x2: sx(v), y1: T, y2: H - B, stroke: DEAD, "stroke-dasharray": "3 3" }));
+  }
+  if (opts.cursor) {
+    svg.append(el("line", { class: "cursor", x1: L, x2: L, y1: T, y2: H - B, stroke: "#333",
+      "data-scale": (W - L - R) / (x1 - x0), "data-offset": L - (x0 * (W - L - R)) / (x1 - x0) }));
+  }
+}
+
+function frontPlot(cands, body) {
+  const svg = $("front-plot");
+  svg.replaceChildren();
+  if (!cands.length) return;
+  const types = [...new Set(cands.map((c) => c.type))];
+  const W = 400, H = 180, L = 46, R = 10, T = 18, B = 26;
+  svg.setAttribute("viewBox", `0 0 ${W} ${H}`);
+  const sizes = cands.map((c) => c.size), mus = cands.map((c) => c.min_transmission_angle_deg);
+  const lo = (v) => Math.min(...v), hi = (v) => Math.max(...v) > Math.min(...v) ? Math.max(...v) : Math.min(...v) + 1;
+  const sx = (x) => L + ((x - lo(sizes)) / (hi(sizes) - lo(sizes))) * (W - L - R);
+  const sy = (y) => H - B - ((y - lo(mus)) / (hi(mus) - lo(mus))) * (H - T - B);
+  svg.append(el("line", { x1: L, y1: H - B, x2: W - R, y2: H - B, stroke: "#999" }), el("line", { x1: L, y1: T, x2: L, y2: H - B, stroke: "#999" }));
+  svg.append(el("text", { x: L, y: H - 6 }, `size ${fmt(lo(sizes), 4)} … ${fmt(hi(sizes), 4)}`));
+  svg.append(el("text", { x: 2, y: T + 8 }, `${fmt(hi(mus), 4)}°`), el("text", { x: 2, y: H - B - 2 }, `${fmt(lo(mus), 4)}°`));
+  types.forEach((t, i) => {
+    const mine = cands.map((c, k) => [c, k]).filter(([c]) => c.type === t);
+    svg.append(el("polyline", { fill: "none", stroke: COLORS[i % COLORS.length], "stroke-width": 1,
+      points: mine.map(([c]) => `${sx(c.size)},${sy(c.min_transmission_angle_deg)}`).join(" ") }));
+    for (const [c, k] of mine) {
+      const dot = el("circle", { cx: sx(c.size), cy: sy(c.min_transmission_angle_deg), r: 4, fill: COLORS[i % COLORS.length], "data-index": k });
+      dot.addEventListener("click", () => choose_(cands, k, body));
+      svg.append(dot);
+    }
+    svg.append(el("text", { x: L + 6, y: T + 12 * i + 2, fill: COLORS[i % COLORS.length] }, t));
+  });
+}
+
+// ---- export ------------------------------------------------------------------------------------
+
+function download(name, type, text) {
+  const a = el("a", { href: URL.createObjectURL(new Blob([text], { type })), download: name });
+  document.body.append(a); a.click(); a.remove();
+}
+
+// ---- state in the address --------------------------------------------------------------------
+
+function saveState(view, state) {
+  const q = new URLSearchParams(state);
+  history.replaceState(null, "", `#${view}?${q}`);
+}
+
+async function route(run) {
+  const [view, query] = (location.hash.slice(1) || "synthesize").split("?");
+  const name = ["synthesize", "analyze", "sweep"].includes(view) ? view : "synthesize";
+  for (const v of ["synthesize", "analyze", "sweep"]) {
+    $(`view-${v}`).hidden = v !== name;
+    if (v === name) $(`tab-${v}`).setAttribute("aria-current", "page"); else $(`tab-${v}`).removeAttribute("aria-current");
+  }
+  const q = new URLSearchParams(query || "");
+  if (name === "synthesize") {
+    loadSynthState(q);
+    if (run && query) await synthesize(Number(q.get("choose") || 0));
+  } else {
+    const prefix = name === "analyze" ? "a" : "s";
+    const t = q.get("type") || $(`${prefix}-type`).value;
+    $(`${prefix}-type`).value = t;
+    const given = query ? Object.fromEntries(q) : null;
+    await paramInputs(prefix, t, given);
+    if (prefix === "s" && given) {
+      for (const k of ["start", "stop", "points"]) if (given[`__${k}`]) $(`s-${k}`).value = given[`__${k}`];
+    }
+    if (run && query) await (name === "analyze" ? analyzeView() : sweepView());
+  }
+}
+
+async function init() {
+  const r = await api("v1/mechanisms");
+  for (const m of r.data) TYPES[m.type] = m;
+  buildTypes();
+  for (const prefix of ["a", "s"]) {
+    const sel = $(`${prefix}-type`);
+    sel.replaceChildren(...Object.values(TYPES).map((m) => el("option", { value: m.type }, m.title)));
+    sel.value = "drag_link_slider" in TYPES ? "drag_link_slider" : Object.keys(TYPES)[0];
+    sel.addEventListener("change", () => paramInputs(prefix, sel.value));
+  }
+  $("s-vary").addEventListener("change", setSweepRange);
+  $("synth-form").addEventListener("submit", (e) => { e.preventDefault(); synthesize(0); });
+  $("analyze-form").addEventListener("submit", (e) => { e.preventDefault(); analyzeView(); });
+  $("sweep-form").addEventListener("submit", (e) => { e.preventDefault(); sweepView(); });
+  $("play").addEventListener("click", () => play(timer === null));
+  $("angle").addEventListener("input", () => { play(false); setFrame(Number($("angle").value)); });
+  $("export-json").addEventListener("click", () => current && download(`${current.type}.json`,
+    "application/json", JSON.stringify({ type: current.type, params: current.params, analysis: current.analysis }, null, 2)));
+  $("export-svg").addEventListener("click", () => current && download(`${current.type}.svg`,
+    "image/svg+xml", new XMLSerializer().serializeToString($("linkage"))));
+  window.addEventListener("hashchange", () => route(false));
+  await route(true);
+  document.body.dataset.ready = "true";
+}
+
+init();
