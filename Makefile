@@ -16,7 +16,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 # the project itself, editable, built by the setuptools the lock pinned
 INSTALL_SELF := $(BIN)/python -m pip install -qq --no-deps --no-build-isolation -e .
 
-.PHONY: serve test stress bench lint lock lock-check notebook python clean
+.PHONY: serve test stress bench atlas lint lock lock-check notebook python clean
 
 python:
 	@test -n "$(PYTHON)" || { echo "make: no Python 3.11, 3.12 or 3.13 found (tried python3.13," \
@@ -60,6 +60,12 @@ test: $(VENV)/.dev
 stress: $(VENV)/.dev
 	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q tests/test_stress.py tests/test_global_search.py \
 		tests/test_quality.py tests/test_motion_search.py
+
+# the design atlas the service ships (GET /v1/atlas) and the README's charts: docs/atlas/,
+# resumed if interrupted; api/atlas.json is its summary
+atlas: $(VENV)/.dev
+	$(BIN)/python -m synth.atlas --out docs/atlas --charts
+	cp docs/atlas/atlas.json api/atlas.json
 
 # run time against error, analysis cost, service latency: tables, benchmarks/results/*.json, plots
 bench: $(VENV)/.dev

@@ -18,7 +18,7 @@ from synth.errors import UnknownMechanism
 
 from .engine import Busy, Engine
 from .guard import Gate, error_item, too_large
-from .routers import analyze, mechanisms, sweep, synthesize
+from .routers import analyze, atlas, mechanisms, sweep, synthesize
 from .routers.common import Located
 from .schemas import Health
 
@@ -42,7 +42,7 @@ app = FastAPIOffline(  # /docs and /redoc load their scripts from this service, 
     lifespan=lifespan,
     swagger_ui_parameters={"validatorUrl": None},  # no badge from validator.swagger.io
 )
-for module in (mechanisms, analyze, synthesize, sweep):
+for module in (mechanisms, analyze, synthesize, sweep, atlas):
     app.include_router(module.router)
 app.add_middleware(Gate)
 # the playground: a page and its script and style, nothing from another origin

@@ -376,3 +376,31 @@ AnalyzeResponse = _analysis_response()
 # synthesize and sweep answer with synth's result dataclasses as they are
 SynthesizeResponse = results.SynthesisResult
 SweepResponse = results.SweepResult
+
+
+class AtlasInputs(BaseModel):
+    types: list[str]
+    ratios: list[float]
+    bounds: list[float]
+    chunk: int
+    version: str
+
+
+class AtlasRange(BaseModel):
+    type: str
+    bound_deg: float
+    min: float | None = Field(
+        description="the least time ratio at which the type meets the "
+        "bound (the grid's first: perhaps less); None: nowhere on the grid"
+    )
+    max: float | None = Field(description="the largest (the grid's last: perhaps more)")
+
+
+class AtlasInfo(BaseModel):
+    inputs: AtlasInputs = Field(description="what reproduces it: python -m synth.atlas")
+    frontier: dict[str, list[tuple[float, float | None, str]]] = Field(
+        description="per type, [time ratio, best minimum transmission angle in degrees (None: "
+        "no design), status]: certified (an exact solver's global optimum), local (IPOPT's) or "
+        "refused"
+    )
+    ranges: list[AtlasRange]

@@ -5,10 +5,10 @@ python -m benchmarks [--quick]
 
 import sys
 
-from . import analysis, overload, service, synthesis
+from . import analysis, atlas, overload, service, synthesis
 
 if __name__ == "__main__":
     quick = ["--quick"] if "--quick" in sys.argv[1:] else []
-    for bench in (analysis, synthesis, service, overload):
+    for bench in (analysis, synthesis, service, overload, atlas):
         print(f"\n## {bench.__name__}\n", flush=True)
         bench.main(quick)

@@ -20,6 +20,17 @@ try:
 except PackageNotFoundError:  # run from a checkout without installing
     __version__ = "0.1.0"
 
+
+def __getattr__(name: str):
+    """``synth.atlas`` (the design atlas, callable) is imported when first used, so that
+    ``python -m synth.atlas`` runs it once."""
+    if name == "atlas":
+        import importlib
+
+        return importlib.import_module(".atlas", __name__)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 __all__ = [
     "Analysis",
     "Candidate",
@@ -34,6 +45,7 @@ __all__ = [
     "Tolerance",
     "UnknownMechanism",
     "analyze",
+    "atlas",
     "joints",
     "mechanisms",
     "sweep",

@@ -12,10 +12,10 @@ from nbclient import NotebookClient
 
 NOTEBOOKS = Path(__file__).resolve().parent.parent / "notebooks"
 NAMES = ("crank_slotted_lever_lab", "scotch_yoke_shm", "drag_link_project", "textbook_examples",
-         "synthesis_tour", "benchmark")  # fmt: skip
+         "synthesis_tour", "benchmark", "atlas")  # fmt: skip
 
 
-def test_the_notebooks_are_the_six_named():
+def test_the_notebooks_are_the_ones_named():
     assert sorted(p.stem for p in NOTEBOOKS.glob("*.ipynb")) == sorted(NAMES)
 
 

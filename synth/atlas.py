@@ -1,0 +1,400 @@
+"""Design atlases: which type reaches which targets, computed exactly (``python -m synth.atlas``).
+
+The frontier: per type and time ratio, the best minimum transmission angle any design reaches
+(everything free within the default bounds; at stroke 1, as the angle does not depend on the
+stroke) and that design, in stroke units. Each grid point is a synthesis (objective
+``max_transmission_angle``) verified as the service verifies, recorded as ``certified`` (an
+exact reduced solver's global optimum), ``local`` (IPOPT's local optimum) or ``refused``
+(with the reason). From the frontier follow the selection chart (a type meets a time ratio
+and a bound exactly where its best angle there is at least the bound) and, per type and
+bound, the reachable time-ratio range: its ends bisected on the same syntheses, to 1e-9
+relative in the time ratio.
+
+The grid's points are cut into chunks, the tasks (a million points are not a million
+tasks): run in this process, in a local process pool (the default), or, given a scheduler's
+address (``--scheduler tcp://host:8786``, or ``DASK_SCHEDULER_ADDRESS``), on a Dask cluster,
+whose scheduler runs again what a lost worker held. Each finished chunk is written to the
+output folder at once (atomically, with the run's inputs in ``manifest.json``), so an
+interrupted run resumes where it stopped: the chunks already there are read, not computed
+again.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import hashlib
+import json
+import os
+import sys
+import tempfile
+import types
+from collections.abc import Iterable, Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import asdict, dataclass, field
+from multiprocessing import get_context
+from pathlib import Path
+
+from . import __version__
+from .mechanisms import all_types, get
+from .synthesis import synthesize
+
+DEFAULT_RATIOS = tuple(round(1.05 + 0.05 * k, 2) for k in range(60))  # 1.05 … 4.0
+DEFAULT_BOUNDS = (10.0, 20.0, 30.0, 40.0, 50.0)
+CHUNK = 32  # grid points per task: a million points are 31 250 tasks, not a million
+BUDGET_MS = 20_000.0  # per synthesis: IPOPT's types may need it; the exact ones take ~1 ms
+BISECT = 1e-9  # relative, in the time ratio: a range's ends
+
+
+@dataclass(frozen=True)
+class Inputs:
+    """Everything that decides an atlas (``manifest.json``): the same inputs, the same atlas."""
+
+    types: tuple[str, ...]
+    ratios: tuple[float, ...]
+    bounds: tuple[float, ...]
+    chunk: int = CHUNK
+    version: str = __version__
+
+    def key(self) -> str:
+        return hashlib.sha256(json.dumps(asdict(self), sort_keys=True).encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class Point:
+    """One frontier point: the best angle at a time ratio, or why there is none."""
+
+    type: str
+    time_ratio: float
+    best_angle_deg: float | None
+    status: str  # certified, local or refused
+    design: dict[str, float] | None = None  # stroke units
+    reason: str | None = None
+
+
+@dataclass
+class Atlas:
+    inputs: Inputs
+    frontier: list[Point]
+    ranges: list[dict] = field(default_factory=list)  # type, bound, min, max (None: unreached)
+    computed: int = 0  # chunks computed by this run (the rest were read from the folder)
+
+    def best(self, mtype: str) -> list[tuple[float, float | None]]:
+        return [(p.time_ratio, p.best_angle_deg) for p in self.frontier if p.type == mtype]
+
+    def meets(self, time_ratio: float, bound_deg: float) -> list[str]:
+        """The types whose grid point at exactly this time ratio meets the bound."""
+        return [p.type for p in self.frontier if p.time_ratio == time_ratio
+                and p.best_angle_deg is not None and p.best_angle_deg >= bound_deg]  # fmt: skip
+
+
+def point(mtype: str, time_ratio: float) -> Point:
+    """The frontier at one time ratio: a synthesis, verified."""
+    r = synthesize(time_ratio, 1.0, 0.0, [{"type": mtype}], objective="max_transmission_angle",
+                   max_candidates=1, time_budget_ms=BUDGET_MS)  # fmt: skip
+    if not r.candidates:
+        why = r.infeasible[0]
+        return Point(mtype, time_ratio, None, "refused", reason=f"{why.code}: {why.reason}")
+    c = r.candidates[0]
+    status = "certified" if c.method == "closed_form" else "local"
+    return Point(mtype, time_ratio, c.min_transmission_angle_deg, status, dict(c.params))
+
+
+def run_chunk(points: Sequence[tuple[str, float]]) -> list[Point]:
+    """One task: its grid points, in order."""
+    return [point(t, tr) for t, tr in points]
+
+
+def chunks(inputs: Inputs) -> list[list[tuple[str, float]]]:
+    grid = [(t, tr) for t in inputs.types for tr in inputs.ratios]
+    return [grid[k : k + inputs.chunk] for k in range(0, len(grid), inputs.chunk)]
+
+
+def atlas(
+    types: Sequence[str] | None = None,
+    ratios: Sequence[float] = DEFAULT_RATIOS,
+    bounds: Sequence[float] = DEFAULT_BOUNDS,
+    *,
+    chunk: int = CHUNK,
+    out: str | Path | None = None,
+    workers: int | None = None,
+    inline: bool = False,
+    scheduler: str | None = None,
+    progress: bool = False,
+) -> Atlas:
+    """The atlas over ``types`` (default: the quick-return types) × ``ratios``, with the
+    time-ratio ranges at each of ``bounds``. ``out``: the folder its chunks, CSV tables and
+    manifest go to, and that a run resumes from. ``inline`` runs every task in this process,
+    else a local process pool of ``workers`` (default: the cores). The result does not depend
+    on how it was run."""
+    types = tuple(types or (t for t in all_types() if get(t).quick_return))
+    for t in types:
+        get(t)  # raises for an unknown type
+    inputs = Inputs(types, tuple(map(float, ratios)), tuple(map(float, bounds)), chunk)
+    tasks = chunks(inputs)
+    folder = _folder(out, inputs)
+    done = {k: _read(folder, k) for k in range(len(tasks))} if folder else {}
+    done = {k: v for k, v in done.items() if v is not None}
+    todo = [k for k in range(len(tasks)) if k not in done]
+    bar = _Progress(len(tasks), len(done)) if progress else None
+    run = _dask(tasks, todo, scheduler, inputs) if scheduler else _run(tasks, todo, inline, workers)
+    for k, pts in run:
+        done[k] = pts
+        if folder:
+            _write(folder, k, pts)
+        if bar:
+            bar.step()
+    frontier = [p for k in range(len(tasks)) for p in done[k]]
+    result = Atlas(inputs, frontier, computed=len(todo))
+    result.ranges = [reach(result, t, b) for t in types for b in inputs.bounds]
+    if folder:
+        tables(result, folder)
+    return result
+
+
+def _run(tasks, todo: list[int], inline: bool, workers: int | None) -> Iterable:
+    """(chunk index, points) as each task finishes. A pool that breaks (a worker killed) is
+    replaced and the unfinished tasks run again."""
+    if inline or not todo:
+        for k in todo:
+            yield k, run_chunk(tasks[k])
+        return
+    left = list(todo)
+    while left:
+        with ProcessPoolExecutor(workers or os.cpu_count(), mp_context=get_context("spawn")) as ex:
+            running = {ex.submit(run_chunk, tasks[k]): k for k in left}
+            try:
+                while running:
+                    finished, _ = wait(running, return_when=FIRST_COMPLETED)
+                    for f in finished:
+                        k = running.pop(f)
+                        pts = f.result()
+                        left.remove(k)
+                        yield k, pts
+            except Exception as e:  # BrokenProcessPool: a worker died; the rest run again
+                if not left or "terminated abruptly" not in str(e):
+                    raise
+
+
+def _dask(tasks, todo: list[int], scheduler: str, inputs: Inputs) -> Iterable:
+    """(chunk index, points) as each task finishes on a Dask cluster. A task whose worker is
+    lost is run again by the scheduler, on another."""
+    from dask.distributed import Client, as_completed
+
+    with Client(scheduler) as client:
+        futures = {client.submit(run_chunk, tasks[k], key=f"atlas-{inputs.key()}-{k}",
+                                 pure=False): k for k in todo}  # fmt: skip
+        for f in as_completed(futures):
+            yield futures[f], f.result()
+
+
+def reach(a: Atlas, mtype: str, bound: float) -> dict:
+    """The time ratios at which the type meets the bound, within the grid: the first and last
+    grid points that meet it, each end bisected against its neighbour outside (None: no grid
+    point meets it)."""
+    pts = [(tr, mu) for tr, mu in a.best(mtype)]
+    ok = [i for i, (_, mu) in enumerate(pts) if mu is not None and mu >= bound]
+    out = {"type": mtype, "bound_deg": bound, "min": None, "max": None}
+    if not ok:
+        return out
+    lo, hi = ok[0], ok[-1]
+    out["min"] = pts[lo][0] if lo == 0 else _bisect(mtype, bound, pts[lo - 1][0], pts[lo][0])
+    out["max"] = (
+        pts[hi][0] if hi == len(pts) - 1 else _bisect(mtype, bound, pts[hi][0], pts[hi + 1][0])
+    )
+    return out
+
+
+def _bisect(mtype: str, bound: float, a: float, b: float) -> float:
+    """The time ratio between a and b where the best angle crosses the bound; the end on the
+    side that meets it."""
+
+    def meets(tr: float) -> bool:
+        p = point(mtype, tr)
+        return p.best_angle_deg is not None and p.best_angle_deg >= bound
+
+    good, bad = (a, b) if meets(a) else (b, a)
+    while abs(good - bad) > BISECT * good:
+        mid = 0.5 * (good + bad)
+        if meets(mid):
+            good = mid
+        else:
+            bad = mid
+    return good
+
+
+# ---- the folder: manifest, chunks, tables ---------------------------------------------------
+
+
+def _folder(out, inputs: Inputs) -> Path | None:
+    if out is None:
+        return None
+    folder = Path(out)
+    (folder / "chunks").mkdir(parents=True, exist_ok=True)
+    manifest = folder / "manifest.json"
+    mine = {"key": inputs.key(), "inputs": asdict(inputs)}
+    if manifest.exists():
+        theirs = json.loads(manifest.read_text())
+        if theirs.get("key") != mine["key"]:
+            raise ValueError(f"{folder} holds an atlas of other inputs ({theirs.get('inputs')}); "
+                             "choose another folder")  # fmt: skip
+    else:
+        _atomic(manifest, json.dumps(mine, indent=1))
+    return folder
+
+
+def _read(folder: Path, k: int) -> list[Point] | None:
+    path = folder / "chunks" / f"{k:06d}.json"
+    if not path.exists():
+        return None
+    return [Point(**p) for p in json.loads(path.read_text())]
+
+
+def _write(folder: Path, k: int, pts: list[Point]) -> None:
+    _atomic(folder / "chunks" / f"{k:06d}.json", json.dumps([asdict(p) for p in pts]))
+
+
+def _atomic(path: Path, text: str) -> None:
+    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False, suffix=".tmp") as f:
+        f.write(text)
+    os.replace(f.name, path)  # whole or not at all
+
+
+def tables(a: Atlas, folder: Path) -> None:
+    """frontier.csv and ranges.csv, with the inputs in manifest.json beside them, and all of
+    it in atlas.json (what the service serves at GET /v1/atlas)."""
+    summary = {
+        "inputs": asdict(a.inputs),
+        "frontier": {t: [[p.time_ratio, p.best_angle_deg, p.status] for p in a.frontier
+                         if p.type == t] for t in a.inputs.types},
+        "ranges": a.ranges,
+    }  # fmt: skip
+    _atomic(folder / "atlas.json", json.dumps(summary, indent=1))
+
+    def text(x) -> str:  # every digit kept; empty for none
+        return "" if x is None else repr(x)
+
+    with open(folder / "frontier.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["type", "time_ratio", "best_angle_deg", "status", "design", "reason"])
+        for p in a.frontier:
+            design = json.dumps(p.design) if p.design else ""
+            w.writerow([p.type, text(p.time_ratio), text(p.best_angle_deg), p.status, design,
+                        p.reason or ""])  # fmt: skip
+    with open(folder / "ranges.csv", "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["type", "bound_deg", "min_time_ratio", "max_time_ratio"])
+        for r in a.ranges:
+            w.writerow([r["type"], text(r["bound_deg"]), text(r["min"]), text(r["max"])])
+
+
+def charts(a: Atlas, folder: Path) -> list[Path]:
+    """frontier.png (every type's best angle against the time ratio) and selection.png (the
+    (time ratio, bound) plane, each type's region where it meets the target)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    paths = []
+    fig, ax = plt.subplots(figsize=(7, 4.2))
+    for t in a.inputs.types:
+        pts = [(tr, mu) for tr, mu in a.best(t) if mu is not None]
+        if pts:
+            ax.plot(*zip(*pts, strict=True), marker=".", label=get(t).title)
+    ax.set(xlabel="time ratio", ylabel="best minimum transmission angle (°)", ylim=(0, 92),
+           title="The frontier: the best transmission angle each type reaches")  # fmt: skip
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths.append(folder / "frontier.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+    # the selection chart: each (time ratio, bound) cell coloured by the set of types that
+    # meet it (a type meets it where its best angle at that time ratio is at least the bound)
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    ratios, bounds = list(a.inputs.ratios), [0.25 * k for k in range(361)]
+    best = {t: dict(a.best(t)) for t in a.inputs.types}
+    cells = [[frozenset(t for t in a.inputs.types if best[t][tr] is not None and best[t][tr] >= b)
+              for tr in ratios] for b in bounds]  # fmt: skip
+    kinds = sorted({c for row in cells for c in row}, key=lambda c: (-len(c), sorted(c)))
+    index = {c: k for k, c in enumerate(kinds)}
+    colors = ["#ffffff" if not c else f"C{k % 10}" for k, c in enumerate(kinds)]
+    fig, ax = plt.subplots(figsize=(7.5, 4.6))
+    ax.pcolormesh(ratios, bounds, [[index[c] for c in row] for row in cells],
+                  cmap=ListedColormap(colors), vmin=-0.5, vmax=len(kinds) - 0.5, shading="nearest",
+                  alpha=0.55)  # fmt: skip
+    short = {t: get(t).title.split(" (")[0] for t in a.inputs.types}
+    handles = [Patch(color=col, alpha=0.55, label=", ".join(short[t] for t in a.inputs.types
+                                                            if t in c) or "none")
+               for c, col in zip(kinds, colors, strict=True)]  # fmt: skip
+    ax.legend(handles=handles, fontsize=7, loc="upper right", title="types that meet it",
+              title_fontsize=7)  # fmt: skip
+    ax.set(xlabel="time ratio", ylabel="minimum transmission angle asked (°)", ylim=(0, 90),
+           title="Which types can meet a target")  # fmt: skip
+    fig.tight_layout()
+    paths.append(folder / "selection.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+    return paths
+
+
+class _Progress:
+    def __init__(self, total: int, done: int) -> None:
+        self.total, self.done = total, done
+        self.show()
+
+    def step(self) -> None:
+        self.done += 1
+        self.show()
+
+    def show(self) -> None:
+        filled = int(30 * self.done / max(self.total, 1))
+        end = "\n" if self.done >= self.total else ""
+        print(f"\r[{'#' * filled}{'.' * (30 - filled)}] {self.done}/{self.total} chunks", end=end,
+              file=sys.stderr, flush=True)  # fmt: skip
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    p = argparse.ArgumentParser(prog="python -m synth.atlas", description=__doc__.split("\n\n")[0])
+    p.add_argument("--types", nargs="*", help="default: the quick-return types")
+    p.add_argument("--ratios", default="1.05:4.0:60", help="start:stop:count (default %(default)s)")
+    p.add_argument("--bounds", nargs="*", type=float, default=list(DEFAULT_BOUNDS))
+    p.add_argument("--chunk", type=int, default=CHUNK)
+    p.add_argument("--out", default="atlas", help="the folder (resumed if it holds a run)")
+    p.add_argument("--workers", type=int, help="local processes (default: the cores)")
+    p.add_argument("--scheduler", default=os.environ.get("DASK_SCHEDULER_ADDRESS"),
+                   help="a Dask scheduler's address: the tasks run on its cluster (default: "
+                   "DASK_SCHEDULER_ADDRESS, else a local process pool)")  # fmt: skip
+    p.add_argument("--inline", action="store_true", help="run every task in this process")
+    p.add_argument("--charts", action="store_true", help="also frontier.png and selection.png")
+    args = p.parse_args(argv)
+    start, stop, count = args.ratios.split(":")
+    n = int(count)
+    ratios = [float(start) + (float(stop) - float(start)) * k / max(n - 1, 1) for k in range(n)]
+    a = atlas(args.types, [round(r, 12) for r in ratios], args.bounds, chunk=args.chunk,
+              out=args.out, workers=args.workers, inline=args.inline,
+              scheduler=args.scheduler, progress=True)  # fmt: skip
+    if args.charts:
+        charts(a, Path(args.out))
+    refused = sum(p.status == "refused" for p in a.frontier)
+    print(f"{len(a.frontier)} points ({refused} refused), {a.computed} chunks computed, "
+          f"tables in {args.out}/")  # fmt: skip
+
+
+__all__ = ["Atlas", "Inputs", "Point", "atlas", "charts", "main", "point", "reach"]
+
+
+class _Module(types.ModuleType):
+    """This module, callable: ``synth.atlas(...)`` is ``synth.atlas.atlas(...)``."""
+
+    def __call__(self, *args, **kwargs) -> Atlas:
+        return atlas(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _Module
+
+if __name__ == "__main__":
+    main()
