@@ -31,6 +31,7 @@ import tempfile
 import types
 from collections.abc import Iterable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import asdict, dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
@@ -44,6 +45,7 @@ DEFAULT_BOUNDS = (10.0, 20.0, 30.0, 40.0, 50.0)
 CHUNK = 32  # grid points per task: a million points are 31 250 tasks, not a million
 BUDGET_MS = 20_000.0  # per synthesis: IPOPT's types may need it; the exact ones take ~1 ms
 BISECT = 1e-9  # relative, in the time ratio: a range's ends
+POOLS = 4  # local pools a run may start (one more each time a worker dies)
 
 
 @dataclass(frozen=True)
@@ -154,13 +156,15 @@ def atlas(
 
 def _run(tasks, todo: list[int], inline: bool, workers: int | None) -> Iterable:
     """(chunk index, points) as each task finishes. A pool that breaks (a worker killed) is
-    replaced and the unfinished tasks run again."""
+    replaced and the unfinished tasks run again, up to ``POOLS`` pools in all."""
     if inline or not todo:
         for k in todo:
             yield k, run_chunk(tasks[k])
         return
     left = list(todo)
-    while left:
+    for attempt in range(POOLS):
+        if not left:
+            return
         with ProcessPoolExecutor(workers or os.cpu_count(), mp_context=get_context("spawn")) as ex:
             running = {ex.submit(run_chunk, tasks[k]): k for k in left}
             try:
@@ -171,8 +175,8 @@ def _run(tasks, todo: list[int], inline: bool, workers: int | None) -> Iterable:
                         pts = f.result()
                         left.remove(k)
                         yield k, pts
-            except Exception as e:  # BrokenProcessPool: a worker died; the rest run again
-                if not left or "terminated abruptly" not in str(e):
+            except BrokenProcessPool:  # a worker died: a new pool runs what is left
+                if attempt == POOLS - 1:
                     raise
 
 

@@ -11,6 +11,7 @@ import subprocess
 import sys
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -162,3 +163,37 @@ def test_the_service_ships_the_atlas_this_code_computes():
             p = synth.atlas.point(mtype, tr)
             assert (p.best_angle_deg, p.status) == (best, status)
     assert len(got["ranges"]) == len(inputs["types"]) * len(inputs["bounds"])
+
+
+def test_a_pool_worker_killed_mid_run_changes_nothing(tmp_path):
+    """The local pool: a worker SIGKILLed, the pool replaced, the unfinished chunks run again."""
+    from benchmarks.common import descendants
+
+    def pool_workers(before: set[int]) -> list[int]:
+        out = []
+        for pid in sorted(descendants(os.getpid()) - before):
+            try:
+                cmd = Path(f"/proc/{pid}/cmdline").read_bytes()
+            except OSError:
+                continue
+            if b"spawn_main" in cmd:  # not the resource tracker
+                out.append(pid)
+        return out
+
+    kw = {"types": ("offset_slider_crank", "whitworth"), "bounds": (), "chunk": 1,
+          "ratios": tuple(round(1.05 + 0.01 * k, 4) for k in range(150))}  # fmt: skip
+    before = descendants(os.getpid())
+    done = {}
+    run = threading.Thread(target=lambda: done.update(a=atlas(**kw, workers=2, out=tmp_path)))
+    run.start()
+    chunks = tmp_path / "chunks"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and len(list(chunks.glob("*.json"))) < 20:
+        time.sleep(0.005)
+    victims = pool_workers(before)
+    assert victims
+    os.kill(victims[0], signal.SIGKILL)
+    at_kill = len(list(chunks.glob("*.json")))
+    run.join(timeout=300)
+    assert at_kill < 300 and "a" in done, at_kill
+    same(done["a"], atlas(**kw, inline=True))
