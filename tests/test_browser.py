@@ -105,13 +105,12 @@ def test_a_chosen_design_is_drawn_to_scale_and_moves(page):
     project(pg)
     rows = pg.locator("#candidates tbody tr")
     for i in range(rows.count()):
+        before = pg.evaluate("shown")
         rows.nth(i).locator("button.choose").click()
-        pg.wait_for_function(
-            f"document.querySelector('#candidates tbody tr.chosen')?.dataset.index == '{i}'"
-        )
+        pg.wait_for_function(f"+document.querySelector('#detail').dataset.shown > {before}")
+        assert pg.get_attribute("#candidates tbody tr.chosen", "data-index") == str(i)
         text = rows.nth(i).inner_text()
         params = dict(re.findall(r"(\w+) = ([-\d.e+]+)", text))
-        pg.wait_for_selector("#linkage line.member", state="attached")
         if pg.get_attribute("#play", "aria-pressed") == "true":
             pg.click("#play")  # still, while measuring
         members = pg.eval_on_selector_all(

@@ -13,6 +13,7 @@ let TYPES = {}; // type -> /v1/mechanisms record
 let current = null; // the design shown: {type, params, analysis, curves, bound}
 let timer = null;
 let frame = 0;
+let shown = 0; // designs asked to be shown: a slower, older answer is dropped
 
 const $ = (id) => document.getElementById(id);
 const fmt = (x, d = 6) => (x === null || x === undefined ? "–" : Number(x).toPrecision(d));
@@ -291,7 +292,9 @@ function pinsOf(curves) {
 }
 
 async function showDesign(type, params, bound, onError) {
+  const mine = ++shown;
   const summary = await api("v1/analyze", { mechanism: { type, params } });
+  if (mine !== shown) return;
   if (!summary.ok) {
     if (onError) onError(summary.data.detail);
     $("detail").hidden = true;
@@ -302,6 +305,7 @@ async function showDesign(type, params, bound, onError) {
   const angles = [...Array(FRAMES).keys()].map((k) => (k * 360) / FRAMES).concat([tmin, tmax]);
   const r = await api("v1/analyze", { mechanism: { type, params }, crank_angles_deg: angles,
     include: TYPES[type].drawing.length ? ["pins"] : [] });
+  if (mine !== shown) return;
   if (!r.ok) { if (onError) onError(r.data.detail); return; }
   current = { type, params: a.params, analysis: a, curves: r.data.curves, bound };
   $("detail").hidden = false;
@@ -313,6 +317,7 @@ async function showDesign(type, params, bound, onError) {
   curvePlots();
   setFrame(0);
   play(true);
+  $("detail").dataset.shown = String(mine); // drawn: for tests and tools that wait on it
 }
 
 function phase(theta) {
