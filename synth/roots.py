@@ -25,8 +25,8 @@ def stationary_points(
     """Every stationary point of every row that changes the sign of its derivative.
 
     Returns (row, θ, value) arrays. Roots are bracketed on an n-point grid, refined where the
-    motion is fast (see ``_refine``), and polished by a vectorised safeguarded Newton
-    iteration on g' with g''.
+    motion is fast (see ``_refine``), and polished by safeguarded Newton steps on g' with g''
+    (``_polish``: compiled, all roots in one call).
     """
     grid, widths = _grid(n)
     g, g1, g2 = f(grid, pv)

@@ -156,9 +156,10 @@ class FourBar(Construction):
 
     def smallest(self, cos_bound: float, start: dict | None = None) -> Reduced:
         """The smallest design with the coupler's worst cos ≤ ``cos_bound``, the better of
-        the two sheets; with nothing fixed, no bound given and no rod, σ = −1 only where
-        σ = +1 has none (it was never smaller in a survey of 300 random targets; a rod or a
-        fixed link can make it smaller). None at all when the best transmission misses the
+        the two sheets; with nothing fixed, no bound given and no rod that swings, σ = −1 only
+        where σ = +1 has none (it was never smaller in a survey of 300 random targets, nor in
+        168 drag-link targets with their rod; a swinging rod or a fixed link can make it
+        smaller). None at all when the best transmission misses the
         bound. On a front (``Problem.near``: this variant's optima at the previous point's
         bound), each sheet's optimum is continued from there (``continued``), and the full
         search runs only where that fails."""
@@ -177,7 +178,9 @@ class FourBar(Construction):
             if self.rod:  # the start IPOPT gets has the rod
                 found, _ = self.coupler_optimum()
             best = [found[0]] if found else []
-        both = self.rod or bool(self.p.fixed) or bool(self.p.explicit)
+        # a rod from an arm that turns fully on the path's line (the drag-link's) is as long
+        # for every design (arm / cos bound): only a swinging arm's rod can favour σ = −1
+        both = (self.rod and self.r.swings) or bool(self.p.fixed) or bool(self.p.explicit)
         sheets: list[tuple[int, list, bool]] = []
         for sigma in (1, -1):
             self.missed = None
