@@ -6,19 +6,13 @@
 (2.0, 450.0)
 """
 
-from importlib.metadata import PackageNotFoundError, version
-
 from . import mechanisms
+from ._version import __version__ as __version__
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
 from .kinematics import analyze, joints
 from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
 from .sweep import sweep
 from .synthesis import Solver, Spec, synthesize
-
-try:
-    __version__ = version("quickreturn-synth")
-except PackageNotFoundError:  # run from a checkout without installing
-    __version__ = "0.1.0"
 
 
 def __getattr__(name: str):

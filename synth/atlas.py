@@ -36,7 +36,7 @@ from dataclasses import asdict, dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
 
-from . import __version__
+from ._version import __version__
 from .mechanisms import all_types, get
 from .synthesis import synthesize
 
