@@ -14,7 +14,7 @@ FORBIDDEN = [
     re.compile(r"\.\./" + "shared"),
     re.compile(r"\b" + "shared/(design|seeds)"),
     re.compile("/" + r"work/"),
-    re.compile(r"(?i)seeds?[ _]?0\d\d(?!\d)"),  # also in names: SEED000_, test_seed002
+    re.compile(r"(?i)seeds?[ _]?0\d\d(?!\d)"),  # in words and inside names alike
     re.compile(r"\b0\d\d_[0-9a-f]{16}\.txt\b"),
 ]
 
