@@ -196,31 +196,27 @@ def reach(a: Atlas, mtype: str, bound: float) -> dict:
     """The time ratios at which the type meets the bound, within the grid: the first and last
     grid points that meet it, each end bisected against its neighbour outside (None: no grid
     point meets it)."""
-    pts = [(tr, mu) for tr, mu in a.best(mtype)]
+    pts = a.best(mtype)
     ok = [i for i, (_, mu) in enumerate(pts) if mu is not None and mu >= bound]
     out = {"type": mtype, "bound_deg": bound, "min": None, "max": None}
     if not ok:
         return out
     lo, hi = ok[0], ok[-1]
-    out["min"] = pts[lo][0] if lo == 0 else _bisect(mtype, bound, pts[lo - 1][0], pts[lo][0])
+    out["min"] = pts[lo][0] if lo == 0 else _bisect(mtype, bound, pts[lo][0], pts[lo - 1][0])
     out["max"] = (
         pts[hi][0] if hi == len(pts) - 1 else _bisect(mtype, bound, pts[hi][0], pts[hi + 1][0])
     )
     return out
 
 
-def _bisect(mtype: str, bound: float, a: float, b: float) -> float:
-    """The time ratio between a and b where the best angle crosses the bound; the end on the
-    side that meets it."""
-
-    def meets(tr: float) -> bool:
-        p = point(mtype, tr)
-        return p.best_angle_deg is not None and p.best_angle_deg >= bound
-
-    good, bad = (a, b) if meets(a) else (b, a)
+def _bisect(mtype: str, bound: float, good: float, bad: float) -> float:
+    """The time ratio between ``good`` (where the type meets the bound: the grid said so) and
+    ``bad`` (where it does not) at which its best angle crosses the bound, on the side that
+    meets it."""
     while abs(good - bad) > BISECT * good:
         mid = 0.5 * (good + bad)
-        if meets(mid):
+        p = point(mtype, mid)
+        if p.best_angle_deg is not None and p.best_angle_deg >= bound:
             good = mid
         else:
             bad = mid
