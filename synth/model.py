@@ -18,7 +18,7 @@ import numpy as np
 
 from .mechanisms import Mechanism, all_types, get
 from .mechanisms._fourbar_construction import construction
-from .native import native
+from .native import bind, native
 
 GRID = 128  # samples per revolution that bracket the stationary points
 POLISH_STEPS = 8  # safeguarded Newton steps a compiled polish takes (``Polisher``)
@@ -122,14 +122,10 @@ class _Batched:
         return out.T.copy()  # the buffer is reused by the next call
 
     def _buffer(self, width: int) -> tuple:
-        f = self.fn.map(width, [False, True], [False])
         x, p = np.zeros(width), np.zeros(self.fn.nnz_in(1))
         out = np.zeros((width, self.fn.nnz_out(0)))  # column-major (rows, width)
-        buf, run = f.buffer()
-        buf.set_arg(0, memoryview(x))
-        buf.set_arg(1, memoryview(p))
-        buf.set_res(0, memoryview(out))
-        return x, p, out, run, buf  # buf holds the bindings run uses
+        run, buf = bind(self.fn.map(width, [False, True], [False]), [x, p], out)
+        return x, p, out, run, buf
 
 
 class Polisher:
@@ -162,15 +158,10 @@ class Polisher:
         (4, n). ``rows``: each root's row; ``pv``: the parameters, (n, p) or shared (p,)."""
         n = len(x0)
         if n not in self.buffers:
-            f = self.fn.map(n)
             args = [np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
                     np.zeros((n, self.rows)), np.zeros((n, self.np))]  # fmt: skip
             out = np.zeros((n, 4))  # column-major (4, n)
-            buf, run = f.buffer()
-            for i, a in enumerate(args):
-                buf.set_arg(i, memoryview(a))
-            buf.set_res(0, memoryview(out))
-            self.buffers[n] = (args, out, run, buf)  # buf holds the bindings run uses
+            self.buffers[n] = (args, out, *bind(self.fn.map(n), args, out))
         (a0, a1, a2, a3, w, p), out, run, _ = self.buffers[n]
         a0[:], a1[:], a2[:], a3[:], p[:] = x0, lo, hi, rising, pv
         w[:] = 0.0

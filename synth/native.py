@@ -51,6 +51,19 @@ def native(fn: ca.Function) -> ca.Function:
         return fn
 
 
+def bind(fn: ca.Function, args: list, out) -> tuple:
+    """``fn`` (mapped: each argument and result an array whose C order is the function's
+    column-major layout) bound to preallocated arrays: calling the returned ``run`` reads
+    ``args`` and writes ``out`` in place, with none of an ordinary call's conversions (~40 µs,
+    more than a few points' evaluation). The returned buffer holds the bindings: keep it with
+    ``run``."""
+    buf, run = fn.buffer()
+    for i, a in enumerate(args):
+        buf.set_arg(i, memoryview(a))
+    buf.set_res(0, memoryview(out))
+    return run, buf
+
+
 def _build(source: str, path: Path) -> bool:
     with _lock:
         if path.exists():

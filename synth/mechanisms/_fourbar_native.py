@@ -21,7 +21,7 @@ import threading
 import casadi as ca
 import numpy as np
 
-from ..native import native
+from ..native import bind, native
 
 # the parameter vector: the names of its entries, in order
 PARAMS = (
@@ -201,14 +201,10 @@ class Compiled:
         return out.T.copy()  # the buffer is reused by the next call
 
     def _buffer(self, width: int, fn: ca.Function | None = None, rows: int = len(ROWS)) -> list:
-        f = (fn or self.fn).map(width, [False, True], [False])
         x, p = np.zeros((width, 2)), np.zeros(len(PARAMS))  # x column-major (2, width)
         out = np.zeros((width, rows))
-        buf, run = f.buffer()
-        buf.set_arg(0, memoryview(x))
-        buf.set_arg(1, memoryview(p))
-        buf.set_res(0, memoryview(out))
-        return [x, p, out, run, buf, None]  # buf holds the bindings run uses; the last params
+        run, buf = bind((fn or self.fn).map(width, [False, True], [False]), [x, p], out)
+        return [x, p, out, run, buf, None]  # the last: the params the buffer last took
 
 
 def compiled(bound_tol: float, strict: float, one_way: float) -> Compiled:
