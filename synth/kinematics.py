@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from . import quality
-from .errors import InvalidDesign, InvalidParameters
+from .errors import InvalidDesign, InvalidParameters, SynthError
 from .mechanisms import Mechanism, get
 from .mechanisms._fourbar import grashof_class
 from .model import Model, model
@@ -33,7 +33,7 @@ from .results import (
     Tolerance,
     Transmission,
 )
-from .roots import TWO_PI, stationary_points
+from .roots import TWO_PI, stationary_points, stationary_points_many
 
 MAX_CURVE_POINTS = 100_000
 INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis or a candidate adds when asked
@@ -67,7 +67,50 @@ def analyze(
     (2.73524, 300.0)
     """
     deg = _asked(mechanism, include, crank_angles_deg, samples)
-    m, p, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)  # checked there
+    m, p, variant, f, pv, found = _prepared(mechanism, params)  # checked there
+    return _analysis(m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include,
+                     tolerance)  # fmt: skip
+
+
+def analyze_many(
+    mechanism: str,
+    designs: Sequence[Mapping[str, float]],
+    *,
+    include: Collection[str] = (),
+    tolerance: Tolerance | None = None,
+) -> list[Analysis | SynthError]:
+    """``analyze`` of several designs of one type (no curves): each one's analysis, or the
+    SynthError that refuses it. The same analyses to the bit, for less: the dead centres and
+    transmission extremes of the designs of one variant are found in shared compiled calls
+    (``roots.stationary_points_many``), which a front's verification and a sweep repeat."""
+    _asked(mechanism, include, None, None)
+    m = get(mechanism)
+    out: list[Any] = [None] * len(designs)
+    variants: dict[frozenset[str], list[tuple[int, dict[str, float]]]] = {}
+    for i, params in enumerate(designs):
+        try:
+            p = m.complete(params)
+        except SynthError as e:
+            out[i] = e
+            continue
+        variants.setdefault(m.variant(p), []).append((i, p))
+    for variant, members in variants.items():
+        f = model(m, variant)
+        pvs = np.array([[p[n] for n in m.names] for _, p in members], dtype=float)
+        for (i, p), pv, found in zip(members, pvs, stationary_points_many(f, pvs), strict=True):
+            try:
+                found = stationary_points(f, pv) if found is None else found
+                out[i] = _analysis(m, p, variant, f, pv, found, 1.0, 0.0, None, include,
+                                   tolerance)  # fmt: skip
+            except SynthError as e:
+                out[i] = e
+    return out
+
+
+def _analysis(m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include,
+              tolerance) -> Analysis:  # fmt: skip
+    """``analyze``'s answer from the stationary points ``found`` of the design's rows."""
+    rows, theta, values = found
     summary = _summary(m, p, f, rows, theta, values)
     if deg is not None:
         curves = _curves(f, pv, crank_speed, crank_acceleration, deg)

@@ -21,6 +21,7 @@ from .mechanisms._fourbar_construction import construction
 from .native import bind, native
 
 GRID = 128  # samples per revolution that bracket the stationary points
+EACH = 32 * GRID  # the most angles ``_Batched.each`` keeps a buffer for (a batch of designs)
 POLISH_STEPS = 8  # safeguarded Newton steps a compiled polish takes (``Polisher``)
 
 _local = threading.local()
@@ -108,6 +109,7 @@ class _Batched:
         out = ca.densify(out)  # structural zeros (a fixed pivot, a constant row) as numbers
         self.fn = native(ca.Function(name, [th, pv], [out], {"cse": True}))
         self.buffers: dict[int, tuple] = {}
+        self.each_buffers: dict[int, tuple] = {}
 
     def __call__(self, theta, pv: np.ndarray) -> np.ndarray:
         theta = np.atleast_1d(theta)
@@ -121,10 +123,24 @@ class _Batched:
         run()
         return out.T.copy()  # the buffer is reused by the next call
 
-    def _buffer(self, width: int) -> tuple:
-        x, p = np.zeros(width), np.zeros(self.fn.nnz_in(1))
+    def each(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
+        """out at each θ with its own parameters (``pv``: shape (len(θ), p)), as ``__call__``
+        gives it: the same operations, so the same results, for several designs at once."""
+        n = theta.size
+        if n > EACH:
+            return self.fn(theta[None, :], pv.T).full()
+        if n not in self.each_buffers:
+            self.each_buffers[n] = self._buffer(n, shared=False)
+        x, p, out, run, _ = self.each_buffers[n]
+        x[:], p[:] = theta, pv
+        run()
+        return out.T.copy()
+
+    def _buffer(self, width: int, shared: bool = True) -> tuple:
+        x = np.zeros(width)
+        p = np.zeros(self.fn.nnz_in(1) if shared else (width, self.fn.nnz_in(1)))
         out = np.zeros((width, self.fn.nnz_out(0)))  # column-major (rows, width)
-        run, buf = bind(self.fn.map(width, [False, True], [False]), [x, p], out)
+        run, buf = bind(self.fn.map(width, [False, shared], [False]), [x, p], out)
         return x, p, out, run, buf
 
 

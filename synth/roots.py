@@ -37,26 +37,71 @@ def stationary_points(
     if f.kind == "kinematics":  # row 0 is the slider's position
         _refuse_dwell(grid, g1[0])
     grid, widths, g1 = _refine(f, pv, grid, widths, g1, g2)
-    nxt = _next(g1)
-    rows, k = np.nonzero((g1 < 0) & (nxt > 0) | (g1 > 0) & (nxt < 0))
-    # exact stationary points on the grid, and kinks (a change point's flat configuration,
-    # where the derivative of sqrt(0) is undefined)
-    zr, zk = np.nonzero((g1 == 0) | ~np.isfinite(g1))
-    lo, hi = grid[k], grid[k] + widths[k]
-    scale = np.max(np.abs(np.where(np.isfinite(g1), g1, 0)), axis=1)[rows]
-
+    (rows, lo, hi, f_lo, f_hi, scale), (zr, zx) = _brackets(grid, widths, g1)
     nr = g1.shape[0]
 
-    def derivatives(x, rows):  # g', g'' of each root's own row
-        return f.fn(x, pv).reshape(3, nr, -1)[1:, rows, np.arange(rows.size)]
+    def derivatives(x, i):  # g', g'' of roots i, each of its own row
+        return f.fn(x, pv).reshape(3, nr, -1)[1:, rows[i], np.arange(i.size)]
 
-    x = _polish(f.polish, derivatives, rows, lo, hi, g1[rows, k], nxt[rows, k], scale, pv)
+    x = _polish(f.polish, derivatives, rows, lo, hi, f_lo, f_hi, scale, pv)
     if f.dead is not None:
-        x = _dead_centres(f, pv, rows, x, TWO_PI / n)
+        x = _dead_centres(f, pv[None, :], np.zeros(rows.size, dtype=int), rows == 0, x, TWO_PI / n)
     rows = np.concatenate([rows, zr])
-    x = np.concatenate([x, grid[zk]]) % TWO_PI
+    x = np.concatenate([x, zx]) % TWO_PI
     values = f.fn(x, pv)[rows, np.arange(x.size)] if x.size else np.empty(0)
     return rows, x, values
+
+
+def stationary_points_many(f: Model, pvs: np.ndarray) -> list[tuple | None]:
+    """``stationary_points`` of several designs of one variant (``pvs``: one row each) in
+    shared compiled calls, with the same results to the bit: each step is the one design's,
+    on the same numbers. None for a design that ``stationary_points`` refuses (it says why)."""
+    k, n = len(pvs), GRID
+    grid, widths = _grid(n)
+    out = f.fn.each(np.tile(grid, k), np.repeat(pvs, n, axis=0))  # design by design
+    nr = out.shape[0] // 3
+    g, g1, g2 = out.reshape(3, nr, k, n).transpose(0, 2, 1, 3).reshape(3, k * nr, n)
+    bad = np.any(~np.isfinite(g).reshape(k, -1), axis=1)
+    if f.kind == "kinematics":
+        bad |= _dwells(g1[::nr])
+    refine = np.any(_hiding(g1, g2, widths).reshape(k, -1), axis=1) & ~bad
+    # the designs whose grid needs no refining at once, then each of the others on its own
+    plain = np.nonzero(np.repeat(~bad & ~refine, nr))[0]
+    (rows, *brackets), (zr, zx) = _brackets(grid, widths, g1[plain])
+    parts, zeros = [(plain[rows], *brackets)], [(plain[zr], zx)]
+    for d in np.nonzero(refine)[0]:
+        own = slice(d * nr, (d + 1) * nr)
+        (rows, *brackets), (zr, zx) = _brackets(*_refine(f, pvs[d], grid, widths, g1[own], g2[own]))
+        parts.append((rows + d * nr, *brackets))
+        zeros.append((zr + d * nr, zx))
+    rows, lo, hi, f_lo, f_hi, scale = (np.concatenate(c) for c in zip(*parts, strict=True))
+    design = rows // nr
+
+    def derivatives(x, i):  # g', g'' of roots i, each of its own row and design
+        return f.fn.each(x, pvs[design[i]]).reshape(3, nr, -1)[1:, rows[i] % nr, np.arange(i.size)]
+
+    x = _polish(f.polish, derivatives, rows % nr, lo, hi, f_lo, f_hi, scale, pvs[design])
+    if f.dead is not None:
+        x = _dead_centres(f, pvs, design, rows % nr == 0, x, TWO_PI / n)
+    rows = np.concatenate([rows, *(z for z, _ in zeros)])
+    x = np.concatenate([x, *(z for _, z in zeros)]) % TWO_PI
+    design = rows // nr
+    values = f.fn.each(x, pvs[design])[rows % nr, np.arange(x.size)]
+    order = np.argsort(design, kind="stable")  # each design's roots in the order it finds them
+    cuts = np.searchsorted(design[order], np.arange(1, k))
+    return [None if bad[d] else (rows[o] % nr, x[o], values[o])
+            for d, o in enumerate(np.split(order, cuts))]  # fmt: skip
+
+
+def _brackets(grid: np.ndarray, widths: np.ndarray, g1: np.ndarray):
+    """Where each row's g' changes sign between neighbouring grid points: (rows, the
+    brackets' ends, g' there, the row's scale); and where it is 0 on the grid, or undefined
+    (a change point's flat configuration, where the derivative of sqrt(0) is): (rows, θ)."""
+    nxt = _next(g1)
+    rows, k = np.nonzero((g1 < 0) & (nxt > 0) | (g1 > 0) & (nxt < 0))
+    zr, zk = np.nonzero((g1 == 0) | ~np.isfinite(g1))
+    scale = np.max(np.abs(np.where(np.isfinite(g1), g1, 0)), axis=1)[rows]
+    return (rows, grid[k], grid[k] + widths[k], g1[rows, k], nxt[rows, k], scale), (zr, grid[zk])
 
 
 @functools.cache
@@ -84,6 +129,17 @@ def _polish(polisher, fd, rows, lo, hi, f_lo, f_hi, scale, pv) -> np.ndarray:
     any they leave unfinished (a kink, a slow start)."""
     if rows.size == 0:
         return np.empty(0)
+    x, done = _compiled(polisher, rows, lo, hi, f_lo, f_hi, scale, pv)
+    if not done.all():
+        left = np.nonzero(~done)[0]
+        x[left] = _rtsafe(lambda y: fd(y, left), lo[left], hi[left], f_lo[left], f_hi[left],
+                          scale[left])  # fmt: skip
+    return x
+
+
+def _compiled(polisher, rows, lo, hi, f_lo, f_hi, scale, pv) -> tuple[np.ndarray, np.ndarray]:
+    """The compiled Newton steps of ``_polish`` from the secant point: the points they reach,
+    and which of them are roots (``pv``: the parameters, shared (p,) or each root's (n, p))."""
     with np.errstate(divide="ignore", invalid="ignore"):
         x0 = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     x0 = np.where(np.isfinite(x0), x0, 0.5 * (lo + hi))
@@ -92,12 +148,7 @@ def _polish(polisher, fd, rows, lo, hi, f_lo, f_hi, scale, pv) -> np.ndarray:
     # finished like ``_rtsafe``: on a root, a closed bracket, or a Newton step down to
     # rounding where the function is ~0 too (at a kink it jumps across 0)
     done = (fx == 0) | (width <= tol) | ((np.abs(step) <= tol) & (np.abs(fx) <= 1e-12 * scale))
-    if not done.all():
-        left = np.nonzero(~done)[0]
-        r = rows[left]
-        x[left] = _rtsafe(lambda y: fd(y, r), lo[left], hi[left], f_lo[left], f_hi[left],
-                          scale[left])  # fmt: skip
-    return x
+    return x, done
 
 
 def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
@@ -142,24 +193,29 @@ def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
     return np.array(x)
 
 
-def _dead_centres(f: Model, pv, rows, x, width: float) -> np.ndarray:
-    """Move the slider's stationary points onto the zeros of the type's dead-centre function,
-    searched within a grid cell (and a quarter of the gap to the next one) of each."""
-    on_s = np.nonzero(rows == 0)[0]
-    if on_s.size < 2:
+def _dead_centres(f: Model, pvs, design, on_s, x, width: float) -> np.ndarray:
+    """Move the slider's stationary points (``on_s``) onto the zeros of the type's dead-centre
+    function, searched within a grid cell (and a quarter of the gap to the next one) of
+    each; the roots of several designs (``design``: each root's row of ``pvs``), each
+    design's on their own."""
+    count = np.bincount(design[on_s], minlength=len(pvs))
+    on_s = np.nonzero(on_s & (count[design] >= 2))[0]
+    if on_s.size == 0:
         return x
-    t = x[on_s]
+    t, d = x[on_s], design[on_s]
     gap = np.abs((t[:, None] - t[None, :] + math.pi) % TWO_PI - math.pi)
+    gap[d[:, None] != d[None, :]] = np.inf
     np.fill_diagonal(gap, np.inf)
     w = np.minimum(width, 0.25 * gap.min(axis=1))
-    lo, hi = t - w, t + w
-    h_lo, h_hi = f.dead(np.concatenate([lo, hi]), pv)[0].reshape(2, -1)
+    lo, hi, pv = t - w, t + w, pvs[d]
+    h_lo, h_hi = f.dead.each(np.concatenate([lo, hi]), np.concatenate([pv, pv]))[0].reshape(2, -1)
     ok = np.sign(h_lo) * np.sign(h_hi) < 0
     scale = np.maximum(np.abs(h_lo), np.abs(h_hi))[ok]
+    pv = pv[ok]
     x = x.copy()
-    zero = np.zeros(np.count_nonzero(ok), dtype=int)
-    x[on_s[ok]] = _polish(f.dead_polish, lambda y, _: f.dead(y, pv), zero, lo[ok], hi[ok],
-                          h_lo[ok], h_hi[ok], scale, pv)  # fmt: skip
+    x[on_s[ok]] = _polish(f.dead_polish, lambda y, i: f.dead.each(y, pv[i]),
+                          np.zeros(pv.shape[0], dtype=int), lo[ok], hi[ok], h_lo[ok], h_hi[ok],
+                          scale, pv)  # fmt: skip
     return x
 
 
@@ -171,10 +227,7 @@ def _refine(f: Model, pv, grid, widths, g1, g2, levels: int = 3, split: int = 16
     stroke squeezed into a few degrees, an extreme just inside a lever's swing): such cells are
     split ``split`` ways, up to ``levels`` times."""
     for _ in range(levels):
-        nxt1, nxt2 = _next(g1), _next(g2)
-        with np.errstate(invalid="ignore"):
-            fast = (np.abs(g1) < np.abs(g2) * widths) | (np.abs(nxt1) < np.abs(nxt2) * widths)
-            suspect = np.any(fast & (g1 * nxt1 > 0) & (g2 * nxt2 <= 0), axis=0)
+        suspect = np.any(_hiding(g1, g2, widths), axis=0)
         if not np.any(suspect):
             break
         k = np.nonzero(suspect)[0]
@@ -188,6 +241,22 @@ def _refine(f: Model, pv, grid, widths, g1, g2, levels: int = 3, split: int = 16
     return grid, widths, g1
 
 
+def _hiding(g1: np.ndarray, g2: np.ndarray, widths: np.ndarray) -> np.ndarray:
+    """Per row and cell (``_refine``): whether a pair of roots of the row's g' could hide in
+    the cell."""
+    nxt1, nxt2 = _next(g1), _next(g2)
+    with np.errstate(invalid="ignore"):
+        fast = (np.abs(g1) < np.abs(g2) * widths) | (np.abs(nxt1) < np.abs(nxt2) * widths)
+        return fast & (g1 * nxt1 > 0) & (g2 * nxt2 <= 0)
+
+
+def _dwells(ds: np.ndarray) -> np.ndarray:
+    """Per row of ds/dθ on the grid: whether the slider stands still (``_refuse_dwell``)."""
+    still = ds == 0
+    ring = np.concatenate((still[:, -1:], still, still[:, :1]), axis=1)  # around the revolution
+    return np.any(ring[:, :-2] & ring[:, 1:-1] & ring[:, 2:], axis=1)
+
+
 def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:
     """A slider that stands still over an interval (a linkage folded onto itself, e.g. an
     offset slider-crank with coupler = crank and no offset) has no defined strokes.
@@ -196,9 +265,8 @@ def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:
     position formulas give an exact 0 for a folded linkage, while a near-stall keeps its tiny
     but real motion (a drag-link kite 1e-9 off its change point moves its slider by ~1e-23 of
     the stroke per radian over 20° of the turn, and its strokes are well defined)."""
-    still = ds == 0
-    ring = np.concatenate((still[-1:], still, still[:1]))  # around the revolution
-    if np.any(ring[:-2] & ring[1:-1] & ring[2:]):
+    if _dwells(ds[None, :])[0]:
+        still = ds == 0
         raise InvalidDesign(
             f"the slider stands still over about {360 * np.count_nonzero(still) / len(grid):.3g}°"
             " of the crank's turn: the linkage folds onto itself, so its strokes and time ratio"

@@ -9,7 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 from .errors import SynthError
-from .kinematics import analyze
+from .kinematics import analyze, analyze_many
 from .results import TOL, Analysis
 
 
@@ -30,6 +30,27 @@ def verify(
         a = analyze(mtype, params, **extras)
     except SynthError:
         return None
+    return _judged(a, time_ratio, stroke, bound_deg)
+
+
+def verify_many(
+    mtype: str,
+    designs: list[dict[str, float]],
+    time_ratio: float,
+    stroke: float,
+    bound_deg: float,
+    **extras: Any,
+) -> list[tuple[Analysis, dict[str, float]] | None]:
+    """``verify`` of each design, their analyses done together (``analyze_many``)."""
+    return [
+        None if isinstance(a, SynthError) else _judged(a, time_ratio, stroke, bound_deg)
+        for a in analyze_many(mtype, designs, **extras)
+    ]
+
+
+def _judged(
+    a: Analysis, time_ratio: float, stroke: float, bound_deg: float
+) -> tuple[Analysis, dict[str, float]] | None:
     residuals = {
         "time_ratio": abs(a.time_ratio - time_ratio) / time_ratio,
         "stroke": abs(a.stroke - stroke) / stroke,
