@@ -11,7 +11,7 @@ from .quality import MOTION_OBJECTIVES, measure
 from .reduced import MAX_TRANSMISSION, MIN_SIZE
 from .results import Candidate, Family
 from .search import Proposal, Searched, Targets, Variant
-from .verify import verify
+from .verify import verify, verify_many
 
 
 def candidate(
@@ -20,8 +20,12 @@ def candidate(
     """The proposal as a candidate if the forward analysis finds that it meets the targets;
     ``extras`` (include, tolerance) are added to its analysis."""
     checked = verify(m.type, p.params, t.time_ratio, t.stroke, t.bound_deg, **extras)
-    if checked is None:
-        return None
+    return None if checked is None else made(m, p, checked, t, variants)
+
+
+def made(m: Mechanism, p: Proposal, checked, t: Targets, variants: list[Variant]) -> Candidate:
+    """The candidate of a proposal that passed verification (``checked``: its analysis and
+    residuals)."""
     a, residuals = checked
     params = a.params  # completed and checked by the analysis
     size = m.size(params)
@@ -101,6 +105,30 @@ def first(m: Mechanism, s: Searched, t: Targets, asked: Targets, extras) -> Cand
         if c is not None:
             return c
     return None
+
+
+def firsts(
+    m: Mechanism, found: list[tuple[Searched, Targets]], asked: Targets, extras
+) -> list[Candidate | None]:
+    """``first`` of each search (with the targets it ranks by), the best proposals of all of
+    them verified together (``verify_many``); where one fails, its search's next proposals
+    are verified one by one."""
+    ranked = [sorted(s.proposals, key=predicted_rank(t.objective)) for s, t in found]
+    heads = [r[0].params for r in ranked if r]
+    checked = iter(verify_many(m.type, heads, asked.time_ratio, asked.stroke, asked.bound_deg,
+                               **extras))  # fmt: skip
+    out: list[Candidate | None] = []
+    for (s, _), r in zip(found, ranked, strict=True):
+        c = None
+        if r:
+            head = next(checked)
+            c = made(m, r[0], head, asked, s.variants) if head is not None else None
+        for p in r[1:] if c is None else ():
+            c = candidate(m, p, asked, s.variants, extras)
+            if c is not None:
+                break
+        out.append(c)
+    return out
 
 
 def predicted_rank(objective: str):
