@@ -15,11 +15,12 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from .errors import InvalidParameters, SynthError
-from .kinematics import analyze
+from .kinematics import analyze, analyze_many
 from .mechanisms import get
 from .results import Extremum, SweepResult
 
 MAX_POINTS = 10_000
+BATCH = 32  # designs analysed together (their grids: 32 × 128 angles, one compiled call)
 
 
 def check(
@@ -70,7 +71,12 @@ def sweep(
             return None
 
     values = np.linspace(start, stop, points) if points > 1 else np.array([start])
-    runs = [at(float(v)) for v in values]
+    designs = [{**held, vary: float(v)} for v in values]
+    runs = [  # analysed together (``analyze_many``), BATCH at a time: the same analyses
+        None if isinstance(a, SynthError) else a
+        for i in range(0, len(designs), BATCH)
+        for a in analyze_many(mechanism, designs[i : i + BATCH])
+    ]
     valid = [a is not None for a in runs]
     intervals = _intervals(lambda v: at(v) is not None, values, valid)
     return SweepResult(
