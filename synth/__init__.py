@@ -9,7 +9,7 @@
 from . import mechanisms
 from ._version import __version__ as __version__
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
-from .kinematics import analyze, joints
+from .kinematics import analyze, analyze_many, joints
 from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
 from .sweep import sweep
 from .synthesis import Solver, Spec, synthesize
@@ -39,6 +39,7 @@ __all__ = [
     "Tolerance",
     "UnknownMechanism",
     "analyze",
+    "analyze_many",
     "atlas",
     "joints",
     "mechanisms",

@@ -88,3 +88,10 @@ def test_a_refused_completion_is_returned_not_raised():
     got = analyze_many("offset_slider_crank", [bad, {**bad, "coupler": 2.0}])
     assert isinstance(got[0], SynthError) and str(got[0]) == str(alone("offset_slider_crank", bad))
     assert got[1].time_ratio == pytest.approx(1.0)
+
+
+def test_a_batch_beyond_the_buffers():
+    """40 designs: 5 120 grid angles, past what ``_Batched.each`` keeps a buffer for."""
+    designs = random_designs("whitworth", 40, seed=2)
+    for p, got in zip(designs, analyze_many("whitworth", designs), strict=True):
+        assert same(got, alone("whitworth", p))
