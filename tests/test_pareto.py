@@ -7,6 +7,7 @@ inner points against the independent global search (tests/globalsearch.py): each
 smallest design that transmits at least as well.
 """
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -156,3 +157,28 @@ def test_families_are_equal_designs_and_the_free_scale_can_be_fixed(tr, stroke, 
         assert picked.min_transmission_angle_deg == pytest.approx(
             c.min_transmission_angle_deg, abs=1e-9
         )
+
+
+@pytest.mark.parametrize(("mtype", "bound"), [("whitworth", 40.0), ("drag_link_slider", 0.0)])
+def test_a_wrong_prediction_of_the_ends_is_planned_again(mtype, bound, monkeypatch):
+    """The front is planned on its ends' predictions, then verified. Predictions 1° too low
+    (as if the best proposals had failed their verification and others stood in): the
+    verified ends differ, the inner points are planned again from them, and the answer is the
+    front planned on the right ends."""
+    from synth import front
+
+    want = synth.synthesize(1.6, 300.0, bound, [{"type": mtype}]).candidates
+    head = front._head
+
+    def wrong(s, t):
+        p = head(s, t)
+        return None if p is None else dataclasses.replace(p, angle_deg=p.angle_deg - 1.0)
+
+    monkeypatch.setattr(front, "_head", wrong)
+    got = synth.synthesize(1.6, 300.0, bound, [{"type": mtype}]).candidates
+    assert len(got) == len(want) == 5
+    for a, b in zip(got, want, strict=True):
+        assert a.min_transmission_angle_deg == pytest.approx(
+            b.min_transmission_angle_deg, rel=1e-12
+        )
+        assert a.size == pytest.approx(b.size, rel=1e-12) and a.front == b.front
