@@ -82,8 +82,8 @@ def _front(spec: Spec, i: int, top: Searched, low: Searched | None, n: int, t: T
             break
         hi, lo = best, small
     if n == 1 or _flat(small, best):
-        ends = (MIN_SIZE, MAX_TRANSMISSION) if _flat(small, best) else (MAX_TRANSMISSION,)
-        return [replace(best, front=FrontPoint(MEASURE, 0, 1, ends))]
+        which = (MIN_SIZE, MAX_TRANSMISSION) if _flat(small, best) else (MAX_TRANSMISSION,)
+        return [replace(best, front=FrontPoint(MEASURE, 0, 1, which))]
     points = [best] + ([small] if small is not None else []) + [c for c in got[len(ends) :] if c]
     kept: list[Candidate] = []  # the non-dominated, best angle first (found twice: the end)
     for c in sorted(points, key=lambda c: (-c.min_transmission_angle_deg, c.size)):
@@ -91,8 +91,8 @@ def _front(spec: Spec, i: int, top: Searched, low: Searched | None, n: int, t: T
             kept.append(c)
     out = []
     for k, c in enumerate(kept):
-        ends = ((MIN_SIZE,) if c is small else ()) + ((MAX_TRANSMISSION,) if c is best else ())
-        out.append(replace(c, front=FrontPoint(MEASURE, len(kept) - 1 - k, len(kept), ends)))
+        which = ((MIN_SIZE,) if c is small else ()) + ((MAX_TRANSMISSION,) if c is best else ())
+        out.append(replace(c, front=FrontPoint(MEASURE, len(kept) - 1 - k, len(kept), which)))
     return out
 
 

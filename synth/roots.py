@@ -13,10 +13,11 @@ import sys
 import numpy as np
 
 from .errors import InvalidDesign
-from .model import GRID, Model
+from .model import EACH, GRID, Model
 
 TWO_PI = 2 * math.pi
 EPS4 = 4 * sys.float_info.epsilon
+BATCH = EACH // GRID  # designs whose grids one compiled call evaluates
 
 
 def stationary_points(
@@ -55,7 +56,11 @@ def stationary_points(
 def stationary_points_many(f: Model, pvs: np.ndarray) -> list[tuple | None]:
     """``stationary_points`` of several designs of one variant (``pvs``: one row each) in
     shared compiled calls, with the same results to the bit: each step is the one design's,
-    on the same numbers. None for a design that ``stationary_points`` refuses (it says why)."""
+    on the same numbers. None for a design that ``stationary_points`` refuses (it says why).
+    At most ``BATCH`` designs go through one call (their grids: ``model.EACH`` angles)."""
+    if len(pvs) > BATCH:
+        return [found for i in range(0, len(pvs), BATCH)
+                for found in stationary_points_many(f, pvs[i : i + BATCH])]  # fmt: skip
     k, n = len(pvs), GRID
     grid, widths = _grid(n)
     out = f.fn.each(np.tile(grid, k), np.repeat(pvs, n, axis=0))  # design by design

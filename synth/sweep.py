@@ -20,7 +20,6 @@ from .mechanisms import get
 from .results import Extremum, SweepResult
 
 MAX_POINTS = 10_000
-BATCH = 32  # designs analysed together (their grids: 32 × 128 angles, one compiled call)
 
 
 def check(
@@ -72,10 +71,8 @@ def sweep(
 
     values = np.linspace(start, stop, points) if points > 1 else np.array([start])
     designs = [{**held, vary: float(v)} for v in values]
-    runs = [  # analysed together (``analyze_many``), BATCH at a time: the same analyses
-        None if isinstance(a, SynthError) else a
-        for i in range(0, len(designs), BATCH)
-        for a in analyze_many(mechanism, designs[i : i + BATCH])
+    runs = [  # analysed together: the same analyses as one by one, for less
+        None if isinstance(a, SynthError) else a for a in analyze_many(mechanism, designs)
     ]
     valid = [a is not None for a in runs]
     intervals = _intervals(lambda v: at(v) is not None, values, valid)

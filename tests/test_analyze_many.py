@@ -91,7 +91,7 @@ def test_a_refused_completion_is_returned_not_raised():
 
 
 def test_a_batch_beyond_the_buffers():
-    """40 designs: 5 120 grid angles, past what ``_Batched.each`` keeps a buffer for."""
+    """40 designs: more than one compiled call's batch (``roots.BATCH``, 32)."""
     designs = random_designs("whitworth", 40, seed=2)
     for p, got in zip(designs, analyze_many("whitworth", designs), strict=True):
         assert same(got, alone("whitworth", p))
