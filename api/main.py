@@ -17,7 +17,7 @@ import synth
 from synth.errors import UnknownMechanism
 
 from .engine import Busy, Engine
-from .guard import Gate, error_item, too_large
+from .guard import Gate, capped, error_item, too_large
 from .routers import analyze, atlas, mechanisms, sweep, synthesize
 from .routers.common import Located
 from .schemas import Health
@@ -59,11 +59,6 @@ def health() -> Health:
     return Health(version=synth.__version__)
 
 
-@app.head("/health", include_in_schema=False)
-def health_head() -> Response:
-    return Response()
-
-
 @app.exception_handler(StarletteHTTPException)
 async def http_error(request: Request, exc: StarletteHTTPException) -> Response:
     """A body that is not JSON at all is malformed input too: 422 in FastAPI's shape."""
@@ -77,18 +72,17 @@ async def http_error(request: Request, exc: StarletteHTTPException) -> Response:
 
 @app.exception_handler(RequestValidationError)
 async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
-    """FastAPI's 422, made safe to encode whatever the input held (``guard.safe``), echoing
-    only short inputs."""
-    detail = []
-    for e in exc.errors():
+    """FastAPI's 422, made safe to encode whatever the input held and bounded in size
+    (``guard.error_item``, ``guard.capped``)."""
+
+    def item(e: dict) -> dict:
         if e["type"] == "json_invalid":  # FastAPI locates it at a character: the msg says where
             e = {"loc": ["body"], "msg": e["ctx"]["error"], "type": e["type"]}
         more = {"input": e["input"]} if "input" in e else {}
         ctx = {k: v for k, v in (e.get("ctx") or {}).items() if k != "error"}
-        detail.append(
-            error_item(e["loc"], e["msg"], e["type"], **more, **({"ctx": ctx} if ctx else {}))
-        )
-    return JSONResponse({"detail": detail}, status_code=422)
+        return error_item(e["loc"], e["msg"], e["type"], **more, **({"ctx": ctx} if ctx else {}))
+
+    return JSONResponse({"detail": capped(exc.errors(), item)}, status_code=422)
 
 
 @app.exception_handler(Busy)
@@ -105,7 +99,7 @@ def located(request: Request, exc: Located) -> JSONResponse:
     """Misuse and invalid designs: 422 in FastAPI's shape, one entry per place (an invalid
     design: each parameter of the failed condition)."""
     e = exc.error
-    detail = [error_item(["body", *loc], e.msg, e.kind) for loc in exc.locs]
+    detail = capped(exc.locs, lambda loc: error_item(["body", *loc], e.msg, e.kind))
     return JSONResponse({"detail": detail}, status_code=422)
 
 
