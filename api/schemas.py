@@ -27,21 +27,20 @@ from synth.synthesis import MAX_CANDIDATES
 
 LENGTH_MIN, LENGTH_MAX = 1e-9, 1e12
 STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
-Finite = Annotated[float, Field(allow_inf_nan=False)]
 
 
 def _camel(name: str) -> str:
     return "".join(w.capitalize() for w in name.split("_"))
 
 
+def _limits(q: Parameter) -> dict[str, float]:
+    """A length's range: ±LENGTH_MAX where it is signed, from 0 where zero is a variant."""
+    lo = -LENGTH_MAX if q.signed else 0.0 if q.zero_means else LENGTH_MIN
+    return {"ge": lo, "le": LENGTH_MAX}
+
+
 def _length(q: Parameter, optional: bool) -> tuple[Any, Any]:
-    limits: dict[str, float] = {"le": LENGTH_MAX}
-    if q.signed:
-        limits["ge"] = -LENGTH_MAX
-    elif q.zero_means:
-        limits["ge"] = 0.0
-    else:
-        limits["ge"] = LENGTH_MIN
+    limits = _limits(q)
     desc = f"{q.symbol}: {q.description}" + (f"; 0: {q.zero_means}" if q.zero_means else "")
     if optional:
         return float | None, Field(None, description=desc, **limits)
@@ -54,9 +53,12 @@ def _params(m: Mechanism, suffix: str, all_optional: bool) -> type[BaseModel]:
 
 
 def _bounds(m: Mechanism) -> type[BaseModel]:
-    pair = Annotated[list[Finite], Field(min_length=2, max_length=2)]
+    def pair(q: Parameter) -> Any:
+        end = Annotated[float, Field(allow_inf_nan=False, **_limits(q))]
+        return Annotated[list[end], Field(min_length=2, max_length=2)]  # type: ignore[valid-type]
+
     fields = {
-        q.name: (pair, Field(None, description=f"[lower, upper] for {q.name}; default "
+        q.name: (pair(q), Field(None, description=f"[lower, upper] for {q.name}; default "
                  f"[{q.bounds[0]:g}, {q.bounds[1]:g}] × the stroke"))
         for q in m.parameters
     }  # fmt: skip
@@ -168,6 +170,15 @@ class AnalyzeRequest(Extras):
     )
 
 
+BUDGET: Any = Field(
+    None,
+    gt=0.0,
+    description="from the request's arrival; omitted: 2000, or the server's largest budget if "
+    "that is less; at most the server's largest budget (SYNTH_MAX_BUDGET_MS, 60 000 by "
+    "default). A request waits for a solver at most half of it (at most 1 s), else 503",
+)
+
+
 class SynthesizeRequest(Extras):
     # the service's limit (the library takes any ratio): a quick stroke of at least 0.36°
     time_ratio: float = Field(..., ge=1.0, le=1e3, description="slow/quick crank angle, ≥ 1")
@@ -214,13 +225,7 @@ class SynthesizeRequest(Extras):
         description="in all; omitted: 5 (pareto: 5 per type of the request, at most "
         f"{MAX_CANDIDATES}, a front of one point taking one)",
     )
-    time_budget_ms: float | None = Field(
-        None,
-        gt=0.0,
-        description="from the request's arrival; omitted: 2000, or the server's largest budget "
-        "if that is less; at most the server's largest budget (SYNTH_MAX_BUDGET_MS, 60 000 by "
-        "default)",
-    )
+    time_budget_ms: float | None = BUDGET
 
 
 class SweepRequest(BaseModel):
@@ -230,6 +235,7 @@ class SweepRequest(BaseModel):
     start: float = Field(..., ge=-LENGTH_MAX, le=LENGTH_MAX)
     stop: float = Field(..., ge=-LENGTH_MAX, le=LENGTH_MAX)
     points: int = Field(101, ge=1, le=MAX_POINTS)
+    time_budget_ms: float | None = BUDGET
 
 
 # --- responses ---------------------------------------------------------------------------

@@ -32,6 +32,9 @@ __all__ = ["MAX_CANDIDATES", "OBJECTIVES", "Solver", "Spec", "check", "synthesiz
 
 OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE, *MOTION_OBJECTIVES)
 MAX_CANDIDATES = 50
+# the most a bound may differ from the stroke, either way (_check_scale); the stroke lies within
+# 1e±100, so that squares of lengths stay normal floats
+SCALE = 1e24
 PER_TYPE = 5  # candidates per type when max_candidates is not given (pareto: per type's front)
 
 
@@ -160,6 +163,8 @@ def check(
     else:
         specs = [_spec(s, i) for i, s in enumerate(mechanisms)]
     _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
+    for i, s in enumerate(specs):
+        _check_scale(s, i, stroke)
     _check_limit(max_working_speed_fluctuation, objective)
     check_include(include)
     for s in specs:
@@ -174,7 +179,7 @@ def check(
 def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
     checks = [
         ("time_ratio", tr, math.isfinite(tr) and tr >= 1, "a finite number ≥ 1"),
-        ("stroke", stroke, math.isfinite(stroke) and stroke > 0, "a finite length > 0"),
+        ("stroke", stroke, 1e-100 <= stroke <= 1e100, "a length in [1e-100, 1e100]"),
         (
             "min_transmission_angle_deg",
             bound,
@@ -199,6 +204,18 @@ def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
             "bound the smallest designs are linkages that lock (a 0° transmission angle)",
             ("min_transmission_angle_deg",),
         )
+
+
+def _check_scale(s: Spec, i: int, stroke: float) -> None:
+    """Bounds within ``SCALE`` of the stroke either way (0 aside): the solvers work in the
+    stroke's unit, where their ratios and squares must stay finite and non-zero."""
+    for k, (lo, hi) in s.bounds.items():
+        if any(x != 0 and not 1 / SCALE <= abs(x) / stroke <= SCALE for x in (lo, hi)):
+            raise InvalidParameters(
+                f"{s.type}.{k} bounds [{lo!r}, {hi!r}]: each must lie within {1 / SCALE:g} … "
+                f"{SCALE:g} × the stroke ({stroke:g}) in size",
+                ("mechanisms", i, "bounds", k),
+            )
 
 
 def _check_limit(limit: float | None, objective: str) -> None:
@@ -238,8 +255,9 @@ def _spec(s: Spec | Mapping[str, Any], i: int) -> Spec:
         why = (
             "need finite bounds" if not (math.isfinite(lo) and math.isfinite(hi))
             else f"lower bound {lo:g} > upper bound {hi:g}" if lo > hi
-            else f"lower bound {lo:g} < 0 for a length" if not q.signed and lo < 0
-            else None
+            else None if q.signed or lo > 0 or (lo == 0 and q.zero_means)
+            else f"a length's bounds must be ≥ 0 (0 means {q.zero_means})" if q.zero_means
+            else "a length's bounds must be > 0"
         )  # fmt: skip
         if why:
             raise InvalidParameters(
