@@ -1,5 +1,6 @@
 # Two commands on a fresh machine (Python 3.11, 3.12 or 3.13, and make):
-#   make serve   - create .venv from the lock file if missing, run the service on $(HOST):$(PORT)
+#   make serve   - create .venv from the lock file if missing, run the service on HOST:PORT
+#                  (environment or `make serve PORT=...`; default 127.0.0.1:8000, api/config.py)
 #   make test    - create .venv (with test tools) if missing, run the whole suite
 # The interpreter: the newest supported one on the PATH (PYTHON=... overrides; `make python`
 # says which it is)
@@ -7,8 +8,6 @@ PYTHON ?= $(shell for p in python3.13 python3.12 python3.11 python3; do \
 	$$p -c 'import sys; sys.exit(not (3, 11) <= sys.version_info < (3, 14))' 2>/dev/null \
 	&& { echo $$p; break; }; done)
 VENV   ?= .venv
-HOST   ?= 127.0.0.1
-PORT   ?= 8000
 BIN    := $(VENV)/bin
 export OMP_NUM_THREADS ?= 1
 export OPENBLAS_NUM_THREADS ?= 1
@@ -48,7 +47,7 @@ notebook: $(VENV)/.dev
 	$(BIN)/jupyter lab $(JUPYTER_ARGS) notebooks/
 
 serve: $(VENV)/.runtime
-	$(BIN)/python -m api.serve --host $(HOST) --port $(PORT)
+	$(BIN)/python -m api.serve
 
 test: $(VENV)/.dev
 	$(BIN)/python -m pytest -q

@@ -19,7 +19,8 @@ class Settings(BaseSettings):
     """``SYNTH_*`` environment variables, and the server's own (README "Serving" has the
     measurements behind the defaults)."""
 
-    model_config = SettingsConfigDict(env_prefix="SYNTH_")
+    # a variable set but empty (HOST=) is as good as unset: the default, never "every interface"
+    model_config = SettingsConfigDict(env_prefix="SYNTH_", env_ignore_empty=True)
 
     host: str = Field("127.0.0.1", validation_alias="HOST")  # where `api.serve` listens
     port: int = Field(8000, ge=0, le=65535, validation_alias="PORT")

@@ -49,9 +49,11 @@ def main(argv: list[str] | None = None) -> None:
     sys.setswitchinterval(SWITCH_S)
     settings = Settings()
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--host", default=settings.host)
-    ap.add_argument("--port", type=int, default=settings.port)
+    ap.add_argument("--host", default=settings.host, help="default: HOST, else 127.0.0.1; "
+                    "empty: the default")  # fmt: skip
+    ap.add_argument("--port", type=int, default=settings.port, help="default: PORT, else 8000")
     a = ap.parse_args(argv)
+    a.host = a.host or settings.host
     workers = settings.web_concurrency or CORES
     os.environ["WEB_CONCURRENCY"] = str(workers)  # for the processes' own settings
     config = uvicorn.Config(APP, host=a.host, port=a.port, workers=workers,
