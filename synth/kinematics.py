@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import Any
 
 import numpy as np
@@ -36,6 +36,9 @@ from .results import (
 from .roots import TWO_PI, stationary_points, stationary_points_many
 
 MAX_CURVE_POINTS = 100_000
+# the numbers an analysis's curves may carry, points × (each curve, and x and y of each pin):
+# 100 000 points of curves alone, ~8 MB of JSON (README, "What a client can rely on")
+MAX_CURVE_VALUES = 500_000
 INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis or a candidate adds when asked
 # an analysis also adds its curves' pins when asked (they need the curves' angles)
 ANALYSIS_INCLUDE = (*INCLUDE, "pins")
@@ -193,7 +196,23 @@ def _asked(
         msg = "include 'pins' needs crank_angles_deg or samples (the angles the pins are wanted at)"
         raise InvalidParameters(msg, ("include",))
     check_drawn(mechanism, include)
+    if deg is not None:
+        _check_values(mechanism, include, deg.size, "samples" if samples else "crank_angles_deg")
     return deg
+
+
+def _check_values(mechanism: str, include: Collection[str], points: int, loc: str) -> None:
+    curves = len(fields(Curves)) - 1  # the pins aside
+    pins = len({pin for d in get(mechanism).drawing for pin in d[1:]}) if "pins" in include else 0
+    per = curves + 2 * pins
+    if points * per > MAX_CURVE_VALUES:
+        what = f"{curves} curves" + (f" and x, y of {pins} pins" if pins else "")
+        raise InvalidParameters(
+            f"the curves would carry {points * per} numbers ({points} points × {per}: {what}); "
+            f"an analysis carries at most {MAX_CURVE_VALUES}: ask for at most "
+            f"{MAX_CURVE_VALUES // per} points" + (" (or no pins)" if pins else ""),
+            (loc,),
+        )
 
 
 def check_drawn(mechanism: str, include: Collection[str]) -> None:
