@@ -79,12 +79,12 @@ class Engine:
                   **kwargs: Any) -> Any:  # fmt: skip
         """``op`` here in the event loop's thread when ``inline`` (an analysis without long
         curves, ~1 ms: less than a hand-off), else on a solver slot. ``deadline`` (monotonic
-        seconds) is when the client's budget ends: a synthesis gets what is left of it as its
-        ``time_budget_ms`` once it has a slot."""
+        seconds) is when the client's budget ends: a synthesis or a sweep gets what is left of
+        it as its ``time_budget_ms`` once it has a slot."""
         if inline:
             return _call(op, kwargs)
         async with self._slot(deadline):
-            if op == "synthesize" and deadline is not None:
+            if deadline is not None:
                 left = deadline - time.monotonic()  # less what the reply takes after it
                 kwargs["time_budget_ms"] = max((left - min(REPLY_S, 0.1 * left)) * 1000, 1e-3)
             executor = self.executor

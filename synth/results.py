@@ -296,6 +296,8 @@ class SweepResult:
     valid: list[bool]
     valid_interval: list[tuple[float, float]]  # exact, within [start, stop]
     time_ratio_range: dict[str, Extremum] | None  # "min", "max" over the valid part
+    # False: the budget ended the sweep before stop (values, and all above, end where it did)
+    complete: bool = True
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)

@@ -3,11 +3,14 @@
 Each point is analysed; the exact valid interval(s) come from bisection on the validity of the
 design (each boundary located to one ulp: for the Grashof limits, where a margin is exactly 0),
 and the time-ratio range over them from bounded Brent refinement of the best sampled points.
+A budget bounds the sampling: the points are analysed in order, ``CHUNK`` at a time, and past
+the budget the sweep ends at the last point analysed (``complete`` False).
 """
 
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Mapping
 from typing import Any
 
@@ -20,11 +23,12 @@ from .mechanisms import get
 from .results import Extremum, SweepResult
 
 MAX_POINTS = 10_000
+CHUNK = 256  # points analysed between two looks at the clock (~25 ms of a four-bar's)
 
 
 def check(
     mechanism: str, params: Mapping[str, float], vary: str, start: float, stop: float,
-    points: int = 101, **_: Any,
+    points: int = 101, time_budget_ms: float | None = None, **_: Any,
 ) -> None:  # fmt: skip
     """What ``sweep`` checks before it sweeps (its arguments' meaning)."""
     m = get(mechanism)
@@ -42,6 +46,10 @@ def check(
         raise InvalidParameters(f"{vary} is a length: start must be > 0, got {start:g}", ("start",))
     if not (isinstance(points, int) and 1 <= points <= MAX_POINTS):
         raise InvalidParameters(f"points must be 1 … {MAX_POINTS}, got {points!r}", ("points",))
+    if time_budget_ms is not None and not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
+        raise InvalidParameters(
+            f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
+        )
 
 
 def sweep(
@@ -51,8 +59,11 @@ def sweep(
     start: float,
     stop: float,
     points: int = 101,
+    time_budget_ms: float | None = None,
 ) -> SweepResult:
-    """Analyse the design at ``points`` values of ``vary`` from ``start`` to ``stop``.
+    """Analyse the design at ``points`` values of ``vary`` from ``start`` to ``stop``; within
+    ``time_budget_ms`` (None: however long it takes), else up to the last point analysed by
+    then (``complete`` False), the intervals and the range over those.
 
     >>> r = sweep("drag_link_slider", {"ground": 0.1, "crank": 0.225, "coupler": 0.3,
     ...           "follower": 0.275, "follower_arm": 0.15, "connecting_rod": 0.3},
@@ -60,7 +71,8 @@ def sweep(
     >>> [[round(v, 12) for v in iv] for iv in r.valid_interval]
     [[0.15, 0.4]]
     """
-    check(mechanism, params, vary, start, stop, points)
+    check(mechanism, params, vary, start, stop, points, time_budget_ms)
+    deadline = time.monotonic() + (time_budget_ms / 1000 if time_budget_ms else math.inf)
     held = {k: v for k, v in params.items() if k != vary}
 
     def at(v: float):
@@ -71,9 +83,16 @@ def sweep(
 
     values = np.linspace(start, stop, points) if points > 1 else np.array([start])
     designs = [{**held, vary: float(v)} for v in values]
-    runs = [  # analysed together: the same analyses as one by one, for less
-        None if isinstance(a, SynthError) else a for a in analyze_many(mechanism, designs)
-    ]
+    runs: list[Any] = []
+    for k in range(0, len(designs), CHUNK):
+        if time.monotonic() >= deadline:
+            break
+        runs += [  # analysed together: the same analyses as one by one, for less
+            None if isinstance(a, SynthError) else a
+            for a in analyze_many(mechanism, designs[k : k + CHUNK])
+        ]
+    complete = len(runs) == len(values)
+    values = values[: len(runs)]
     valid = [a is not None for a in runs]
     intervals = _intervals(lambda v: at(v) is not None, values, valid)
     return SweepResult(
@@ -86,12 +105,15 @@ def sweep(
         valid=valid,
         valid_interval=intervals,
         time_ratio_range=_tr_range(at, values, runs, intervals),
+        complete=complete,
     )
 
 
 def _intervals(ok, values: np.ndarray, valid: list[bool]) -> list[tuple[float, float]]:
     """The valid intervals within [values[0], values[-1]], each boundary bisected to one ulp."""
     out: list[tuple[float, float]] = []
+    if not valid:
+        return out
     lo = float(values[0]) if valid[0] else None
     for k in range(1, len(values)):
         if valid[k] != valid[k - 1]:

@@ -6,13 +6,14 @@ from typing import Annotated, Any
 
 from fastapi import Depends, Request
 
-from synth.errors import InvalidDesign, SynthError
+from synth.errors import InvalidDesign, InvalidParameters, SynthError
 from synth.kinematics import check as check_analysis
 from synth.results import Tolerance
 from synth.sweep import check as check_sweep
 from synth.synthesis import check as check_synthesis
 
 from ..engine import Engine
+from ..guard import arrival
 from ..schemas import Extras
 
 # each operation's own checks of its arguments (cheap, no solving): run before a request waits
@@ -32,6 +33,18 @@ def engine(request: Request) -> Engine:
 
 
 EngineDep = Annotated[Engine, Depends(engine)]
+
+
+def budget(request: Request, engine: Engine, budget_ms: float | None) -> tuple[float, float]:
+    """The request's ``time_budget_ms`` (the server's default where it gives none) and its
+    deadline: a budget counts from the request's arrival. Over the server's largest: a 422."""
+    budget_ms = budget_ms or engine.settings.default_budget_ms
+    largest = engine.settings.max_budget_ms
+    if budget_ms > largest:
+        e = InvalidParameters(f"time_budget_ms must be ≤ {largest:g} (this server's largest "
+                              f"budget), got {budget_ms:g}", ("time_budget_ms",))  # fmt: skip
+        raise Located(e, [e.loc])
+    return budget_ms, arrival(request) + budget_ms / 1000
 
 
 class Located(Exception):

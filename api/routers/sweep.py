@@ -2,25 +2,32 @@
 
 from typing import Annotated
 
-from fastapi import APIRouter, Body
+from fastapi import APIRouter, Body, Request
 
 from ..examples import SWEEP
 from ..guard import Route
 from ..schemas import REFUSALS, SweepRequest, SweepResponse
-from .common import EngineDep, run_design
+from .common import EngineDep, budget, run_design
 
 router = APIRouter(tags=["analysis"], route_class=Route)
 
 
 @router.post("/v1/sweep", response_model=SweepResponse, responses=REFUSALS)
 async def sweep(
-    engine: EngineDep, body: Annotated[SweepRequest, Body(openapi_examples=SWEEP)]
+    request: Request,
+    engine: EngineDep,
+    body: Annotated[SweepRequest, Body(openapi_examples=SWEEP)],
 ) -> SweepResponse:
-    """What range must an adjustable part cover (Podhorodeski et al. (2005), Fig. 5)."""
+    """What range must an adjustable part cover (Podhorodeski et al. (2005), Fig. 5). The
+    budget counts from the request's arrival, as a synthesis's does: a sweep that runs out of
+    it ends at the last value analysed (``complete`` false)."""
+    budget_ms, deadline = budget(request, engine, body.time_budget_ms)
     r = await run_design(
         engine,
         "sweep",
         body.mechanism,
+        deadline=deadline,
+        time_budget_ms=budget_ms,
         vary=body.vary,
         start=body.start,
         stop=body.stop,

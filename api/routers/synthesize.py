@@ -4,12 +4,12 @@ from typing import Annotated
 
 from fastapi import APIRouter, Body, Request
 
-from synth.errors import InvalidParameters, SynthError
+from synth.errors import SynthError
 
 from ..examples import SYNTHESIZE
-from ..guard import Route, arrival
+from ..guard import Route
 from ..schemas import REFUSALS, SynthesizeRequest, SynthesizeResponse
-from .common import EngineDep, Loc, Located, run, tolerance
+from .common import EngineDep, Loc, budget, run, tolerance
 
 router = APIRouter(tags=["synthesis"], route_class=Route)
 
@@ -43,24 +43,19 @@ async def synthesize(
             at = (*at[:2], body.mechanisms[int(at[1])].type, *at[2:])
         return [at]
 
-    budget = body.time_budget_ms or engine.settings.default_budget_ms
-    largest = engine.settings.max_budget_ms
-    if budget > largest:
-        e = InvalidParameters(f"time_budget_ms must be ≤ {largest:g} (this server's largest "
-                              f"budget), got {budget:g}", ("time_budget_ms",))  # fmt: skip
-        raise Located(e, [e.loc])
+    budget_ms, deadline = budget(request, engine, body.time_budget_ms)
     r = await run(
         engine,
         locate,
         "synthesize",
-        deadline=arrival(request) + budget / 1000,  # the budget bounds the wait
+        deadline=deadline,
         time_ratio=body.time_ratio,
         stroke=body.stroke,
         min_transmission_angle_deg=body.min_transmission_angle_deg,
         mechanisms=specs,
         objective=body.objective,
         max_candidates=body.max_candidates,
-        time_budget_ms=budget,
+        time_budget_ms=budget_ms,
         include=body.include,
         max_working_speed_fluctuation=body.max_working_speed_fluctuation,
         tolerance=tolerance(body),
