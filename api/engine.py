@@ -3,19 +3,24 @@
 Two executors, chosen by settings: a process pool (each worker process has its own CasADi
 solvers; the GIL is not shared) or a thread pool (each thread builds its own solvers: one
 ``nlpsol`` is never called from two threads, that crashes). Either way at most ``workers``
-solves run at once. A request waits for one of those slots only as long as its budget allows
-(``queue_share`` of what is left of it, at most ``max_queue_ms``); past that it is refused at
-once with ``Busy`` (HTTP 503 with Retry-After) rather than queued: a budget bounds what the
-client waits, and a solve that starts runs with what is left of it.
+solves run at once (``Slots``). A request waits for one of those slots only until its start-by
+time: ``queue_share`` of its budget after its arrival, at most ``max_queue_ms`` (1 s without a
+budget); then it is refused with ``Busy`` (HTTP 503 with Retry-After): a budget bounds what
+the client waits, and a solve that starts runs with what is left of it. A freed slot goes to
+the waiter whose start-by time comes first, so a short budget is not starved by long ones.
 """
 
 from __future__ import annotations
 
 import asyncio
+import heapq
+import itertools
 import multiprocessing
 import os
 import time
+from collections.abc import AsyncIterator
 from concurrent.futures import BrokenExecutor, Executor, ProcessPoolExecutor, ThreadPoolExecutor
+from contextlib import asynccontextmanager
 from functools import partial
 from typing import Any
 
@@ -34,7 +39,8 @@ class Busy(Exception):
     """Every solver slot stayed taken for as long as the request could wait."""
 
     def __init__(self, waited_ms: float, retry_after_s: int) -> None:
-        super().__init__(f"every solver is busy (waited {waited_ms:.0f} ms for one)")
+        super().__init__(f"every solver is busy (waited {waited_ms:.0f} ms for one since the "
+                         "request arrived)")  # fmt: skip
         self.retry_after_s = retry_after_s
 
 
@@ -54,7 +60,7 @@ class Engine:
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
         self.executor = self._new_executor()
-        self._slots: asyncio.Semaphore | None = None  # made in the event loop, on first use
+        self.slots = Slots(settings.workers)
         self._replacing: asyncio.Lock | None = None
 
     def _new_executor(self) -> Executor:
@@ -75,17 +81,24 @@ class Engine:
             app.state.engine = cls(get_settings())
         return app.state.engine
 
-    async def run(self, op: str, inline: bool = False, deadline: float | None = None,
+    async def run(self, op: str, inline: bool = False, arrival: float | None = None,
                   **kwargs: Any) -> Any:  # fmt: skip
         """``op`` here in the event loop's thread when ``inline`` (an analysis without long
-        curves, ~1 ms: less than a hand-off), else on a solver slot. ``deadline`` (monotonic
-        seconds) is when the client's budget ends: a synthesis or a sweep gets what is left of
-        it as its ``time_budget_ms`` once it has a slot."""
+        curves, ~1 ms: less than a hand-off), else on a solver slot, waited for from
+        ``arrival`` (monotonic seconds; None: now) until the start-by time. With a
+        ``time_budget_ms`` (a synthesis, a sweep) the budget counts from ``arrival`` too: the
+        operation gets what is left of it once it has a slot."""
         if inline:
             return _call(op, kwargs)
-        async with self._slot(deadline):
-            if deadline is not None:
-                left = deadline - time.monotonic()  # less what the reply takes after it
+        s = self.settings
+        arrival = time.monotonic() if arrival is None else arrival
+        budget_s = kwargs.get("time_budget_ms", 0) / 1000
+        wait = s.max_queue_ms / 1000
+        if budget_s:
+            wait = min(wait, s.queue_share * budget_s)
+        async with self.slots.held(arrival, arrival + wait):
+            if budget_s:
+                left = arrival + budget_s - time.monotonic()  # less what the reply takes after it
                 kwargs["time_budget_ms"] = max((left - min(REPLY_S, 0.1 * left)) * 1000, 1e-3)
             executor = self.executor
             loop = asyncio.get_running_loop()
@@ -96,15 +109,6 @@ class Engine:
                 # saw this one break, and each tried once more on it
                 await self._replace(executor)
                 return await loop.run_in_executor(self.executor, partial(_call, op, kwargs))
-
-    def _slot(self, deadline: float | None) -> _Slot:
-        if self._slots is None:
-            self._slots = asyncio.Semaphore(self.settings.workers)
-        s = self.settings
-        wait = s.max_queue_ms / 1000
-        if deadline is not None:
-            wait = min(wait, s.queue_share * max(deadline - time.monotonic(), 0.0))
-        return _Slot(self._slots, wait)
 
     async def _replace(self, broken: Executor) -> None:
         if self._replacing is None:
@@ -131,22 +135,53 @@ class Engine:
             p.terminate()
 
 
-class _Slot:
-    """One of the engine's solver slots, waited for at most ``wait`` seconds (else Busy)."""
+class Slots:
+    """The engine's solver slots. A request waits for one until its start-by time, then gets
+    ``Busy``; a slot that comes free goes to the waiter whose start-by time comes first
+    (earliest deadline first), not to the one that came first: a request whose budget allows
+    a short wait is served ahead of longer ones that can wait longer, and under overload
+    each budget class is served in about the same share (benchmarks/overload.py)."""
 
-    def __init__(self, slots: asyncio.Semaphore, wait: float) -> None:
-        self.slots, self.wait = slots, wait
+    def __init__(self, n: int) -> None:
+        self.free = n
+        self.waiting: list[tuple[float, int, asyncio.Future[None]]] = []  # a heap by start-by
+        self._order = itertools.count()  # ties: first come, first served
 
-    async def __aenter__(self) -> None:
-        if not self.slots.locked():  # free: no wait (wait_for with no time never acquires)
-            await self.slots.acquire()
-            return
-        t0 = time.monotonic()
+    @asynccontextmanager
+    async def held(self, arrival: float, start_by: float) -> AsyncIterator[None]:
+        await self._acquire(arrival, start_by)
         try:
-            await asyncio.wait_for(self.slots.acquire(), timeout=max(self.wait, 0.0))
-        except TimeoutError:
-            waited = time.monotonic() - t0
-            raise Busy(waited * 1000, max(1, round(self.wait))) from None
+            yield
+        finally:
+            self._release()
 
-    async def __aexit__(self, *exc: object) -> None:
-        self.slots.release()
+    async def _acquire(self, arrival: float, start_by: float) -> None:
+        if self.free:  # then nobody waits: a freed slot goes to a waiter first
+            self.free -= 1
+            return
+        loop = asyncio.get_running_loop()
+        slot: asyncio.Future[None] = loop.create_future()
+        heapq.heappush(self.waiting, (start_by, next(self._order), slot))
+
+        def expire() -> None:
+            if not slot.done():
+                waited = time.monotonic() - arrival
+                slot.set_exception(Busy(waited * 1000, max(1, round(start_by - arrival))))
+
+        timer = loop.call_later(max(start_by - time.monotonic(), 0.0), expire)
+        try:
+            await slot
+        except asyncio.CancelledError:
+            if slot.done() and not slot.cancelled() and slot.exception() is None:
+                self._release()  # handed a slot as the request was cancelled: pass it on
+            raise
+        finally:
+            timer.cancel()
+
+    def _release(self) -> None:
+        while self.waiting:
+            slot = heapq.heappop(self.waiting)[2]
+            if not slot.done():  # not expired: the slot passes to it
+                slot.set_result(None)
+                return
+        self.free += 1

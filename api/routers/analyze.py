@@ -2,7 +2,7 @@
 
 from typing import Annotated
 
-from fastapi import APIRouter, Body
+from fastapi import APIRouter, Body, Request
 
 from ..examples import ANALYZE
 from ..guard import Route
@@ -22,7 +22,9 @@ INLINE_CURVE_POINTS = 1000
     responses=REFUSALS,
 )
 async def analyze(
-    engine: EngineDep, body: Annotated[AnalyzeRequest, Body(openapi_examples=ANALYZE)]
+    request: Request,
+    engine: EngineDep,
+    body: Annotated[AnalyzeRequest, Body(openapi_examples=ANALYZE)],
 ) -> AnalyzeResponse:
     """Time ratio, stroke, dead centres, strokes and transmission angles of a design; curves at
     exactly ``crank_angles_deg`` or at ``samples`` evenly spaced angles, and only then; motion
@@ -30,6 +32,7 @@ async def analyze(
     (or, for sensitivities, a ``tolerance`` is given)."""
     points = len(body.crank_angles_deg or ()) + (body.samples or 0)
     a = await run_design(
+        request,
         engine,
         "analyze",
         body.mechanism,

@@ -35,16 +35,16 @@ def engine(request: Request) -> Engine:
 EngineDep = Annotated[Engine, Depends(engine)]
 
 
-def budget(request: Request, engine: Engine, budget_ms: float | None) -> tuple[float, float]:
-    """The request's ``time_budget_ms`` (the server's default where it gives none) and its
-    deadline: a budget counts from the request's arrival. Over the server's largest: a 422."""
+def budget(engine: Engine, budget_ms: float | None) -> float:
+    """The request's ``time_budget_ms``, the server's default where it gives none; over the
+    server's largest: a 422."""
     budget_ms = budget_ms or engine.settings.default_budget_ms
     largest = engine.settings.max_budget_ms
     if budget_ms > largest:
         e = InvalidParameters(f"time_budget_ms must be ≤ {largest:g} (this server's largest "
                               f"budget), got {budget_ms:g}", ("time_budget_ms",))  # fmt: skip
         raise Located(e, [e.loc])
-    return budget_ms, arrival(request) + budget_ms / 1000
+    return budget_ms
 
 
 class Located(Exception):
@@ -56,25 +56,26 @@ class Located(Exception):
 
 
 async def run(
+    request: Request,
     engine: Engine,
     locate: Callable[[SynthError], list[Loc]],
     op: str,
     inline: bool = False,
-    deadline: float | None = None,
     **kwargs: Any,
 ) -> Any:
-    """Run ``op`` on the engine (see ``Engine.run`` for ``inline`` and ``deadline``) once its
-    checks pass; a domain error goes where ``locate`` places it in the request body."""
+    """Run ``op`` on the engine (see ``Engine.run`` for ``inline``; waits and budgets count
+    from the request's arrival) once its checks pass; a domain error goes where ``locate``
+    places it in the request body."""
     try:
         if not inline:  # inline, the operation itself raises the same at once
             CHECKS[op](**kwargs)
-        return await engine.run(op, inline, deadline, **kwargs)
+        return await engine.run(op, inline, arrival(request), **kwargs)
     except SynthError as e:
         raise Located(e, locate(e)) from None
 
 
 async def run_design(
-    engine: Engine, op: str, design: Any, inline: bool = False, **kwargs: Any
+    request: Request, engine: Engine, op: str, design: Any, inline: bool = False, **kwargs: Any
 ) -> Any:
     """``run`` for an operation on one design of the request (``body.mechanism``): an error
     about its parameters is located at each parameter in ``mechanism.params``, any other at
@@ -88,7 +89,8 @@ async def run_design(
             return [("mechanism", "params", *e.loc)]
         return [e.loc]
 
-    return await run(engine, locate, op, inline, mechanism=design.type, params=params, **kwargs)
+    return await run(request, engine, locate, op, inline, mechanism=design.type, params=params,
+                     **kwargs)  # fmt: skip
 
 
 def tolerance(body: Extras) -> Tolerance | None:

@@ -21,13 +21,12 @@ async def sweep(
     """What range must an adjustable part cover (Podhorodeski et al. (2005), Fig. 5). The
     budget counts from the request's arrival, as a synthesis's does: a sweep that runs out of
     it ends at the last value analysed (``complete`` false)."""
-    budget_ms, deadline = budget(request, engine, body.time_budget_ms)
     r = await run_design(
+        request,
         engine,
         "sweep",
         body.mechanism,
-        deadline=deadline,
-        time_budget_ms=budget_ms,
+        time_budget_ms=budget(engine, body.time_budget_ms),
         vary=body.vary,
         start=body.start,
         stop=body.stop,

@@ -43,19 +43,18 @@ async def synthesize(
             at = (*at[:2], body.mechanisms[int(at[1])].type, *at[2:])
         return [at]
 
-    budget_ms, deadline = budget(request, engine, body.time_budget_ms)
     r = await run(
+        request,
         engine,
         locate,
         "synthesize",
-        deadline=deadline,
         time_ratio=body.time_ratio,
         stroke=body.stroke,
         min_transmission_angle_deg=body.min_transmission_angle_deg,
         mechanisms=specs,
         objective=body.objective,
         max_candidates=body.max_candidates,
-        time_budget_ms=budget_ms,
+        time_budget_ms=budget(engine, body.time_budget_ms),
         include=body.include,
         max_working_speed_fluctuation=body.max_working_speed_fluctuation,
         tolerance=tolerance(body),
