@@ -35,6 +35,9 @@ class Settings(BaseSettings):
     # share one interpreter, so more threads would only take turns: each solve slower, and a
     # budget that binds under load changes the answer); a process pool: every core
     workers: int | None = Field(None, ge=1)
+    # a request must arrive whole (headers and body) this soon after the connection, or after
+    # its first byte on a kept-alive one, else 408 and the connection is closed (api.connection)
+    request_timeout_s: float = Field(5.0, gt=0)
     warm: bool = True  # build the common solvers in the workers at start, in the background
     max_budget_ms: float = 60_000.0  # the largest time_budget_ms a request may ask for
     # how long a request may wait for a solver slot before a 503: this share of what is left

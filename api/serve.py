@@ -4,6 +4,8 @@ Runs ``WEB_CONCURRENCY`` uvicorn processes (default: one per core) on one listen
 ``HOST`` and ``PORT`` give the defaults of ``--host`` and ``--port`` (``api.config``).
 Each process answers short analyses in its own event loop and solves in its own solver threads
 (``api.config``); the processes share nothing, so analysis throughput scales with the cores.
+Their connections are ``api.connection``'s: a request that does not arrive whole in time is
+refused (408), a half-closed one answered, Transfer-Encoding with Content-Length refused (400).
 
 The socket is made here rather than by ``uvicorn --workers``: uvicorn 0.54 binds it with
 ``proto`` 0, accepted connections inherit that, and asyncio then leaves Nagle's algorithm on
@@ -23,6 +25,7 @@ import uvicorn
 from uvicorn.supervisors import Multiprocess
 
 from .config import CORES, Settings
+from .connection import Connection
 
 APP = "api.main:app"
 # on SIGTERM: stop accepting at once, give requests in flight this long, then cancel them and
@@ -56,7 +59,7 @@ def main(argv: list[str] | None = None) -> None:
     a.host = a.host or settings.host
     workers = settings.web_concurrency or CORES
     os.environ["WEB_CONCURRENCY"] = str(workers)  # for the processes' own settings
-    config = uvicorn.Config(APP, host=a.host, port=a.port, workers=workers,
+    config = uvicorn.Config(APP, host=a.host, port=a.port, workers=workers, http=Connection,
                             timeout_graceful_shutdown=SHUTDOWN_S)  # fmt: skip
     if workers == 1:
         uvicorn.Server(config).run()  # binds by host and port: proto is set
