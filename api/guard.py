@@ -8,6 +8,7 @@ such input back failed to encode (a 500), so every value an error carries is mad
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import time
@@ -146,12 +147,12 @@ def safe(x: Any, depth: int = 0) -> Any:
     if isinstance(x, dict | list | tuple):
         if depth >= MAX_DEPTH:
             return "…"
-        items = list(x.items() if isinstance(x, dict) else x)
-        more = [f"… {len(items) - MAX_ITEMS} more"] if len(items) > MAX_ITEMS else []
+        items = itertools.islice(x.items() if isinstance(x, dict) else x, MAX_ITEMS)
+        more = [f"… {len(x) - MAX_ITEMS} more"] if len(x) > MAX_ITEMS else []
         if isinstance(x, dict):
-            kept = {safe(str(k)): safe(v, depth + 1) for k, v in items[:MAX_ITEMS]}
+            kept = {safe(str(k)): safe(v, depth + 1) for k, v in items}
             return kept | ({"…": more[0]} if more else {})
-        return [safe(v, depth + 1) for v in items[:MAX_ITEMS]] + more
+        return [safe(v, depth + 1) for v in items] + more
     return safe(str(x))
 
 
