@@ -1,6 +1,7 @@
 """The ASGI app: ``uvicorn api.main:app``. Its handlers turn synth's domain errors, placed in
 the request by the routers, into 422s, and every other refusal into FastAPI's shape."""
 
+import gc
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -26,6 +27,8 @@ from .schemas import Health
 @asynccontextmanager
 async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     engine = Engine.of(app)
+    gc.collect()
+    gc.freeze()  # what the imports made lives as long as the process: no collection scans it
     if engine.settings.warm:
         engine.warm()  # in the background: /health answers at once
     yield
