@@ -4,7 +4,8 @@ with the limits uvicorn lacks there, added as a byte count, timers and one end-o
 the parsing left to llhttp:
 
 - A request line and headers of more than ``MAX_HEAD_BYTES`` get 431 and the connection is
-  closed (uvicorn's h11 protocol has this limit; its httptools one has none).
+  closed, counted as parsed and, while incomplete, as read (uvicorn's h11 protocol has this
+  limit; its httptools one has none).
 - A request must arrive whole within ``request_timeout_s`` (``api.config``, 5 s) of the
   connection, or of its own first byte on a kept-alive connection: headers and body, however
   slowly they trickle. Past that a partial request gets 408 and the connection is closed; a
@@ -38,8 +39,11 @@ class Connection(HttpToolsProtocol):
         super().__init__(*args, **kwargs)
         self.timeout_s = get_settings().request_timeout_s
         self.receiving = False  # between a request's first byte and its last
-        self.head_bytes = 0  # read since the last request's headers were complete
-        self.in_head = True  # no request's headers are complete since its first byte
+        self.heads = 0  # requests whose request line and headers were read whole
+        self.head_bytes = 0  # read since then while no request line and headers were whole
+        self.in_body = False  # between a request's headers and its last byte
+        self.head_size = 0  # this request's line and headers as parsed so far
+        self.too_large = False
         self.eof = False  # the client shut its side down
         self.deadline: asyncio.TimerHandle | None = None
 
@@ -52,28 +56,52 @@ class Connection(HttpToolsProtocol):
         super().connection_lost(exc)
 
     def data_received(self, data: bytes) -> None:
-        head = self.in_head
+        heads, body = self.heads, self.in_body
         super().data_received(data)
-        if head and self.in_head and not self.transport.is_closing():
-            self.head_bytes += len(data)
+        if self.heads == heads and not (body or self.in_body or self.transport.is_closing()):
+            self.head_bytes += len(data)  # all of it headers, none whole yet (llhttp holds them)
             if self.head_bytes > MAX_HEAD_BYTES:
-                msg = b"the request line and headers are over %d bytes" % MAX_HEAD_BYTES
-                self._refuse(b"431 Request Header Fields Too Large", msg)
+                self._too_large()
+
+    # the parsed request line and headers, as the parser hands them over
+    def on_url(self, url: bytes) -> None:
+        self._count(len(url))
+        super().on_url(url)
+
+    def on_header(self, name: bytes, value: bytes) -> None:
+        self._count(len(name) + len(value) + 4)
+        super().on_header(name, value)
+
+    def _count(self, n: int) -> None:
+        self.head_size += n
+        if self.head_size > MAX_HEAD_BYTES:
+            self.too_large = True
+            raise ValueError("request line and headers too large")  # the parser stops: 400...
+
+    def send_400_response(self, msg: str) -> None:
+        if self.too_large:  # ...which is 431 here
+            self._too_large()
+        else:
+            super().send_400_response(msg)
+
+    def _too_large(self) -> None:
+        msg = b"the request line and headers are over %d bytes" % MAX_HEAD_BYTES
+        self._refuse(b"431 Request Header Fields Too Large", msg)
 
     def on_message_begin(self) -> None:
         super().on_message_begin()
-        self.receiving = True
+        self.receiving, self.head_size = True, 0
         if self.deadline is None:  # a kept-alive connection's next request: from its first byte
             self._arm()
 
     def on_headers_complete(self) -> None:
-        self.in_head, self.head_bytes = False, 0
+        self.heads, self.head_bytes, self.in_body = self.heads + 1, 0, True
         super().on_headers_complete()
         if self.pipeline:  # queued behind a reply, unread until it is written: not timed
             self._disarm()
 
     def on_message_complete(self) -> None:
-        self.receiving, self.in_head = False, True
+        self.receiving = self.in_body = False
         self._disarm()
         super().on_message_complete()
 
