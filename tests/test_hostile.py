@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import http.client
 import json
+import math
 import re
 import resource
 import socket
@@ -19,8 +20,11 @@ import time
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from api.config import Settings
+from synth.mechanisms import all_types, get
 
 from .server import serving
 
@@ -430,3 +434,67 @@ def test_a_sweep_that_runs_out_of_its_budget_ends_where_it_was(port):
     whole = json.loads(data)
     assert r.status == 200 and whole["complete"] is True and len(whole["values"]) == 4000
     assert whole["values"][:n] == short["values"] and whole["valid"][:n] == short["valid"]
+
+
+# --- properties: any nesting, any bounds, never a 5xx ----------------------------------------
+
+ANYWHERE = [  # where a nested value goes: the body itself, a number, a name, a list, a bound
+    lambda v: v,
+    lambda v: '{"time_ratio":' + v + ',"stroke":1}',
+    lambda v: '{"mechanism":{"type":' + v + ',"params":{}}}',
+    lambda v: ANALYZE + ',"crank_angles_deg":[1,' + v + "]}",
+    lambda v: FOURBAR % ("whitworth", '{"lever":' + v + "}"),
+]
+PATHS = ["/v1/synthesize", "/v1/synthesize", "/v1/analyze", "/v1/analyze", "/v1/synthesize"]
+
+
+@given(
+    depth=st.integers(1, 200_000),
+    where=st.integers(0, len(ANYWHERE) - 1),
+    objects=st.booleans(),
+)
+def test_any_nesting_anywhere_is_never_a_5xx(port, depth, where, objects):
+    value = deep_object(depth) if objects else nested(depth)
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+    r, raw = send(conn, "POST", PATHS[where], ANYWHERE[where](value))
+    assert r.status == 422 and len(raw) <= SMALL, (r.status, raw[:300])
+
+
+SPECIAL = [0.0, -0.0, 5e-324, 2.2e-308, 1e-300, 1e-12, 1e-9, 1e12, 1e13, 1e300, 1.7e308, -1.0]
+# half the ends plausible (× the stroke), half from the edges of what a float can be
+ENDS = st.one_of(st.floats(0.01, 10.0), st.floats(1e-4, 1e3), st.sampled_from(SPECIAL),
+                 st.floats(allow_nan=False, allow_infinity=False))  # fmt: skip
+
+
+@st.composite
+def bounded(draw, mtype: str) -> dict:
+    """A synthesis of one type with random bounds on random parameters: zeros, subnormals,
+    equal ends, huge ones, reversed ones."""
+    bounds = {}
+    stroke = draw(st.sampled_from([1.0, 1e-9, 1e12, 300.0]))
+    for q in get(mtype).parameters:
+        if draw(st.booleans()):
+            lo = draw(ENDS)
+            hi = lo if draw(st.booleans()) else draw(ENDS)
+            scale = stroke if lo in (0.0, 1.0) or lo not in SPECIAL else 1.0
+            bounds[q.name] = [lo * scale, hi * scale]
+    return {"time_ratio": draw(st.sampled_from([1.0, 1.5, 3.0])), "stroke": stroke,
+            "min_transmission_angle_deg": draw(st.sampled_from([0.0, 20.0])),
+            "objective": draw(st.sampled_from(["pareto", "max_transmission_angle"])),
+            "mechanisms": [{"type": mtype, "bounds": bounds}], "time_budget_ms": 300}  # fmt: skip
+
+
+@pytest.mark.parametrize("mtype", [t for t in all_types() if get(t).quick_return])
+@settings(max_examples=25)
+@given(data=st.data())
+def test_any_bounds_on_every_type_are_never_a_5xx(port, mtype, data):
+    body = data.draw(bounded(mtype))
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+    r, raw = send(conn, "POST", "/v1/synthesize", json.dumps(body))
+    assert r.status in (200, 422), (r.status, raw[:300], body)
+    out = json.loads(raw)
+    if r.status == 422:
+        assert out["detail"] and len(raw) <= SMALL
+    else:
+        for c in out["candidates"]:
+            assert all(math.isfinite(v) for v in c["params"].values()), c
