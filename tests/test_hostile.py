@@ -461,9 +461,14 @@ def test_any_nesting_anywhere_is_never_a_5xx(port, depth, where, objects):
 
 
 SPECIAL = [0.0, -0.0, 5e-324, 2.2e-308, 1e-300, 1e-12, 1e-9, 1e12, 1e13, 1e300, 1.7e308, -1.0]
-# half the ends plausible (× the stroke), half from the edges of what a float can be
-ENDS = st.one_of(st.floats(0.01, 10.0), st.floats(1e-4, 1e3), st.sampled_from(SPECIAL),
-                 st.floats(allow_nan=False, allow_infinity=False))  # fmt: skip
+# ends plausible (× the stroke), 0, and from the edges of what a float can be
+ENDS = st.one_of(
+    st.floats(0.01, 10.0),
+    st.floats(1e-4, 1e3),
+    st.just(0.0),
+    st.sampled_from(SPECIAL),
+    st.floats(allow_nan=False, allow_infinity=False),
+)
 
 
 @st.composite
@@ -476,6 +481,8 @@ def bounded(draw, mtype: str) -> dict:
         if draw(st.booleans()):
             lo = draw(ENDS)
             hi = lo if draw(st.booleans()) else draw(ENDS)
+            if draw(st.integers(0, 3)):  # mostly in order
+                lo, hi = min(lo, hi), max(lo, hi)
             scale = stroke if lo in (0.0, 1.0) or lo not in SPECIAL else 1.0
             bounds[q.name] = [lo * scale, hi * scale]
     return {"time_ratio": draw(st.sampled_from([1.0, 1.5, 3.0])), "stroke": stroke,
