@@ -12,10 +12,11 @@ the parsing left to llhttp:
   connection that never sent a byte is closed. uvicorn times only the idle gap after a
   response, and restarts that on every byte.
 - A client that sends its request and then shuts its side down (half-close) gets its reply,
-  then the connection is closed; uvicorn closed it at the end of file, reply unsent.
+  then the connection is closed; uvicorn's closes it at the end of file, reply unsent.
 
-Measured against hypercorn 0.18 and granian 2.8 (docs/service.md): neither does both, nor
-refuses Transfer-Encoding with Content-Length.
+Measured against hypercorn 0.18 and granian 2.8 (docs/benchmarks.md, "Clients that
+misbehave"): each lacks one of these or more, and neither refuses Transfer-Encoding with
+Content-Length.
 """
 
 from __future__ import annotations
