@@ -40,8 +40,8 @@ class Settings(BaseSettings):
     request_timeout_s: float = Field(5.0, gt=0)
     warm: bool = True  # build the common solvers in the workers at start, in the background
     max_budget_ms: float = 60_000.0  # the largest time_budget_ms a request may ask for
-    # how long a request may wait for a solver slot before a 503: this share of what is left
-    # of its budget (a synthesis), at most max_queue_ms (also for sweeps and long curves)
+    # how long after its arrival a request may wait for a solver slot before a 503: this share
+    # of its budget (a synthesis, a sweep), at most max_queue_ms (all that long curves get)
     queue_share: float = 0.5
     max_queue_ms: float = 1000.0
 

@@ -32,9 +32,9 @@ __all__ = ["MAX_CANDIDATES", "OBJECTIVES", "Solver", "Spec", "check", "synthesiz
 
 OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE, *MOTION_OBJECTIVES)
 MAX_CANDIDATES = 50
-# the most a bound may differ from the stroke, either way (_check_scale); the stroke lies within
-# 1e±100, so that squares of lengths stay normal floats
-SCALE = 1e24
+# the solvers work in the stroke's unit: a stroke within STROKES and bounds within SCALE of it
+# either way keep their ratios and squares finite and non-zero (_check_scale)
+STROKES, SCALE = (1e-100, 1e100), 1e24
 PER_TYPE = 5  # candidates per type when max_candidates is not given (pareto: per type's front)
 
 
@@ -179,7 +179,12 @@ def check(
 def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
     checks = [
         ("time_ratio", tr, math.isfinite(tr) and tr >= 1, "a finite number ≥ 1"),
-        ("stroke", stroke, 1e-100 <= stroke <= 1e100, "a length in [1e-100, 1e100]"),
+        (
+            "stroke",
+            stroke,
+            STROKES[0] <= stroke <= STROKES[1],
+            f"a length in [{STROKES[0]:g}, {STROKES[1]:g}]",
+        ),
         (
             "min_transmission_angle_deg",
             bound,
