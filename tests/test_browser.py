@@ -220,6 +220,27 @@ def test_analysis_and_sweep_views(page):
     assert pg.locator("#sweep-plot rect.valid").count() >= 1  # the valid interval, shaded
 
 
+def test_a_sweep_out_of_budget_says_where_it_ended(page):
+    """The page sends no budget; the request is given a 50 ms one on its way (the real server
+    answers it): the plot ends where the server stopped, and the page says so."""
+    pg = page.page
+
+    def short(route):
+        body = json.loads(route.request.post_data)
+        route.continue_(post_data=json.dumps({**body, "points": 10_000, "time_budget_ms": 50}))
+
+    pg.route("**/v1/sweep", short)
+    pg.click("#tab-sweep")
+    pg.wait_for_selector("#s-param-coupler")
+    pg.select_option("#s-vary", "coupler")
+    pg.click("#s-run")
+    pg.wait_for_selector("#s-status:not(:empty)")
+    assert "time budget ran out" in pg.inner_text("#s-status")
+    pg.unroute("**/v1/sweep")
+    pg.click("#s-run")  # its own request: whole, and no note
+    pg.wait_for_selector("#s-status:empty", state="attached")
+
+
 @pytest.mark.parametrize(("name", "viewport"), [("desktop", DESKTOP), ("phone", PHONE)])
 def test_screenshots_of_each_view(site, name, viewport):
     p = Page(site, viewport)

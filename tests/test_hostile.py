@@ -17,6 +17,7 @@ import re
 import resource
 import socket
 import time
+from contextlib import closing
 from pathlib import Path
 
 import pytest
@@ -455,8 +456,8 @@ PATHS = ["/v1/synthesize", "/v1/synthesize", "/v1/analyze", "/v1/analyze", "/v1/
 )
 def test_any_nesting_anywhere_is_never_a_5xx(port, depth, where, objects):
     value = deep_object(depth) if objects else nested(depth)
-    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-    r, raw = send(conn, "POST", PATHS[where], ANYWHERE[where](value))
+    with closing(http.client.HTTPConnection("127.0.0.1", port, timeout=60)) as conn:
+        r, raw = send(conn, "POST", PATHS[where], ANYWHERE[where](value))
     assert r.status == 422 and len(raw) <= SMALL, (r.status, raw[:300])
 
 
@@ -496,8 +497,8 @@ def bounded(draw, mtype: str) -> dict:
 @given(data=st.data())
 def test_any_bounds_on_every_type_are_never_a_5xx(port, mtype, data):
     body = data.draw(bounded(mtype))
-    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-    r, raw = send(conn, "POST", "/v1/synthesize", json.dumps(body))
+    with closing(http.client.HTTPConnection("127.0.0.1", port, timeout=60)) as conn:
+        r, raw = send(conn, "POST", "/v1/synthesize", json.dumps(body))
     assert r.status in (200, 422), (r.status, raw[:300], body)
     out = json.loads(raw)
     if r.status == 422:

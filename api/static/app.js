@@ -143,7 +143,8 @@ async function synthesize(choose = 0) {
   saveState("synthesize", synthState());
   $("synth-status").textContent = "Synthesising…";
   const r = await api("v1/synthesize", body);
-  $("synth-status").textContent = "";
+  $("synth-status").textContent = r.ok && !r.data.complete
+    ? "The time budget ran out: these are the designs found by then." : "";
   const tbody = $("candidates").querySelector("tbody");
   tbody.replaceChildren();
   $("refusals").replaceChildren();
@@ -276,8 +277,12 @@ async function sweepView() {
   const r = await api("v1/sweep", body);
   const svg = $("sweep-plot");
   svg.replaceChildren();
+  $("s-status").textContent = "";
   if (!r.ok) { showErrors(r.data.detail, designFieldId("s"), "s-form-error"); return; }
   const s = r.data;
+  $("s-status").textContent = s.complete ? "" : !s.values.length
+    ? "The time budget ran out before any value was analysed."
+    : `The time budget ran out: the sweep ends at ${s.vary} = ${fmt(s.values.at(-1), 7)}.`;
   plot(svg, s.values, [
     { ys: s.time_ratio, color: COLORS[0], label: "time ratio" },
     { ys: s.min_transmission_angle_deg, color: COLORS[1], label: "min. transmission (°)", right: true },
