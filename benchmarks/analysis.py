@@ -3,9 +3,9 @@ motion quality, sensitivities and the envelope.
 
     python -m benchmarks.analysis [--quick]
 
-One reference design per type (mechanisms.md). Each case is timed as the median of repeated
-calls, in one run, interleaved with the summary-only baseline so that machine load moves both;
-the report is the ratio to that baseline.
+One reference design per type (docs/model.md, Reference cases). Each case is timed as the
+median of repeated calls, in one run, interleaved with the summary-only baseline so that
+machine load moves both; the report is the ratio to that baseline.
 
 Also what a synthesis costs: the default requests (everything free, each objective, several
 time ratios and bounds) and requests a type cannot meet, per type and for all five

@@ -1,6 +1,7 @@
-"""The closed forms of mechanisms.md in 50-digit arithmetic (mpmath): the referee where a
-design sits so near a dead point that double precision cannot resolve its dead centres in a
-plain forward simulation (a coupler at its reach: s has a square-root kink there).
+"""The types' closed forms (their modules' docstrings, docs/model.md) in 50-digit
+arithmetic (mpmath): the referee where a design sits so near a dead point that double precision
+cannot resolve its dead centres in a plain forward simulation (a coupler at its reach: s has a
+square-root kink there).
 
 Valid where the slider's extremes are the driving link's extremes, i.e. every type but the
 ram-link / connecting-rod variants with a non-default path height. Written here from the

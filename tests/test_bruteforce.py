@@ -1,7 +1,7 @@
 """Self-test of the independent reference simulator tests/bruteforce.py.
 
-Checks it against the contract's reference cases (design/mechanisms.md) and, on random designs,
-against the contract's closed forms (used here ONLY as a cross-check of the simulator).
+Checks it against the sources' reference cases (docs/model.md, Reference cases) and, on random
+designs, against the types' closed forms (used here ONLY as a cross-check of the simulator).
 """
 
 import math

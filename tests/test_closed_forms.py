@@ -1,4 +1,4 @@
-"""The closed forms of mechanisms.md agree with the root-found extremes on random designs.
+"""The types' closed forms (docs/model.md) agree with the root-found extremes on random designs.
 
 The closed forms (each type's ``facts``) are only used by synthesis; the analysis never reads
 them. Here each is checked against ``synth.analyze`` (root finding on ds/dθ), and both are

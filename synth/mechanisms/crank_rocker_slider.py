@@ -24,7 +24,7 @@ slider_height   h       O4 to the slider path along the mid-swing line
 Valid: Grashof with the crank the shortest link (a crank-rocker); r6 ≥ max |h − r5 cos δ| over
 the swing when r6 > 0. Default h = r5 cos(Δψ/2), the path through C's extreme positions.
 Transmission: coupler → rocker cos μ = (r3² + r4² − |AO4|²)/(2 r3 r4), extremes with the crank on
-the ground line; rod → slider cos μ = (h − r5 cos δ)/r6. Closed forms (mechanisms.md): with φe,
+the ground line; rod → slider cos μ = (h − r5 cos δ)/r6. Closed forms: with φe,
 φf the angles of O2D to the ground line at the toggles, TR = (π + |φf − φe|)/(π − |φf − φe|);
 stroke = 2 r5 sin(Δψ/2) when s is monotonic over the swing: r6 cos(Δψ/2) ≥ |h − r5 cos(Δψ/2)|
 (``one_way``).

@@ -20,7 +20,7 @@ ram_height      h       lever pivot to the ram path, along the pivot line
 
 Valid: r2 < d (else it is a Whitworth); d + r2 ≤ L (the block stays on the lever);
 l ≥ max |h − L cos ψ| over the swing when l > 0. Default h = L cos ψmax, the path through the
-tip's extreme positions. Closed forms (mechanisms.md): sin ψmax = r2/d;
+tip's extreme positions. Closed forms: sin ψmax = r2/d;
 TR = (π + 2 asin(r2/d)) / (π − 2 asin(r2/d)); stroke = 2 L r2/d when s is monotonic in ψ
 (``one_way``: l cos ψmax ≥ |h − L cos ψmax|);
 transmission at the ram link cos μ = (h − L cos ψ)/l; the slot drive alone transmits at 90°.

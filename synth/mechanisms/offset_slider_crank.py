@@ -13,7 +13,7 @@ offset   e       signed distance of the slider path from O2 (y = e)
 =======  ======  ==================================================
 
 Valid when r3 ≥ r2 + |e| (the crank turns fully). Transmission (coupler → slider): the angle
-between BC and the path's normal, cos μ = (e − B_y)/r3. Closed forms (mechanisms.md):
+between BC and the path's normal, cos μ = (e − B_y)/r3. Closed forms:
 stroke = sqrt((r3+r2)² − e²) − sqrt((r3−r2)² − e²); β = asin(|e|/(r3−r2)) − asin(|e|/(r3+r2));
 TR = (π+β)/(π−β); μ_min = acos((r2+|e|)/r3).
 """

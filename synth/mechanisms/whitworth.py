@@ -16,7 +16,7 @@ connecting_rod  l       rod PR from the arm to the ram
 ==============  ======  ======================================
 
 Valid: r2 > d (the lever turns fully); l > L (the rod reaches the ram path). Closed forms
-(mechanisms.md): extremes where B_x = −d; quick-stroke crank angle 2 acos(d/r2);
+extremes where B_x = −d; quick-stroke crank angle 2 acos(d/r2);
 TR = (π − acos(d/r2)) / acos(d/r2); stroke = 2L; transmission cos μ = L cos ψ / l,
 μ_min = acos(L/l).
 """
