@@ -36,10 +36,10 @@ MB = 1_000_000
 CLOSING = (413, 431)
 
 SCOTCH = '{"type":"scotch_yoke","params":{"crank":1}}'
-SWEEP = '{"mechanism":' + SCOTCH + ',"vary":"crank","start":1,"stop":2'
+ANALYZE = '{"mechanism":' + SCOTCH  # an analysis's body, but for its closing brace
+SWEEP = ANALYZE + ',"vary":"crank","start":1,"stop":2'
 WHIT = '{"time_ratio":1.6,"stroke":300,"mechanisms":[{"type":"whitworth",'
 BIG_LIST = "[" + ",".join(["1"] * 1_000_000) + "]"  # 2 MB: under the byte limit, over the count
-ANALYZE = '{"mechanism":' + SCOTCH
 DRAG = ('{"type":"drag_link_slider","params":{"ground":0.1,"crank":0.225,"coupler":0.2504,'
         '"follower":0.275,"follower_arm":0.15,"connecting_rod":0.3}}')  # fmt: skip
 FOURBAR = '{"time_ratio":1.5,"stroke":1,"mechanisms":[{"type":"%s","bounds":%s}]}'
@@ -262,7 +262,7 @@ def test_the_contract_states_the_refusals_and_the_docs_load_nothing_from_elsewhe
 # --- the connection: requests that never arrive whole, half-closes, framing ----------------
 
 REQUEST_TIMEOUT_S = Settings().request_timeout_s  # the documented default: 5 s
-BODY = b'{"mechanism":{"type":"scotch_yoke","params":{"crank":1}}}'
+BODY = (ANALYZE + "}").encode()
 
 
 def raw(port: int, data: bytes = b"", half_close: bool = False, timeout: float = 30.0):
@@ -351,7 +351,7 @@ GET_ROUTES = ["/health", "/v1/mechanisms", "/v1/mechanisms/whitworth", "/v1/atla
 POSTS = {
     "/v1/analyze": BODY,
     "/v1/synthesize": b'{"time_ratio":1.5,"stroke":1,"mechanisms":[{"type":"whitworth"}]}',
-    "/v1/sweep": ANALYZE.encode() + b',"vary":"crank","start":1,"stop":2,"points":5}',
+    "/v1/sweep": (SWEEP + ',"points":5}').encode(),
 }
 
 
