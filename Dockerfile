@@ -19,7 +19,7 @@ COPY api api
 FROM base AS native
 RUN apt-get update && apt-get install -y --no-install-recommends gcc libc6-dev \
     && rm -rf /var/lib/apt/lists/*
-RUN python -c "import synth.model; synth.model.compile_all()"
+RUN python -c "import synth.analysis.model; synth.analysis.model.compile_all()"
 
 FROM base
 COPY --from=native /opt/synth /opt/synth

@@ -1,7 +1,7 @@
 """Settings: the only place the service reads the environment (read once, overridable in tests),
 ``api.serve``'s host, port and processes included.
 
-The library reads its own two, for the compiled analysis, in ``synth.native``."""
+The library reads its own two, for the compiled analysis, in ``synth.numerics.native``."""
 
 from __future__ import annotations
 

@@ -32,7 +32,7 @@ from .config import Settings, get_settings
 # it found by its deadline, encoding, an event loop busy with other requests; with it, a
 # synthesis's wall time stays within its budget under load (benchmarks/overload.py)
 REPLY_S = 0.1
-_OPS = {"analyze": synth.analyze, "synthesize": synth.synthesize, "sweep": synth.sweep}
+_OPS = {"analyze": synth.analyze, "synthesize": synth.synthesize, "sweep": synth.analysis.sweep}
 
 
 class Busy(Exception):
@@ -53,7 +53,7 @@ def _warm() -> None:
     synth.synthesize(1.5, 1.0, 10.0, time_budget_ms=5000)
     for t in synth.mechanisms.all_types():
         m = synth.mechanisms.get(t)
-        synth.model.model(m, frozenset())
+        synth.analysis.model.model(m, frozenset())
 
 
 class Engine:

@@ -21,10 +21,10 @@ from pydantic import (
 )
 
 from synth import results
-from synth.kinematics import ANALYSIS_INCLUDE, INCLUDE, MAX_CURVE_POINTS
+from synth.analysis.kinematics import ANALYSIS_INCLUDE, INCLUDE, MAX_CURVE_POINTS
+from synth.analysis.sweep import MAX_POINTS
 from synth.mechanisms import Mechanism, Parameter, all_types, get
-from synth.sweep import MAX_POINTS
-from synth.synthesis import MAX_CANDIDATES
+from synth.synthesis.synthesize import MAX_CANDIDATES
 
 from .guard import MAX_ERRORS
 

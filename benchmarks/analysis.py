@@ -121,7 +121,7 @@ def pareto_costs(repeats: int, quick: bool = False) -> list[dict]:
 
 
 def motion_costs(repeats: int) -> list[dict]:
-    """The motion objectives (SLSQP from many starts, ``synth.motion_search``) against a
+    """The motion objectives (SLSQP from many starts, ``synth.synthesis.motion``) against a
     max_transmission_angle request on the same targets (time ratio 1.6, stroke 1, bound 20°,
     everything free), per quick-return type, calls alternated; with the measure reached."""
     rows = []

@@ -7,15 +7,15 @@
   reduced solver: cold multistart IPOPT, ``search.STARTS`` (8) Halton starts per structural
   variant. It is the path shipped before the reduced solvers, less the old closed-form fast
   paths: the "before" of the comparison, and the reference for optimality.
-- Peers on the same NLP (``synth.formulation``: same variables, bounds, objective and
+- Peers on the same NLP (``synth.synthesis.formulation``: same variables, bounds, objective and
   constraints, per structural variant, the same valid Halton starts): scipy SLSQP from each
   start, scipy differential evolution once per variant, pylinkage's particle swarm once per
   variant on the L1 exact-penalty function of the NLP (it takes only box bounds). They run
-  through synth.search's own ``ipopt`` with its local solve (``multistart``) swapped for theirs,
-  so the problem set-up (variants, fixed parts checked, bounds, starts) is shared code, with no
-  reduced solver and no time budget. They return, unverified and without synth's Newton
-  polish, what SLSQP reports converged, and the best point of evolution and swarm (which have
-  no usable convergence test here).
+  through synth.synthesis.search's own ``ipopt`` with its local solve (``multistart``)
+  swapped for theirs, so the problem set-up (variants, fixed parts checked, bounds, starts)
+  is shared code, with no reduced solver and no time budget. They return, unverified and
+  without synth's Newton polish, what SLSQP reports converged, and the best point of
+  evolution and swarm (which have no usable convergence test here).
 
 Candidates are in the caller's units; every method's are verified the same way afterwards.
 """
@@ -33,11 +33,11 @@ import numpy as np
 from scipy.optimize import Bounds, NonlinearConstraint, differential_evolution, minimize
 
 import synth
-from synth import search, synthesis
-from synth.diagnose import forget_ranges
-from synth.formulation import Formulation, relevant
 from synth.mechanisms import get
-from synth.solve import MAX_ITER, Built, multistart
+from synth.synthesis import search, synthesize
+from synth.synthesis.diagnose import forget_ranges
+from synth.synthesis.formulation import Formulation, relevant
+from synth.synthesis.solve import MAX_ITER, Built, multistart
 
 SEED = 6
 DE = {"maxiter": 150, "popsize": 15, "tol": 1e-8}  # bounded: ~1 s per variant with its polish
@@ -156,9 +156,9 @@ def nlp(form: Formulation) -> Nlp:
     return _nlps[key]
 
 
-# A local solve with synth.solve.multistart's signature: (built, fixed values, TR, cos bound,
-# lower and upper bounds of the free lengths, start points, deadline) -> (start index, free
-# lengths in stroke units) of each converged solution.
+# A local solve with synth.synthesis.solve.multistart's signature: (built, fixed values, TR,
+# cos bound, lower and upper bounds of the free lengths, start points, deadline) -> (start
+# index, free lengths in stroke units) of each converged solution.
 LocalSolve = Callable[..., Iterator[tuple[int, dict[str, float]]]]
 
 
@@ -168,7 +168,7 @@ def on_nlp(local: LocalSolve) -> Method:
     local solves by ``local``; no reduced solver, no verification."""
 
     def run(target: dict[str, Any]) -> Outcome:
-        spec = synthesis._spec(target["mechanisms"][0], 0)
+        spec = synthesize._spec(target["mechanisms"][0], 0)
         m = get(spec.type)
         t = search.Targets(
             target["time_ratio"], target["stroke"], target["min_transmission_angle_deg"],
@@ -211,7 +211,7 @@ def _box(form: Formulation, lo: np.ndarray, hi: np.ndarray, extra: tuple[float, 
 
 
 def _parameters(fixed: np.ndarray, tr: float, cos_bound: float) -> np.ndarray:
-    return np.concatenate([fixed, [tr, cos_bound]])  # as synth.solve.multistart
+    return np.concatenate([fixed, [tr, cos_bound]])  # as synth.synthesis.solve.multistart
 
 
 def _solution(form: Formulation, x: np.ndarray) -> dict[str, float]:
@@ -241,7 +241,7 @@ def slsqp(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Ite
     for i, x0 in enumerate(start_points):
         r = minimize(
             lambda x: float(fn.f(x, pv)),
-            np.r_[x0, [1.0] * b.form.n_extra],  # as synth.solve.multistart
+            np.r_[x0, [1.0] * b.form.n_extra],  # as synth.synthesis.solve.multistart
             jac=lambda x: fn.grad_f(x, pv).full().ravel(),
             method="SLSQP",
             bounds=box,

@@ -44,8 +44,9 @@ from typing import Any
 
 import numpy as np
 
-from synth import SynthError, analyze, search
+from synth import SynthError, analyze
 from synth.mechanisms import all_types
+from synth.synthesis import search
 
 from . import methods, targets
 from .common import machine

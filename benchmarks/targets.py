@@ -26,10 +26,10 @@ from typing import Any
 import numpy as np
 
 from synth import SynthError, analyze
-from synth.formulation import relevant
+from synth.analysis.verify import verify
 from synth.mechanisms import Mechanism, all_types, get
 from synth.results import Analysis
-from synth.verify import verify
+from synth.synthesis.formulation import relevant
 
 SEED = 6  # GitHub issue 6
 N_FEASIBLE = 100

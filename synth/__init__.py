@@ -6,24 +6,14 @@
 (2.0, 450.0)
 """
 
-from . import mechanisms
+from . import atlas, mechanisms
 from ._version import __version__ as __version__
+from .analysis.kinematics import analyze, analyze_many, joints
+from .analysis.sweep import sweep
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
-from .kinematics import analyze, analyze_many, joints
+from .mechanisms import register
 from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
-from .sweep import sweep
 from .synthesis import Solver, Spec, synthesize
-
-
-def __getattr__(name: str):
-    """``synth.atlas`` (the design atlas, callable) is imported when first used, so that
-    ``python -m synth.atlas`` runs it once."""
-    if name == "atlas":
-        import importlib
-
-        return importlib.import_module(".atlas", __name__)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
 
 __all__ = [
     "Analysis",
@@ -43,6 +33,7 @@ __all__ = [
     "atlas",
     "joints",
     "mechanisms",
+    "register",
     "sweep",
     "synthesize",
 ]

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import synth
-from synth import roots
+from synth.analysis import roots
+from synth.analysis.kinematics import analyze_many
 from synth.errors import SynthError
-from synth.kinematics import analyze_many
 from synth.mechanisms import all_types
 
 from .designs import random_designs

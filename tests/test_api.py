@@ -13,7 +13,7 @@ from api.config import Settings
 from api.engine import Engine
 from api.main import app
 from api.routers.common import engine
-from synth.kinematics import ANALYSIS_INCLUDE
+from synth.analysis.kinematics import ANALYSIS_INCLUDE
 from synth.mechanisms import all_types, get
 
 from . import bruteforce

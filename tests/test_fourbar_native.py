@@ -1,4 +1,4 @@
-"""The four-bar construction's compiled evaluation (synth.mechanisms._fourbar_native) against
+"""The four-bar construction's compiled evaluation (synth.mechanisms.fourbar.compiled) against
 its numpy version: the same validity and feasibility, the same NaNs, the same numbers to
 rounding, over random problems (fixed links, bounds, rods, both objectives) and points."""
 
@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from synth.errors import Unreachable
-from synth.formulation import relevant
 from synth.mechanisms import crank_rocker_slider, drag_link_slider, get
-from synth.mechanisms._fourbar_synthesis import FourBar
-from synth.search import Spec, Targets, build_problem, variants
+from synth.mechanisms.fourbar.solver import FourBar
+from synth.synthesis.formulation import relevant
+from synth.synthesis.search import Spec, Targets, build_problem, variants
 
 ROLES = {"crank_rocker_slider": crank_rocker_slider.ROLES,
          "drag_link_slider": drag_link_slider.ROLES}  # fmt: skip

@@ -8,7 +8,7 @@ import itertools
 import pytest
 
 import synth
-from synth.mechanisms import _fourbar_synthesis
+from synth.mechanisms.fourbar import solver
 
 SPECS = [
     {"type": "crank_rocker_slider"},
@@ -22,7 +22,7 @@ SPECS = [
 @pytest.mark.parametrize("spec", SPECS, ids=lambda s: str(s))
 def test_continued_fronts_equal_the_full_search(spec, monkeypatch):
     continued = []
-    original = _fourbar_synthesis.FourBar.continued
+    original = solver.FourBar.continued
 
     def counted(self, cos_bound):
         answer = original(self, cos_bound)
@@ -31,9 +31,9 @@ def test_continued_fronts_equal_the_full_search(spec, monkeypatch):
 
     targets = list(itertools.product((1.2, 1.6, 2.2), (0.0, 10.0, 25.0), (1.0, 37.0)))
     fronts = []
-    monkeypatch.setattr(_fourbar_synthesis.FourBar, "continued", counted)
+    monkeypatch.setattr(solver.FourBar, "continued", counted)
     fronts.append([synth.synthesize(tr, s, b, [spec]).candidates for tr, b, s in targets])
-    monkeypatch.setattr(_fourbar_synthesis.FourBar, "continued", lambda self, c: None)
+    monkeypatch.setattr(solver.FourBar, "continued", lambda self, c: None)
     fronts.append([synth.synthesize(tr, s, b, [spec]).candidates for tr, b, s in targets])
     assert any(continued)  # the continuation was taken, not only its fallback
     for fast, full in zip(*fronts, strict=True):

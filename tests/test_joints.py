@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 import synth
-from synth import kinematics
-from synth.kinematics import check
+from synth.analysis import kinematics
+from synth.analysis.kinematics import check
 from synth.mechanisms import all_types, get
-from synth.mechanisms._registry import _REGISTRY
+from synth.mechanisms.registry import _REGISTRY
 
 from .designs import random_designs
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import synth
-from synth.kinematics import motion_terms
+from synth.analysis.kinematics import motion_terms
 
 from . import motion_referee
 from .designs import random_designs

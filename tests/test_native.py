@@ -1,5 +1,5 @@
-"""The analysis's compiled functions (synth.native) against CasADi's virtual machine: the same
-numbers to the bit, for every type and structural variant, and the virtual machine wherever
+"""The analysis's compiled functions (synth.numerics.native) against CasADi's virtual machine:
+the same numbers to the bit, for every type and structural variant, and the virtual machine wherever
 no library can be built."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ import shutil
 import numpy as np
 import pytest
 
+from synth.analysis.model import GRID, KINDS, Model
 from synth.mechanisms import all_types, get
-from synth.model import GRID, KINDS, Model
-from synth.native import FLAGS
+from synth.numerics.native import FLAGS
 
 from .designs import random_designs
 
@@ -60,7 +60,7 @@ def test_compiled_kinematics_match_the_virtual_machine_to_the_bit(
 
 
 def test_without_a_compiler_or_a_cache_the_virtual_machine_runs(monkeypatch, tmp_path):
-    from synth import native
+    from synth.numerics import native
 
     monkeypatch.setattr(native, "_compiler", lambda: None)
     monkeypatch.setenv("SYNTH_CACHE", str(tmp_path / "empty"))

@@ -165,7 +165,7 @@ def test_a_wrong_prediction_of_the_ends_is_planned_again(mtype, bound, monkeypat
     (as if the best proposals had failed their verification and others stood in): the
     verified ends differ, the inner points are planned again from them, and the answer is the
     front planned on the right ends."""
-    from synth import front
+    from synth.synthesis import front
 
     want = synth.synthesize(1.6, 300.0, bound, [{"type": mtype}]).candidates
     head = front._head

@@ -1,4 +1,4 @@
-"""Motion quality and sensitivities (synth.quality) against independent computations.
+"""Motion quality and sensitivities (synth.analysis.quality) against independent computations.
 
 - Speed fluctuation and peak accelerations against a brute force on tests/bruteforce.py's
   geometry (which shares no code with synth): the slider's velocity by complex step, its

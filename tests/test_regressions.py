@@ -103,7 +103,7 @@ def test_drag_link_coupler_at_the_double_root():
     from mpmath import acos, mpf
 
     fixed = {"ground": 0.1, "crank": 0.225, "follower": 0.275, "connecting_rod": 0.3}
-    s = synth.sweep("drag_link_slider", {**fixed, "coupler": 0.2, "follower_arm": 0.15},
+    s = synth.analysis.sweep("drag_link_slider", {**fixed, "coupler": 0.2, "follower_arm": 0.15},
                     "coupler", 0.15, 0.40, 51)  # fmt: skip
     tr_min = s.time_ratio_range["min"].time_ratio
     r = synth.synthesize(tr_min, 0.3, mechanisms=[{"type": "drag_link_slider", "fixed": fixed}])

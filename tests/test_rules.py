@@ -38,11 +38,11 @@ RULES = [
          {"type": "scotch_yoke"}, {"type": "whitworth", "bounds": {"crank": [90.0, 60.0]}}]}),
      ["body", "mechanisms", 1, "whitworth", "bounds", "crank"]),
     ("a sweep's start ≤ stop",
-     lambda: synth.sweep("crank_shaper", SHAPER, "crank", 60.0, 50.0),
+     lambda: synth.analysis.sweep("crank_shaper", SHAPER, "crank", 60.0, 50.0),
      ("/v1/sweep", {**SWEEP, "vary": "crank", "start": 60.0, "stop": 50.0}),
      ["body", "stop"]),
     ("a sweep varies a parameter of the type",
-     lambda: synth.sweep("crank_shaper", SHAPER, "colour", 10.0, 60.0),
+     lambda: synth.analysis.sweep("crank_shaper", SHAPER, "colour", 10.0, 60.0),
      ("/v1/sweep", {**SWEEP, "vary": "colour"}),
      ["body", "vary"]),
 ]  # fmt: skip

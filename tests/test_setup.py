@@ -353,7 +353,7 @@ def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
     # the image: no compiler, and every type's analysis compiled from the libraries it carries
     env = environment(base) | {"CC": str(tmp_path / "no-compiler")}
     probe = (
-        "from synth.model import model; from synth.mechanisms import all_types, get; "
+        "from synth.analysis.model import model; from synth.mechanisms import all_types, get; "
         "print({model(get(t), frozenset()).fn.fn.class_name() for t in all_types()})"
     )
     out = subprocess.run(["python", "-c", probe], cwd=app, env=env, check=True,

@@ -1,4 +1,4 @@
-"""synth.sweep: Podhorodeski et al. (2005) Fig. 5, the adjustable coupler's range."""
+"""synth.analysis.sweep: Podhorodeski et al. (2005) Fig. 5, the adjustable coupler's range."""
 
 import pytest
 
@@ -12,7 +12,7 @@ DESIGN = {**ref.DRAG_LINK_PROJECT, "coupler": 0.3}
 
 @pytest.mark.parametrize(("start", "stop"), [(0.15, 0.40), (0.05, 0.6)])
 def test_fig5_valid_interval_and_time_ratio_range(start, stop):
-    r = synth.sweep("drag_link_slider", DESIGN, "coupler", start, stop, 101)
+    r = synth.analysis.sweep("drag_link_slider", DESIGN, "coupler", start, stop, 101)
     ((lo, hi),) = r.valid_interval
     # the Grashof limits, exactly: r3 ≥ r1 + r4 − r2 and r3 ≤ r2 + r4 − r1
     assert lo == pytest.approx(0.15, rel=1e-15) and hi == pytest.approx(0.40, rel=1e-15)
@@ -36,8 +36,8 @@ def test_fig5_valid_interval_and_time_ratio_range(start, stop):
 
 def test_sweep_arguments_are_checked():
     with pytest.raises(synth.InvalidParameters, match="start must be > 0"):
-        synth.sweep("drag_link_slider", DESIGN, "coupler", -0.1, 0.5, 11)
+        synth.analysis.sweep("drag_link_slider", DESIGN, "coupler", -0.1, 0.5, 11)
     with pytest.raises(synth.InvalidParameters, match="points must be"):
-        synth.sweep("drag_link_slider", DESIGN, "coupler", 0.1, 0.5, 10_001)
+        synth.analysis.sweep("drag_link_slider", DESIGN, "coupler", 0.1, 0.5, 10_001)
     with pytest.raises(synth.InvalidParameters, match="has no parameter"):
-        synth.sweep("drag_link_slider", DESIGN, "rod", 0.1, 0.5, 11)
+        synth.analysis.sweep("drag_link_slider", DESIGN, "rod", 0.1, 0.5, 11)

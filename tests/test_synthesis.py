@@ -10,7 +10,7 @@ import math
 import pytest
 
 import synth
-from synth.solve import multistart
+from synth.synthesis.solve import multistart
 
 from . import bruteforce
 from . import reference_cases as ref
@@ -114,7 +114,7 @@ def test_a_range_end_is_exact_and_kept_ranges_answer_alike():
     """The end a refused time ratio lies beyond is bisected to 1e-10: designs 1e-8 inside it
     pass the brute-force check, and 1e-8 outside it is refused with the same end. The range is
     kept per process; the order of the questions changes no number."""
-    from synth.diagnose import forget_ranges
+    from synth.synthesis.diagnose import forget_ranges
 
     def reach(tr):
         (why,) = synth.synthesize(tr, ref.DRAG_LINK_STROKE, 0.0, mechanisms=[PROJECT]).infeasible

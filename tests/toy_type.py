@@ -30,7 +30,7 @@ from dataclasses import replace
 import casadi as ca
 
 from synth.mechanisms import Condition, Mechanism, Parameter, get
-from synth.mechanisms._registry import ROD, register
+from synth.mechanisms.registry import ROD, register
 
 TOY = "centred_slider_crank"
 GENERIC = "offset_slider_crank_generic"

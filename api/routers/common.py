@@ -6,11 +6,11 @@ from typing import Annotated, Any
 
 from fastapi import Depends, Request
 
+from synth.analysis.kinematics import check as check_analysis
+from synth.analysis.sweep import check as check_sweep
 from synth.errors import InvalidDesign, InvalidParameters, SynthError
-from synth.kinematics import check as check_analysis
 from synth.results import Tolerance
-from synth.sweep import check as check_sweep
-from synth.synthesis import check as check_synthesis
+from synth.synthesis.synthesize import check as check_synthesis
 
 from ..engine import Engine
 from ..guard import arrival

@@ -1,7 +1,16 @@
-"""The mechanism types: each public module of this package defines one and registers it
-(``_registry.register``). They are found, not listed: a new type is one new module.
+"""The mechanism types and what they share.
 
-A type kept outside the package is a module that registers it too: name it (or several,
+- ``registry``: the record of a type (``Mechanism``, its ``Parameter``s and ``Condition``s) and
+  ``register``, which adds one.
+- ``types``: the six types, one module each; every module of that package registers one.
+- ``geometry``: polymorphic planar geometry (floats and CasADi symbols alike).
+- ``reduced``: the contract of a type's exact reduced solver (``Problem`` in, ``Reduced`` out)
+  and ``rod``, the rule for a connecting rod from a pin to a straight path.
+- ``fourbar``: the four-bar family (the output pin, Grashof, the dead-centre construction and
+  its solver), shared by the two four-bar types; ``slotted``: the slotted-lever types' scale.
+
+The types are found, not listed: a new type is one new module in ``types``. A type kept
+outside the package is a module that calls ``register`` too: name it (or several,
 comma-separated) in ``SYNTH_TYPES`` and every process that imports synth (a service's solver
 processes too) imports it after the package's own."""
 
@@ -9,16 +18,17 @@ import importlib
 import os
 import pkgutil
 
-from ._registry import Condition, Mechanism, Parameter, all_types, get
+from . import types
+from .registry import Condition, Mechanism, Parameter, Scale, all_types, get, register
 
 # the listing's order (and a default request's): these as the contract has them, then any
 # other type by its module's name
 FIRST = ("scotch_yoke", "offset_slider_crank", "crank_shaper", "whitworth",
          "crank_rocker_slider", "drag_link_slider")  # fmt: skip
-_modules = [m.name for m in pkgutil.iter_modules(__path__) if not m.name.startswith("_")]
+_modules = [m.name for m in pkgutil.iter_modules(types.__path__) if not m.name.startswith("_")]
 for _name in sorted(_modules, key=lambda n: (FIRST.index(n) if n in FIRST else len(FIRST), n)):
-    importlib.import_module(f"{__name__}.{_name}")
+    importlib.import_module(f"{types.__name__}.{_name}")
 for _name in filter(None, (n.strip() for n in os.environ.get("SYNTH_TYPES", "").split(","))):
     importlib.import_module(_name)
 
-__all__ = ["Condition", "Mechanism", "Parameter", "all_types", "get"]
+__all__ = ["Condition", "Mechanism", "Parameter", "Scale", "all_types", "get", "register"]

@@ -1,0 +1,391 @@
+"""Analysis of one design over a crank revolution, generic over the registry.
+
+Dead centres and transmission extremes are the stationary points of the type's compiled
+model (``model``), found to machine precision (``roots``); the motion's extremes and the
+sensitivities to the lengths come from the same machinery (``quality``), only when asked.
+Nothing here uses a type's closed forms.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import fields, replace
+from typing import Any
+
+import numpy as np
+
+from ..errors import InvalidDesign, InvalidParameters, SynthError
+from ..mechanisms import Mechanism, get
+from ..mechanisms.fourbar.geometry import grashof_class
+from ..results import (
+    NEAR_DEAD_POINT_DEG,
+    NEAR_LIMIT,
+    Analysis,
+    Conditioning,
+    Curves,
+    Extreme,
+    Joint,
+    PinPath,
+    Stroke,
+    Tolerance,
+    Transmission,
+)
+from . import quality
+from .model import Model, model
+from .roots import TWO_PI, stationary_points, stationary_points_many
+
+MAX_CURVE_POINTS = 100_000
+# the numbers an analysis's curves may carry, points × (each curve, and x and y of each pin):
+# 100 000 points of curves alone, ~8 MB of JSON (README, "What a client can rely on")
+MAX_CURVE_VALUES = 500_000
+INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis or a candidate adds when asked
+# an analysis also adds its curves' pins when asked (they need the curves' angles)
+ANALYSIS_INCLUDE = (*INCLUDE, "pins")
+
+
+def analyze(
+    mechanism: str,
+    params: Mapping[str, float],
+    *,
+    crank_speed: float = 1.0,
+    crank_acceleration: float = 0.0,
+    crank_angles_deg: Sequence[float] | None = None,
+    samples: int | None = None,
+    include: Collection[str] = (),
+    tolerance: Tolerance | None = None,
+) -> Analysis:
+    """Analyse one design over a crank revolution (the semantics of POST /v1/analyze).
+
+    Curves are computed only when asked: at exactly ``crank_angles_deg``, or at ``samples``
+    evenly spaced angles (0° included, 360° not). So are ``include``'s ``"motion"`` (speed
+    fluctuation and peak accelerations), ``"sensitivities"`` (to every length; also with a
+    ``tolerance``, which adds the worst-case deviations), ``"envelope"`` (the box the frame
+    must hold) and ``"pins"`` (the curves' ``pins``: every pin of the type's drawing at the
+    curves' angles, as ``joints`` gives them; only with curves).
+
+    >>> a = analyze("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
+    ...                           "connecting_rod": 200})
+    >>> round(a.time_ratio, 5), round(a.stroke, 9)
+    (2.73524, 300.0)
+    """
+    deg = _asked(mechanism, include, crank_angles_deg, samples)
+    m, p, variant, f, pv, found = _prepared(mechanism, params)  # checked there
+    return _analysis(m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include,
+                     tolerance)  # fmt: skip
+
+
+def analyze_many(
+    mechanism: str,
+    designs: Sequence[Mapping[str, float]],
+    *,
+    include: Collection[str] = (),
+    tolerance: Tolerance | None = None,
+) -> list[Analysis | SynthError]:
+    """``analyze`` of several designs of one type (no curves): each one's analysis, or the
+    SynthError that refuses it. The same analyses to the bit, for less: the dead centres and
+    transmission extremes of the designs of one variant are found in shared compiled calls
+    (``roots.stationary_points_many``), which a front's verification and a sweep repeat."""
+    _asked(mechanism, include, None, None)
+    m = get(mechanism)
+    out: list[Any] = [None] * len(designs)
+    variants: dict[frozenset[str], list[tuple[int, dict[str, float]]]] = {}
+    for i, params in enumerate(designs):
+        try:
+            p = m.complete(params)
+        except SynthError as e:
+            out[i] = e
+            continue
+        variants.setdefault(m.variant(p), []).append((i, p))
+    for variant, members in variants.items():
+        f = model(m, variant)
+        pvs = np.array([[p[n] for n in m.names] for _, p in members], dtype=float)
+        for (i, p), pv, found in zip(members, pvs, stationary_points_many(f, pvs), strict=True):
+            try:
+                found = stationary_points(f, pv) if found is None else found
+                out[i] = _analysis(m, p, variant, f, pv, found, 1.0, 0.0, None, include,
+                                   tolerance)  # fmt: skip
+            except SynthError as e:
+                out[i] = e
+    return out
+
+
+def _analysis(m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include,
+              tolerance) -> Analysis:  # fmt: skip
+    """``analyze``'s answer from the stationary points ``found`` of the design's rows."""
+    rows, theta, values = found
+    summary = _summary(m, p, f, rows, theta, values)
+    if deg is not None:
+        curves = _curves(f, pv, crank_speed, crank_acceleration, deg)
+        if "pins" in include:
+            xy = _pins(model(m, variant, "pins"), pv, deg)
+            curves = replace(curves, pins={k: PinPath(x, y) for k, (x, y) in xy.items()})
+        summary["curves"] = curves
+    if "envelope" in include:
+        summary["envelope"] = quality.envelope(m, variant, p, pv)
+    if {"motion", "sensitivities"} & set(include) or tolerance is not None:
+        st = quality.Strokes(*_ends(rows, theta, values))
+        if "motion" in include:
+            summary["motion"] = quality.motion(m, variant, f, pv, st)
+        if "sensitivities" in include or tolerance is not None:
+            worst = _worst_joint(rows, theta, values)
+            summary["sensitivities"] = quality.sensitivities(
+                m, variant, f, pv, st, worst, tolerance
+            )
+    return Analysis(**summary)
+
+
+def motion_terms(
+    mechanism: str, params: Mapping[str, float], gradient: bool = False
+) -> quality.MotionTerms:
+    """The values whose maxima are the motion measures (``quality.MotionTerms``), with their
+    derivatives in the parameters when ``gradient``, for an optimiser that bounds each;
+    raises SynthError for a design that does not run."""
+    m, _, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)
+    if np.count_nonzero(rows == 0) != 2:
+        msg = "the slider does not run one working and one return stroke"
+        raise InvalidDesign(msg, (), "stroke")
+    st = quality.Strokes(*_ends(rows, theta, values))
+    return quality.motion_terms(m, variant, f, pv, st, gradient)
+
+
+def worst_transmission(mechanism: str, params: Mapping[str, float]) -> tuple[float, ...]:
+    """Each transmission joint's crank angle (radians) where its |cos μ| is largest, in the
+    type's order; raises SynthError for a design that does not run."""
+    _, _, _, f, _, (rows, theta, values) = _prepared(mechanism, params)
+    out = []
+    for j in range(1, len(f.names) + 1):
+        k = np.nonzero(rows == j)[0]
+        out.append(float(theta[k[np.argmax(np.abs(values[k]))]]) if k.size else 0.0)
+    return tuple(out)
+
+
+def _prepared(mechanism: str, params: Mapping[str, float]):
+    """The completed design, its variant's compiled model, its parameter vector, and the
+    stationary points of its rows (the dead centres and transmission extremes)."""
+    m = get(mechanism)
+    p = m.complete(params)
+    variant = m.variant(p)
+    f = model(m, variant)
+    pv = np.array([p[n] for n in m.names], dtype=float)
+    return m, p, variant, f, pv, stationary_points(f, pv)
+
+
+def check_include(include: Collection[str], allowed: Sequence[str] = INCLUDE) -> None:
+    """Raise InvalidParameters for anything ``include`` names that is not ``allowed``: by
+    default what a candidate's analysis can add (``ANALYSIS_INCLUDE`` for an analysis's)."""
+    unknown = sorted(set(include) - set(allowed))
+    if unknown:
+        raise InvalidParameters(
+            f"include: unknown {', '.join(map(repr, unknown))}; choose from {', '.join(allowed)}",
+            ("include",),
+        )
+
+
+def _asked(
+    mechanism: str,
+    include: Collection[str],
+    crank_angles_deg: Sequence[float] | None,
+    samples: int | None,
+) -> np.ndarray | None:
+    """The curves' angles (``curve_angles``), once ``include`` is checked against them: pins
+    need angles to be at, and a drawing."""
+    check_include(include, ANALYSIS_INCLUDE)
+    deg = curve_angles(crank_angles_deg, samples)
+    if "pins" in include and deg is None:
+        msg = "include 'pins' needs crank_angles_deg or samples (the angles the pins are wanted at)"
+        raise InvalidParameters(msg, ("include",))
+    check_drawn(mechanism, include)
+    if deg is not None:
+        _check_values(mechanism, include, deg.size, "samples" if samples else "crank_angles_deg")
+    return deg
+
+
+def _check_values(mechanism: str, include: Collection[str], points: int, loc: str) -> None:
+    curves = len(fields(Curves)) - 1  # the pins aside
+    pins = len({pin for d in get(mechanism).drawing for pin in d[1:]}) if "pins" in include else 0
+    per = curves + 2 * pins
+    if points * per > MAX_CURVE_VALUES:
+        what = f"{curves} curves" + (f" and x, y of {pins} pins" if pins else "")
+        raise InvalidParameters(
+            f"the curves would carry {points * per} numbers ({points} points × {per}: {what}); "
+            f"an analysis carries at most {MAX_CURVE_VALUES}: ask for at most "
+            f"{MAX_CURVE_VALUES // per} points" + (" (or no pins)" if pins else ""),
+            (loc,),
+        )
+
+
+def check_drawn(mechanism: str, include: Collection[str]) -> None:
+    """Raise InvalidParameters where ``include`` asks for what needs the type's pins (its
+    drawing: ``pins``, the ``envelope``) and the type has none."""
+    needs = [k for k in ("pins", "envelope") if k in include]
+    if needs and get(mechanism).joints is None:
+        raise InvalidParameters(
+            f"include {needs[0]!r}: {mechanism} has no drawing yet", ("include",)
+        )
+
+
+def _ends(rows, theta, values) -> tuple[float, float, float, float]:
+    """The slider's extremes: crank angles (radians) and positions (t_min, t_max, s_min, s_max)."""
+    on_s = rows == 0
+    s_theta, s_val = theta[on_s], values[on_s]
+    i_max, i_min = s_val.argmax(), s_val.argmin()
+    return float(s_theta[i_min]), float(s_theta[i_max]), float(s_val[i_min]), float(s_val[i_max])
+
+
+def _worst_joint(rows, theta, values) -> tuple[int, float, float] | None:
+    """(row, crank angle, cos μ) where the transmission is worst, None without joints."""
+    joint = rows > 0
+    if not np.any(joint):
+        return None
+    k = np.nonzero(joint)[0][np.argmax(np.abs(values[joint]))]
+    return int(rows[k]), float(theta[k]), float(values[k])
+
+
+def joints(
+    mechanism: str, params: Mapping[str, float], crank_angles_deg: Sequence[float]
+) -> dict[str, np.ndarray]:
+    """The pin positions at each crank angle, {pin: array of (x, y)}, for drawings; the pins
+    and the frame are named in the type's docstring (``synth.mechanisms.get(t).description``).
+
+    >>> j = joints("drag_link_slider", {"ground": 0.1, "crank": 0.225, "coupler": 0.2504,
+    ...            "follower": 0.275, "follower_arm": 0.15, "connecting_rod": 0.3}, [90.0])
+    >>> sorted(j), j["A"].round(9).tolist()
+    (['A', 'B', 'C', 'D', 'O2', 'O4'], [[0.0, 0.225]])
+    """
+    m = get(mechanism)
+    if m.joints is None:
+        raise InvalidParameters(f"{mechanism} has no drawing yet", ("mechanism",))
+    p = m.complete(params)
+    deg = np.asarray(crank_angles_deg, dtype=float).ravel()
+    if deg.size == 0:
+        return {}
+    pv = np.array([p[n] for n in m.names], dtype=float)
+    xy = _pins(model(m, m.variant(p), "pins"), pv, deg)
+    return {k: np.column_stack(v) for k, v in xy.items()}
+
+
+def _pins(f: Model, pv: np.ndarray, deg: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Each pin's x and y at each crank angle (degrees), {pin: (x, y)}, from the compiled
+    ``pins`` model ``f``; empty arrays for no angles."""
+    if deg.size == 0:
+        return {k: (np.empty(0), np.empty(0)) for k in f.names}
+    g = f(np.radians(deg), pv)[0]
+    return {k: (g[2 * i].copy(), g[2 * i + 1].copy()) for i, k in enumerate(f.names)}
+
+
+def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -> dict:
+    reversals = int(np.count_nonzero(rows == 0))
+    if reversals < 2:
+        raise InvalidDesign("the slider does not move: no dead centres found", (), "stroke")
+    t_min, t_max, s_min, s_max = _ends(rows, theta, values)
+    up = (t_max - t_min) % TWO_PI  # crank travel while the slider goes min -> max (+ direction)
+    down = TWO_PI - up
+    if min(up, down) < 1e-12:
+        raise InvalidDesign(
+            f"the slider's extremes fall at one crank angle ({math.degrees(t_max):.6g}°): the "
+            "linkage passes a change point there and its assembly circuit switches, so the "
+            "slider jumps",
+            (),
+            "change_point",
+        )
+    slow_up = up >= down
+    joints = []
+    for j, name in enumerate(f.names, start=1):
+        c = values[rows == j]
+        lo, hi = float(c.min()), float(c.max())
+        worst = min(1.0, max(abs(lo), abs(hi)))
+        best = 0.0 if lo < 0 < hi else min(1.0, abs(lo), abs(hi))
+        joints.append(Joint(name, math.degrees(math.acos(worst)), math.degrees(math.acos(best))))
+    mu_min = min((jt.min_deg for jt in joints), default=90.0)
+    return {
+        "type": m.type,
+        "params": p,
+        "time_ratio": max(up, down) / min(up, down),
+        "stroke": s_max - s_min,
+        "extremes": {
+            "min": Extreme(s_min, math.degrees(t_min)),
+            "max": Extreme(s_max, math.degrees(t_max)),
+        },
+        "working_stroke": Stroke(math.degrees(max(up, down)), 1 if slow_up else -1),
+        "return_stroke": Stroke(math.degrees(min(up, down)), -1 if slow_up else 1),
+        "transmission": Transmission(
+            mu_min,
+            max((jt.max_deg for jt in joints), default=90.0),
+            tuple(joints),
+        ),
+        "grashof": grashof_class(*m.fourbar(p)) if m.fourbar else None,
+        "reversals": reversals,
+        "conditioning": conditioning(m, p, mu_min, reversals),
+    }
+
+
+def conditioning(m: Mechanism, p: dict[str, float], mu_deg: float, reversals: int) -> Conditioning:
+    """Distance to a dead point and to the nearest validity limit, flagged when small."""
+    scale = max(abs(v) for v in p.values())
+    variant = m.variant(p)
+    margins = [
+        (min(float(t) for t in c.margin(p)) / scale, c.name)
+        for c in m.conditions
+        if c.applies(variant)
+    ]
+    margin, name = min(margins, default=(None, None))
+    flags = []
+    if mu_deg < NEAR_DEAD_POINT_DEG:
+        flags.append("near_dead_point")
+    if margin is not None and margin < NEAR_LIMIT:
+        flags.append("near_validity_limit")
+    if reversals > 2:
+        flags.append("dithering")
+    return Conditioning(mu_deg, margin, name, tuple(flags))
+
+
+def check(
+    mechanism: str,
+    params: Mapping[str, float],
+    crank_angles_deg: Sequence[float] | None = None,
+    samples: int | None = None,
+    include: Collection[str] = (),
+    **_: Any,
+) -> None:
+    """What ``analyze`` checks before it analyses: the design's validity, and the arguments'
+    meaning (``curve_angles``, and ``include`` with them). Takes (and ignores) ``analyze``'s
+    other arguments."""
+    get(mechanism).complete(params)
+    _asked(mechanism, include, crank_angles_deg, samples)
+
+
+def curve_angles(crank_angles_deg: Sequence[float] | None, samples: int | None):
+    """The crank angles of the curves asked for, in degrees (None: no curves), checked."""
+    if crank_angles_deg is None and samples is None:
+        return None
+    if crank_angles_deg is not None and samples is not None:
+        raise InvalidParameters("give crank_angles_deg or samples, not both", ("samples",))
+    if crank_angles_deg is not None:
+        deg = np.asarray(crank_angles_deg, dtype=float).ravel()
+    else:
+        if not (isinstance(samples, int) and samples >= 1):
+            raise InvalidParameters(f"samples must be ≥ 1, got {samples}", ("samples",))
+        deg = np.arange(samples) * (360.0 / samples)
+    if deg.size > MAX_CURVE_POINTS:
+        raise InvalidParameters(
+            f"at most {MAX_CURVE_POINTS} curve points, got {deg.size}", ("crank_angles_deg",)
+        )
+    if not np.all(np.isfinite(deg)):
+        raise InvalidParameters("crank angles must be finite", ("crank_angles_deg",))
+    return deg
+
+
+def _curves(f: Model, pv, omega, alpha, deg: np.ndarray) -> Curves:
+    if deg.size == 0:
+        empty = np.empty(0)
+        return Curves(deg, empty, empty, empty, empty)
+    g, g1, g2 = f(np.radians(deg), pv)
+    mu = np.degrees(np.arccos(np.minimum(1.0, np.abs(g[1:])))) if g.shape[0] > 1 else None
+    return Curves(
+        crank_angle_deg=deg,
+        position=g[0],
+        velocity=g1[0] * omega,
+        acceleration=g2[0] * omega**2 + g1[0] * alpha,
+        transmission_deg=np.min(mu, axis=0) if mu is not None else np.full(deg.size, 90.0),
+    )

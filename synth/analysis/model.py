@@ -1,0 +1,216 @@
+"""Each type's kinematics compiled for one structural variant, once per thread.
+
+The rows are the slider's position s(θ) and each pin joint's transmission cosine, with their
+first and second θ-derivatives (automatic differentiation); ``kind="motion"`` gives the rows
+s′ and s″ instead, whose stationary points are the velocity and acceleration extremes. The
+functions are built to machine code where a C compiler is at hand (``native``), and are never
+shared between threads.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import threading
+
+import casadi as ca
+import numpy as np
+
+from ..mechanisms import Mechanism, all_types, get
+from ..mechanisms.fourbar.construction import construction
+from ..numerics.native import bind, native
+
+GRID = 128  # samples per revolution that bracket the stationary points
+EACH = 32 * GRID  # the most angles ``_Batched.each`` keeps a buffer for (a batch of designs)
+POLISH_STEPS = 8  # safeguarded Newton steps a compiled polish takes (``Polisher``)
+
+_local = threading.local()
+
+
+KINDS = ("kinematics", "motion", "pins", "envelope")
+
+
+class Model:
+    """A type's kinematics compiled for one variant, evaluated at a vector of crank angles.
+
+    A call gives the rows and their first two θ-derivatives. The rows, by ``kind``:
+
+    - ``kinematics``: s, then each transmission joint's cos μ (``names``);
+    - ``motion``: s′ and s″ (per unit crank speed), whose stationary points are the extremes
+      of the slider's velocity and acceleration;
+    - ``pins``: x and y of every pin of the type's drawing (``names``, in pairs);
+    - ``envelope``: those of the pins' coordinates that move (``axes``: 0 for x, 1 for y),
+      whose stationary points bound the space the frame must hold.
+    """
+
+    def __init__(self, m: Mechanism, variant: frozenset[str], kind: str = "kinematics") -> None:
+        th = ca.SX.sym("theta")
+        pv = ca.SX.sym("p", len(m.parameters))
+        p = {q.name: (0.0 if q.name in variant else pv[i]) for i, q in enumerate(m.parameters)}
+        g, self.names, self.axes = _rows(m, p, th, kind)
+        g1 = ca.jacobian(g, th)
+        g2 = ca.jacobian(g1, th)
+        self.kind = kind
+        base = "_".join((m.type, *sorted(variant)))  # one symbol per compiled library
+        self.name = f"{base}_{kind}"
+        self.fn = _Batched(self.name, th, pv, ca.vertcat(g, g1, g2))
+        self.polish = Polisher(f"{self.name}_polish", th, pv, g1, g2)
+        self._rows = (th, pv, ca.vertcat(g, g1))
+        self.dead = self.dead_polish = None
+        if kind == "kinematics" and m.dead_centres is not None:
+            h = m.dead_centres(p, th)
+            dh = ca.jacobian(h, th)
+            self.dead = _Batched(f"{base}_dead_centres", th, pv, ca.vertcat(h, dh))
+            self.dead_polish = Polisher(f"{base}_dead_centres_polish", th, pv, h, dh)
+
+    def __call__(self, theta: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, ...]:
+        """g, g', g'' at each θ: arrays of shape (rows, len(θ))."""
+        out = self.fn(theta, pv)
+        return tuple(out.reshape(3, out.shape[0] // 3, -1))
+
+    def dp(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
+        """∂g/∂p and ∂g'/∂p at each θ: shape (len(θ), 2·rows, parameters)."""
+        out = self._dp(theta, pv)
+        return out.T.reshape(out.shape[1], len(pv), -1).transpose(0, 2, 1)
+
+    @functools.cached_property
+    def _dp(self) -> _Batched:  # built on first use: only sensitivities need it
+        th, pv, g = self._rows
+        return _Batched(f"{self.name}_dp", th, pv, ca.vec(ca.jacobian(g, pv)))
+
+
+def _rows(m: Mechanism, p: dict, th: ca.SX, kind: str) -> tuple[ca.SX, tuple, np.ndarray]:
+    """A kind's rows (see ``Model``), their names and their axes."""
+    none = np.zeros(0, dtype=int)
+    if kind == "kinematics":
+        joints = m.transmission(p, th)
+        return ca.vertcat(m.position(p, th), *joints.values()), tuple(joints), none
+    if kind == "motion":
+        s1 = ca.jacobian(m.position(p, th), th)
+        return ca.vertcat(s1, ca.jacobian(s1, th)), (), none
+    pins = m.joints(p, th)
+    coords = [(axis, ca.SX(c)) for xy in pins.values() for axis, c in enumerate(xy)]
+    if kind == "envelope":
+        coords = [(axis, c) for axis, c in coords if ca.depends_on(c, th)]
+    axes = np.array([axis for axis, _ in coords], dtype=int)
+    return ca.vertcat(*(c for _, c in coords)), tuple(pins), axes
+
+
+class _Batched:
+    """out(θ, p) compiled, evaluated at each θ of a vector.
+
+    Up to GRID angles go through a buffer preallocated for their number (made on first use,
+    owned like the function by one thread's Model): an ordinary call's numpy <-> DM
+    conversions cost ~40 µs, more than a few-angle Newton step's evaluation. Common
+    subexpressions are merged (the derivatives repeat g's terms): the same operations on the
+    same operands, so the same results, from half the instructions."""
+
+    def __init__(self, name: str, th: ca.SX, pv: ca.SX, out: ca.SX) -> None:
+        out = ca.densify(out)  # structural zeros (a fixed pivot, a constant row) as numbers
+        self.fn = native(ca.Function(name, [th, pv], [out], {"cse": True}))
+        self.buffers: dict[int, tuple] = {}
+        self.each_buffers: dict[int, tuple] = {}
+
+    def __call__(self, theta, pv: np.ndarray) -> np.ndarray:
+        theta = np.atleast_1d(theta)
+        n = theta.size
+        if n > GRID:  # curves: the conversions are small against the work
+            return self.fn(theta[None, :], pv).full()
+        if n not in self.buffers:
+            self.buffers[n] = self._buffer(n)
+        x, p, out, run, _ = self.buffers[n]
+        x[:], p[:] = theta, pv
+        run()
+        return out.T.copy()  # the buffer is reused by the next call
+
+    def each(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
+        """out at each θ with its own parameters (``pv``: shape (len(θ), p)), as ``__call__``
+        gives it: the same operations, so the same results, for several designs at once."""
+        n = theta.size
+        if n > EACH:
+            return self.fn(theta[None, :], pv.T).full()
+        if n not in self.each_buffers:
+            self.each_buffers[n] = self._buffer(n, shared=False)
+        x, p, out, run, _ = self.each_buffers[n]
+        x[:], p[:] = theta, pv
+        run()
+        return out.T.copy()
+
+    def _buffer(self, width: int, shared: bool = True) -> tuple:
+        x = np.zeros(width)
+        p = np.zeros(self.fn.nnz_in(1) if shared else (width, self.fn.nnz_in(1)))
+        out = np.zeros((width, self.fn.nnz_out(0)))  # column-major (rows, width)
+        run, buf = bind(self.fn.map(width, [False, shared], [False]), [x, p], out)
+        return x, p, out, run, buf
+
+
+class Polisher:
+    """Roots of one row each of d(θ) (d′ its derivative), from brackets where it changes sign:
+    ``POLISH_STEPS`` safeguarded Newton steps (bisection where Newton leaves the bracket)
+    unrolled into one compiled function, mapped over the roots, each with its own row and
+    parameters. A call replaces the several evaluations and the Python loop of a step-by-step
+    iteration; the caller checks convergence and finishes the others (``roots._rtsafe``)."""
+
+    def __init__(self, name: str, th: ca.SX, pv: ca.SX, d: ca.SX, d1: ca.SX) -> None:
+        w = ca.SX.sym("w", d.numel())  # the root's row, one-hot
+        row = ca.Function("row", [th, pv, w], [ca.dot(w, d), ca.dot(w, d1)])
+        x = x0 = ca.SX.sym("x0")
+        lo, hi, rising = ca.SX.sym("lo"), ca.SX.sym("hi"), ca.SX.sym("rising")
+        a, b, fx, step = lo, hi, ca.SX(0), ca.SX(0)
+        for _ in range(POLISH_STEPS):
+            fx, dfx = row(x, pv, w)
+            on_lo = rising * fx < 0  # on lo's side of the root
+            a, b = ca.if_else(on_lo, x, a), ca.if_else(on_lo, b, x)
+            xn = x - fx / dfx
+            nxt = ca.if_else(ca.logic_and(xn >= a, xn <= b), xn, 0.5 * (a + b))
+            x, step = nxt, nxt - x
+        out = ca.vertcat(x, step, fx, b - a)
+        fn = ca.Function(name, [x0, lo, hi, rising, w, pv], [out], {"cse": True})
+        self.fn, self.rows, self.np = native(fn), d.numel(), pv.numel()
+        self.buffers: dict[int, tuple] = {}
+
+    def __call__(self, x0, lo, hi, rising, rows, pv) -> np.ndarray:
+        """(x, the last step, d at the point before it, the bracket's width) per root: shape
+        (4, n). ``rows``: each root's row; ``pv``: the parameters, (n, p) or shared (p,)."""
+        n = len(x0)
+        if n not in self.buffers:
+            args = [np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
+                    np.zeros((n, self.rows)), np.zeros((n, self.np))]  # fmt: skip
+            out = np.zeros((n, 4))  # column-major (4, n)
+            self.buffers[n] = (args, out, *bind(self.fn.map(n), args, out))
+        (a0, a1, a2, a3, w, p), out, run, _ = self.buffers[n]
+        a0[:], a1[:], a2[:], a3[:], p[:] = x0, lo, hi, rising, pv
+        w[:] = 0.0
+        w[np.arange(n), rows] = 1.0
+        run()
+        return out.T.copy()
+
+
+def model(m: Mechanism, variant: frozenset[str], kind: str = "kinematics") -> Model:
+    """The compiled model, cached per thread: CasADi functions are never shared by threads."""
+    cache: dict[tuple, Model] = _local.__dict__.setdefault("models", {})
+    key = (m.type, variant, kind)
+    if key not in cache:
+        cache[key] = Model(m, variant, kind)
+    return cache[key]
+
+
+def compile_all() -> None:
+    """Every type's analysis, in every structural variant, built into the native cache: an
+    image's build step (elsewhere each is built on first use). Raises where one cannot be."""
+    for mtype in all_types():
+        m = get(mtype)
+        optional = [q.name for q in m.parameters if q.zero_means]
+        for k in range(len(optional) + 1):
+            for parts, kind in itertools.product(itertools.combinations(optional, k), KINDS):
+                f = Model(m, frozenset(parts), kind)
+                fns = (f.fn.fn, f._dp.fn, f.polish.fn, f.dead and f.dead.fn,
+                       f.dead_polish and f.dead_polish.fn)  # fmt: skip
+                for fn in fns:
+                    if fn is not None and fn.class_name() != "External":
+                        raise RuntimeError(
+                            f"{fn.name()}: no C compiler or cache (synth.numerics.native)"
+                        )
+    for fn in (construction().fn, construction().taylor_fn):  # the four-bars' reduced synthesis
+        if fn.class_name() != "External":
+            raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.numerics.native)")

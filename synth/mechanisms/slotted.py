@@ -1,0 +1,50 @@
+"""Shared by the slotted-lever types (crank_shaper, whitworth): the crank as a free scale.
+
+In both, the time ratio fixes the ratio of pivot_distance to crank and the stroke fixes the
+lever, so crank and pivot_distance are one family with a free scale.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .reduced import Problem, agree, differ, intersect, unreachable
+
+
+def check(p: Problem, time_ratio, stroke) -> None:
+    """Fixed parts that alone set the time ratio (crank and pivot_distance) or the stroke (the
+    lever) must meet it: ``time_ratio(crank/pivot_distance)``, ``stroke(lever)``."""
+    f = p.fixed
+    if "crank" in f and "pivot_distance" in f:
+        got = time_ratio(f["crank"] / f["pivot_distance"])
+        if not agree(got, p.ratio):
+            raise unreachable(
+                "crank {} and pivot_distance {} give time ratio {}, not {}".format(
+                    p.shown(f["crank"]), p.shown(f["pivot_distance"]), *differ(got, p.ratio)
+                )
+            )
+    if "lever" in f and not agree(stroke(f["lever"]), 1.0):
+        raise unreachable(
+            "lever {} gives stroke {}, not {} (the stroke is set by the lever and the time "
+            "ratio alone)".format(
+                p.shown(f["lever"]), *differ(stroke(f["lever"]) * p.stroke, p.stroke)
+            )
+        )
+
+
+def scale(p: Problem, pivot_per_crank: float, reach: float = math.inf) -> float | None:
+    """The crank of the smallest design with pivot_distance = ``pivot_per_crank`` × crank and
+    crank ≤ ``reach``; a fixed crank or pivot_distance sets it (both fixed: the crank, the pair
+    checked by ``check``), else it is the smallest the bounds allow. None if there is none."""
+    if "crank" in p.fixed:
+        crank = p.fixed["crank"]
+    elif "pivot_distance" in p.fixed:
+        crank = p.fixed["pivot_distance"] / pivot_per_crank
+    else:
+        lo, hi = p.bounds["pivot_distance"]
+        span = intersect(p.bounds["crank"], (lo / pivot_per_crank, hi / pivot_per_crank))
+        if span is None:
+            return None
+        crank = span[0]
+    ok = crank <= reach * (1 + 1e-12) and p.allows("crank", crank)
+    return crank if ok and p.allows("pivot_distance", crank * pivot_per_crank) else None

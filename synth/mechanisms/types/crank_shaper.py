@@ -1,0 +1,224 @@
+"""Crank and slotted lever (crank shaper): the slotted-lever lab handout, Shelare et al. (2012),
+the textbook chapter (Ex. 1, 2) and Podhorodeski et al. (2005), Fig. 1b.
+
+The crank pin B = r2(cos θ, sin θ) carries a block that slides in the lever pivoted at
+O4 = (−d, 0); the lever angle ψ = atan2(B_y, B_x + d) oscillates (r2 < d) and its tip is
+P = O4 + L(cos ψ, sin ψ). The ram runs on the line x = −d + h (perpendicular to the pivot line):
+
+    ram_link l = 0 (the tip drives the ram through a block in a slot):  s = P_y
+    ram_link l > 0 (a link PR):             s = P_y + sqrt(l² − (h − L cos ψ)²)
+
+==============  ======  =============================================================
+name            symbol  meaning
+==============  ======  =============================================================
+crank           r2      crank CB
+pivot_distance  d       lever pivot to crank pivot, AC
+lever           L       slotted lever AP
+ram_link        l       link PR from the lever tip to the ram (0: slot drive)
+ram_height      h       lever pivot to the ram path, along the pivot line
+==============  ======  =============================================================
+
+Valid: r2 < d (else it is a Whitworth); d + r2 ≤ L (the block stays on the lever);
+l ≥ max |h − L cos ψ| over the swing when l > 0. Default h = L cos ψmax, the path through the
+tip's extreme positions. Closed forms: sin ψmax = r2/d;
+TR = (π + 2 asin(r2/d)) / (π − 2 asin(r2/d)); stroke = 2 L r2/d when s is monotonic in ψ
+(``one_way``: l cos ψmax ≥ |h − L cos ψmax|);
+transmission at the ram link cos μ = (h − L cos ψ)/l; the slot drive alone transmits at 90°.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+import numpy as np
+
+from ...errors import Unreachable
+from ..geometry import leg, lever
+from ..reduced import Problem, Reduced, rod
+from ..registry import (
+    ROD,
+    Condition,
+    Mechanism,
+    Parameter,
+    Scale,
+    absent,
+    one_way,
+    reach_condition,
+    register,
+)
+from ..slotted import check
+from ..slotted import scale as _scale
+
+
+def _lever(p, th):
+    """cos ψ, sin ψ of the lever O4→B."""
+    r2, d = p["crank"], p["pivot_distance"]
+    return lever(r2, d, th)
+
+
+def _cos_psi_max(p):
+    r2, d = p["crank"], p["pivot_distance"]
+    return leg(d, r2) / d
+
+
+def _offsets(p):
+    """The signed distances from the lever tip to the ram path at mid-swing and at the ends:
+    the largest |·| over the swing is one of them (h − L cos ψ is monotonic in cos ψ)."""
+    h, L = p["ram_height"], p["lever"]
+    return h - L, h - L * _cos_psi_max(p)
+
+
+def position(p, th):
+    L, l, h = p["lever"], p["ram_link"], p["ram_height"]
+    c, s = _lever(p, th)
+    if absent(l):
+        return L * s
+    return L * s + leg(l, h - L * c)
+
+
+def transmission(p, th):
+    L, l, h = p["lever"], p["ram_link"], p["ram_height"]
+    if absent(l):
+        return {}
+    c, _ = _lever(p, th)
+    return {"ram_link-ram": (h - L * c) / l}
+
+
+def defaults(p):
+    return {"ram_height": p["lever"] * _cos_psi_max(p)}
+
+
+def joints(p, th):
+    r2, d, L, h = p["crank"], p["pivot_distance"], p["lever"], p["ram_height"]
+    c, s = _lever(p, th)
+    return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (-d, 0.0),
+            "P": (-d + L * c, L * s), "R": (-d + h, position(p, th))}  # fmt: skip
+
+
+def facts(p):
+    r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["ram_link"]
+    half = ca.atan2(r2, leg(d, r2))  # ψmax = asin(r2/d)
+    return {
+        "beta": 2 * half,  # TR = (π + 2ψmax)/(π − 2ψmax)
+        "stroke": 2 * L * r2 / d,
+        "transmission_cos": () if absent(l) else tuple(t / l for t in _offsets(p)),
+        "one_way": () if absent(l) else one_way(l, _cos_psi_max(p), _offsets(p)[1]),
+    }
+
+
+def reduced(p: Problem) -> Reduced:
+    """The time ratio fixes crank/pivot_distance = sin ψmax = sin(β/2), the stroke fixes the
+    lever, 1/(2 sin ψmax); the crank is a free scale (the smallest allowed: ties, and the
+    size), up to the block's reach, pivot_distance + crank ≤ lever. A ram link and its path
+    follow ``reduced.rod`` (the lever tip swings ±ψmax); the slot drive transmits at 90°."""
+    if p.beta <= 0:
+        raise Unreachable("TIME_RATIO_UNREACHABLE", "crank_shaper has time ratio > 1 always")
+    f = p.fixed
+    k = f["crank"] / f["pivot_distance"] if {"crank", "pivot_distance"} <= f.keys() else None
+    k = k or math.sin(p.beta / 2)  # sin ψmax: the fixed pair's (checked against the target)
+
+    def time_ratio(ratio: float) -> float:
+        half = math.asin(ratio)
+        return (math.pi + 2 * half) / (math.pi - 2 * half)
+
+    check(p, time_ratio, lambda lever: 2 * lever * k)
+    lever = f.get("lever", 0.5 / k)
+    crank = _scale(p, 1 / k, reach=lever * k / (1 + k))
+    if crank is None or not p.allows("lever", lever):
+        return Reduced([])
+    design = {"crank": crank, "pivot_distance": crank / k, "lever": lever}
+    if "ram_link" not in p.variant:
+        l, h, _ = rod(p, "ram_link", "ram_height", np.array(lever), p.beta / 2, 0.0)
+        if not np.isfinite(l):
+            return Reduced([])
+        design.update(ram_link=float(l), ram_height=float(h))
+    return Reduced([{**design, **p.fixed}])
+
+
+register(
+    Mechanism(
+        type="crank_shaper",
+        title="Crank and slotted lever (crank shaper)",
+        description="A crank drives a block in an oscillating slotted lever whose tip drives the "
+        "ram, directly through a block in a slot or through a short ram link: the classic "
+        "shaper drive.",
+        sources=(
+            "the slotted-lever lab handout",
+            "Shelare et al. (2012)",
+            "Podhorodeski et al. (2005)",
+            "the textbook chapter",
+        ),
+        quick_return=True,
+        parameters=(
+            Parameter("crank", "r2", "crank CB"),
+            Parameter("pivot_distance", "d", "lever pivot to crank pivot, AC"),
+            Parameter("lever", "L", "slotted lever AP, pivot to tip"),
+            Parameter(
+                "ram_link",
+                "l",
+                "link PR from the lever tip to the ram",
+                default=0.0,
+                zero_means="the lever tip drives the ram through a block in a slot",
+                bounds=ROD,
+            ),
+            Parameter(
+                "ram_height",
+                "h",
+                "lever pivot to the ram path, along the pivot line",
+                default_rule="lever·cos ψmax (sin ψmax = crank/pivot_distance): the path "
+                "through the tip's extreme positions",
+                link=False,
+            ),
+        ),
+        conditions=(
+            Condition(
+                name="oscillating_lever",
+                text="crank < pivot_distance (the lever oscillates; otherwise a Whitworth)",
+                margin=lambda p: (p["pivot_distance"] - p["crank"],),
+                strict=True,
+                explain=lambda p: (
+                    f"crank {p['crank']:g} ≥ pivot_distance {p['pivot_distance']:g}: the lever "
+                    f"would turn a full revolution (that is a whitworth), not oscillate"
+                ),
+            ),
+            Condition(
+                name="block_on_lever",
+                text="pivot_distance + crank ≤ lever (the crank-pin block stays on the lever)",
+                margin=lambda p: (p["lever"] - p["pivot_distance"] - p["crank"],),
+                explain=lambda p: (
+                    f"lever {p['lever']:g} < pivot_distance {p['pivot_distance']:g} + crank "
+                    f"{p['crank']:g} = {p['pivot_distance'] + p['crank']:g}: the crank-pin block "
+                    f"runs off the slotted lever"
+                ),
+            ),
+            reach_condition(
+                "ram_link_reach",
+                "ram_link",
+                "ram_height",
+                "lever",
+                _offsets,
+                "the lever tip",
+                "ram",
+            ),
+        ),
+        position=position,
+        transmission=transmission,
+        defaults=defaults,
+        facts=facts,
+        reduced=reduced,
+        scale=Scale(
+            "crank",
+            ("pivot_distance",),
+            "the time ratio sets crank/pivot_distance and the stroke sets the lever alone",
+            reach=lambda p: p["lever"] / (1 + p["pivot_distance"] / p["crank"]),  # block on lever
+        ),
+        joints=joints,
+        drawing=(
+            ("pivot_distance", "O2", "O4"),
+            ("crank", "O2", "B"),
+            ("lever", "O4", "P"),
+            ("ram_link", "P", "R"),
+        ),
+    )
+)

@@ -1,0 +1,78 @@
+"""Scotch yoke (slotted link) — the slotted-link lab handout.
+
+The crank pin B = r(cos θ, sin θ) slides in a slot of the yoke, which moves along x:
+
+    s(θ) = r cos θ        (the seed measures x = r(1 − cos θ) from one extreme: the same curve)
+
+=====  ==========  =========================
+name   symbol      meaning
+=====  ==========  =========================
+crank  r           crank radius O2B
+=====  ==========  =========================
+
+Time ratio 1 (simple harmonic motion: the baseline, not a quick return), stroke 2r; the slot
+drives along the slot's normal, so the transmission angle is 90° throughout.
+"""
+
+from __future__ import annotations
+
+import math
+
+import casadi as ca
+
+from ...errors import Unreachable
+from ...results import TOL
+from ..reduced import Problem, Reduced, judge
+from ..registry import Mechanism, Parameter, register
+
+
+def position(p, th):
+    return p["crank"] * ca.cos(th)
+
+
+def transmission(p, th):
+    return {}
+
+
+def joints(p, th):
+    r = p["crank"]
+    return {"O2": (0.0, 0.0), "B": (r * ca.cos(th), r * ca.sin(th)),
+            "yoke": (position(p, th), 0.0)}  # fmt: skip
+
+
+def facts(p):
+    return {"beta": 0.0, "stroke": 2 * p["crank"], "transmission_cos": ()}
+
+
+def reduced(p: Problem) -> Reduced:
+    """crank = stroke/2; the time ratio is 1 for every design."""
+    if p.beta > math.pi / 2 * TOL:  # time ratio 1 to the verification's tolerance
+        raise Unreachable(
+            "TIME_RATIO_UNREACHABLE",
+            f"scotch_yoke has time ratio 1 for every design, not {p.ratio:.9g}",
+        )
+    if "crank" in p.fixed:
+        judge(p, facts, dict(p.fixed))  # stroke = 2 crank
+    elif not p.allows("crank", 0.5):
+        return Reduced([])
+    return Reduced([{"crank": p.fixed.get("crank", 0.5)}])
+
+
+register(
+    Mechanism(
+        type="scotch_yoke",
+        title="Scotch yoke (slotted link)",
+        description="A crank pin sliding in a slotted yoke: simple harmonic motion, time ratio 1. "
+        "The baseline every quick-return mechanism is compared with.",
+        sources=("the slotted-link lab handout",),
+        quick_return=False,
+        parameters=(Parameter("crank", "r", "crank radius O2B"),),
+        conditions=(),
+        position=position,
+        transmission=transmission,
+        facts=facts,
+        reduced=reduced,
+        joints=joints,
+        drawing=(("crank", "O2", "B"),),
+    )
+)

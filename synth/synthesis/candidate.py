@@ -1,0 +1,144 @@
+"""A proposal made a candidate: verified by the forward analysis, with what the answer says
+about it (its objective value, the constraints and bounds it rests on, its family), and the
+orders in which the objectives rank proposals and candidates."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..analysis.quality import MOTION_OBJECTIVES, measure
+from ..analysis.verify import verify, verify_many
+from ..mechanisms import Mechanism
+from ..mechanisms.reduced import MAX_TRANSMISSION, MIN_SIZE
+from ..results import Candidate, Family
+from .search import Proposal, Searched, Targets, Variant
+
+
+def candidate(
+    m: Mechanism, p: Proposal, t: Targets, variants: list[Variant], extras: dict[str, Any]
+) -> Candidate | None:
+    """The proposal as a candidate if the forward analysis finds that it meets the targets;
+    ``extras`` (include, tolerance) are added to its analysis."""
+    checked = verify(m.type, p.params, t.time_ratio, t.stroke, t.bound_deg, **extras)
+    return None if checked is None else made(m, p, checked, t, variants)
+
+
+def made(m: Mechanism, p: Proposal, checked, t: Targets, variants: list[Variant]) -> Candidate:
+    """The candidate of a proposal that passed verification (``checked``: its analysis and
+    residuals)."""
+    a, residuals = checked
+    params = a.params  # completed and checked by the analysis
+    size = m.size(params)
+    mu = a.transmission.min_deg
+    limits = {}
+    for v in variants:
+        if v.parts == m.variant(params):
+            limits = {k: tuple(x * t.stroke for x in v.problem.bounds[k]) for k in v.free}
+    return Candidate(
+        type=m.type,
+        params=params,
+        time_ratio=a.time_ratio,
+        stroke=a.stroke,
+        min_transmission_angle_deg=mu,
+        objective_value=(
+            measure(a.motion, t.objective)
+            if t.objective in MOTION_OBJECTIVES
+            else mu
+            if t.objective == MAX_TRANSMISSION
+            else size
+        ),
+        method=p.method,
+        residuals=residuals,
+        verified=True,
+        grashof=a.grashof,
+        size=size,
+        conditioning=a.conditioning,
+        active=active(params, mu, t, limits),
+        motion=a.motion,
+        sensitivities=a.sensitivities,
+        envelope=a.envelope,
+        family=family(m, params, limits),
+    )
+
+
+def family(m: Mechanism, params: dict[str, float], limits: dict) -> Family | None:
+    """The type's free scale (``Mechanism.scale``) where the request leaves every length of
+    it free: its range within the bounds (and validity), the others tied to it."""
+    sc = m.scale
+    if sc is None or any(k not in limits for k in (sc.free, *sc.tied)):
+        return None
+    x = params[sc.free]
+    ratio = {k: params[k] / x for k in sc.tied}
+    lo = max([limits[sc.free][0]] + [limits[k][0] / r for k, r in ratio.items()])
+    hi = min([limits[sc.free][1]] + [limits[k][1] / r for k, r in ratio.items()])
+    if sc.reach is not None:
+        hi = min(hi, sc.reach(params))
+    ties = ", ".join(f"{k} = {r:.12g} × {sc.free}" for k, r in ratio.items())
+    return Family(
+        free=(sc.free,),
+        range={sc.free: (min(lo, x), max(hi, x))},
+        tied={k: (sc.free, r) for k, r in ratio.items()},
+        relation=f"{ties}; the other lengths as given ({sc.why})",
+    )
+
+
+def active(params: dict[str, float], mu: float, t: Targets, bounds: dict) -> tuple[str, ...]:
+    """The constraints at their limit (within 1e-6, relative): the bound, the variables' bounds."""
+    out = []
+    if t.bound_deg > 0 and mu - t.bound_deg <= 1e-6 * max(t.bound_deg, 1.0):
+        out.append("min_transmission_angle")
+    for name, (lo, hi) in bounds.items():
+        v = params[name]
+        if abs(v - lo) <= 1e-6 * max(abs(lo), t.stroke):
+            out.append(f"{name} ≥ {lo:g}")
+        elif abs(v - hi) <= 1e-6 * max(abs(hi), t.stroke):
+            out.append(f"{name} ≤ {hi:g}")
+    return tuple(out)
+
+
+def first(m: Mechanism, s: Searched, t: Targets, asked: Targets, extras) -> Candidate | None:
+    """The best proposal of a search (by ``t``'s objective) that passes verification against
+    the request (``asked``)."""
+    variants = s.variants
+    for p in sorted(s.proposals, key=predicted_rank(t.objective)):
+        c = candidate(m, p, asked, variants, extras)
+        if c is not None:
+            return c
+    return None
+
+
+def firsts(
+    m: Mechanism, found: list[tuple[Searched, Targets]], asked: Targets, extras
+) -> list[Candidate | None]:
+    """``first`` of each search (with the targets it ranks by), the best proposals of all of
+    them verified together (``verify_many``); where one fails, its search's next proposals
+    are verified one by one."""
+    ranked = [sorted(s.proposals, key=predicted_rank(t.objective)) for s, t in found]
+    heads = [r[0].params for r in ranked if r]
+    checked = iter(verify_many(m.type, heads, asked.time_ratio, asked.stroke, asked.bound_deg,
+                               **extras))  # fmt: skip
+    out: list[Candidate | None] = []
+    for (s, _), r in zip(found, ranked, strict=True):
+        c = None
+        if r:
+            head = next(checked)
+            c = made(m, r[0], head, asked, s.variants) if head is not None else None
+        for p in r[1:] if c is None else ():
+            c = candidate(m, p, asked, s.variants, extras)
+            if c is not None:
+                break
+        out.append(c)
+    return out
+
+
+def predicted_rank(objective: str):
+    if objective == MIN_SIZE:
+        return lambda p: (p.size, -p.angle_deg, p.type)
+    return lambda p: (-round(p.angle_deg, 9), p.size, p.type)
+
+
+def rank(objective: str):
+    if objective == MIN_SIZE:
+        return lambda c: (c.size, -c.min_transmission_angle_deg, c.type)
+    # ties (e.g. slot drives, 90° for every design) go to the smaller mechanism
+    return lambda c: (-round(c.min_transmission_angle_deg, 9), c.size, c.type)

@@ -1,0 +1,242 @@
+"""Why a type gave no design, with numbers: the best minimum transmission angle any design
+reaches at the targets, else the time ratios the type reaches with the bound.
+
+Where a variant's reduced solver answered exactly, the numbers come from the same exact
+reduced problem (certified: the best angle is its global optimum; the time-ratio range is the
+hull of the ratios at which it has a design, its ends bisected). Elsewhere they come from
+IPOPT's local optima of the diagnostic objectives (formulation.DIAGNOSTICS).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from functools import lru_cache
+
+from ..analysis.kinematics import analyze
+from ..errors import SynthError, Unreachable
+from ..mechanisms import Mechanism
+from ..mechanisms.reduced import MAX_TRANSMISSION, differ
+from ..results import TOL, Infeasible
+from .search import Searched, Spec, Targets, Variant, ipopt, predict, scaled
+
+GRID = 17  # time ratios scanned for the reachable range
+TOP = math.pi * (1 - 1e-6)  # β of the largest time ratio tried, about 2e6
+SCAN_TOL = 1e-6  # relative: a design at the scan's time ratio
+# β of the range's ends: the one the target lies beyond tighter than the verification (it tells
+# how far to move), the other to the six digits a message prints
+NEAR_END, FAR_END = 1e-10, 1e-6
+RANGES = 256  # reachable ranges kept per process (least recently used dropped)
+
+
+def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
+    if not s.variants:
+        return s.reasons[0] if s.reasons else _budget(m)
+    searchable = [v for v in s.variants if v.free or v.exact]
+    if not searchable:
+        return Infeasible(m.type, "FIXED_PARTS_CONTRADICT_TARGETS", _fixed_design(m, spec, t))
+    best = None
+    if t.bound_deg > 0:
+        angles = [a for v in searchable for a in _angles(m, v, spec, t)]
+        best = max(angles, default=None)
+    if best is not None and best < t.bound_deg:
+        return Infeasible(
+            m.type,
+            "TRANSMISSION_UNREACHABLE",
+            f"{m.type} reaches at most a minimum transmission angle of {best:.4f}° at time "
+            f"ratio {t.time_ratio:g} and stroke {t.stroke:g}{_with(spec)}, below the bound "
+            f"{t.bound_deg:g}°",
+            best_transmission_angle_deg=best,
+        )
+    trs = [tr for v in searchable for tr in _reach(m, v, spec, t)]
+    if time.monotonic() >= t.deadline:
+        return _budget(m)
+    if trs and min(trs) <= t.time_ratio <= max(trs):  # designs exist, none passed the check
+        return Infeasible(
+            m.type,
+            "NO_VALID_DESIGN",
+            f"{m.type} reaches time ratios {min(trs):.6g} … {max(trs):.6g} with a transmission "
+            f"angle ≥ {t.bound_deg:g}° and stroke {t.stroke:g}{_with(spec)}, yet no design its "
+            f"solvers found at {t.time_ratio:.9g} met the targets to {TOL:g} (by the closed "
+            f"forms and the forward analysis)",
+        )
+    if trs:
+        lo, hi = min(trs), max(trs)
+        if t.time_ratio < lo:  # the end the target lies beyond: with the digits that tell
+            (lo_s, want), hi_s = differ(lo, t.time_ratio), f"{hi:.6g}"
+        else:
+            lo_s, (hi_s, want) = f"{lo:.6g}", differ(hi, t.time_ratio)
+        return Infeasible(
+            m.type,
+            "TIME_RATIO_UNREACHABLE",
+            f"{m.type} reaches time ratios {lo_s} … {hi_s} with a transmission angle ≥ "
+            f"{t.bound_deg:g}° and stroke {t.stroke:g}{_with(spec)}, not {want}",
+            time_ratio_range=(lo, hi),
+        )
+    return Infeasible(
+        m.type,
+        "NO_VALID_DESIGN",
+        f"no valid {m.type} has stroke {t.stroke:g} with a transmission angle ≥ "
+        f"{t.bound_deg:g}°{_with(spec)} within the bounds",
+    )
+
+
+def _angles(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
+    """The minimum transmission angle of the variant's best designs at the targets (any
+    angle): exact where the reduced solver is, else IPOPT's local optima, verified. The
+    reduced problem is asked even where it was not exact for the request: without the bound
+    it may be (a bound no rod can meet leaves no start on its grid)."""
+    found = _reduced(m, v, t, v.problem.beta)
+    if found is not None:
+        return list(found)
+    return [mu for _, mu in _optima(m, v, spec, t, "max_transmission_angle", 1.0)]
+
+
+def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL):
+    """The predicted angles of the exact reduced optima at β (max transmission, no bound)
+    that meet the time ratio and stroke to ``tol``, one by one (each costs a prediction), or
+    None where the reduced solver is not exact there."""
+    problem = replace(
+        v.problem, beta=beta, cos_bound=1.0, objective=MAX_TRANSMISSION, hints=(), near=()
+    )
+    if m.reduced is None:
+        return None
+    try:
+        answer = m.reduced(problem)
+    except Unreachable:
+        return iter(())
+    if answer is None or not answer.exact:
+        return None
+    tr = (math.pi + beta) / (math.pi - beta)
+
+    def angles():
+        for d in answer.designs:
+            got = predict(m, {**scaled(d, t.stroke), **dict.fromkeys(v.parts, 0.0)})
+            if got and abs(got[0] - tr) <= tol * tr and abs(got[1] - t.stroke) <= tol * t.stroke:
+                yield got[2]
+
+    return angles()
+
+
+def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
+    """The smallest and largest time ratio with a design meeting the bound."""
+    if not v.exact:
+        return [
+            tr
+            for objective in ("max_time_ratio", "min_time_ratio")
+            for tr, mu in _optima(m, v, spec, t, objective)
+            if mu >= t.bound_deg - TOL * max(t.bound_deg, 1.0)
+        ]
+    scan = _Scan.of(m, v, t)
+    ends = _ends(scan)
+    if ends is None:
+        return []
+    # the end the target lies beyond to NEAR_END, the other to FAR_END. Bisection from a kept
+    # bracket goes on along the same midpoints, so the numbers do not depend on what was asked
+    # before; threads that narrow the same end at once at most repeat each other's work
+    below = t.beta < ends[0][1]
+    out = []
+    for k, tol in enumerate((NEAR_END, FAR_END) if below else (FAR_END, NEAR_END)):
+        bracket = _edge(scan.ok, *ends[k], tol)
+        if abs(bracket[1] - bracket[0]) < abs(ends[k][1] - ends[k][0]):
+            ends[k] = bracket
+        out.append((math.pi + bracket[1]) / (math.pi - bracket[1]))
+    return out
+
+
+@dataclass(frozen=True)
+class _Scan:
+    """What a reachable range depends on (``key``: not the time ratio), and how to test a β."""
+
+    key: tuple
+    m: Mechanism = field(compare=False)
+    v: Variant = field(compare=False)
+    t: Targets = field(compare=False)
+
+    @classmethod
+    def of(cls, m: Mechanism, v: Variant, t: Targets) -> _Scan:
+        p = v.problem
+        key = (m.type, v.parts, p.variant, tuple(sorted(p.fixed.items())),
+               tuple(sorted(p.bounds.items())), p.explicit, t.stroke, t.bound_deg)  # fmt: skip
+        return cls(key, m, v, t)
+
+    def ok(self, beta: float) -> bool:
+        """Whether a design at β meets the bound. The closed forms lose digits where the range
+        ends in a degenerate design (a time ratio → 3 for the slider-crank, → ∞ for the
+        slotted levers): SCAN_TOL tells the ends."""
+        bound = self.t.bound_deg - TOL * max(self.t.bound_deg, 1.0)
+        angles = _reduced(self.m, self.v, self.t, beta, SCAN_TOL)
+        return angles is not None and any(a >= bound for a in angles)
+
+
+@lru_cache(maxsize=RANGES)
+def _ends(scan: _Scan) -> list[tuple[float, float]] | None:
+    """The brackets (β outside, β inside) of the reachable range's two ends on a grid of β,
+    narrowed in place as queries need; None if no β has a design. Kept per process: a
+    designer sweeping the time ratio past an end, or a tool checking many targets against the
+    same parts, pays the grid once and each end's bisection once."""
+    betas = [TOP * k / (GRID - 1) for k in range(GRID)]
+    flags = [scan.ok(b) for b in betas]
+    if not any(flags):
+        return None
+    i = flags.index(True)
+    j = len(flags) - 1 - flags[::-1].index(True)
+    low = (betas[i], betas[i]) if i == 0 else (betas[i - 1], betas[i])
+    high = (betas[j], betas[j]) if j == GRID - 1 else (betas[j + 1], betas[j])
+    return [low, high]
+
+
+def forget_ranges() -> None:
+    """Drop the reachable ranges kept (a benchmark timing each refusal's whole cost)."""
+    _ends.cache_clear()
+
+
+def _edge(ok, out: float, inside: float, tol: float) -> tuple[float, float]:
+    """Bisect between a β without a design and one with to ``tol`` (where it is not already):
+    the narrowed (outside, inside)."""
+    while abs(inside - out) > tol * max(1.0, abs(inside)):
+        mid = 0.5 * (out + inside)
+        if ok(mid):
+            inside = mid
+        else:
+            out = mid
+    return out, inside
+
+
+def _optima(m: Mechanism, v: Variant, spec: Spec, t: Targets, objective: str, cos_bound=None):
+    """(TR, min transmission°) of each verified local optimum of ``objective`` (IPOPT)."""
+    for x, _ in ipopt(m, v, spec, t, objective, cos_bound=cos_bound):
+        try:
+            a = analyze(m.type, {**spec.fixed, **x, **dict.fromkeys(v.parts, 0.0)})
+        except SynthError:
+            continue
+        if a.reversals == 2 and abs(a.stroke - t.stroke) <= TOL * t.stroke:
+            yield a.time_ratio, a.transmission.min_deg
+
+
+def _budget(m: Mechanism) -> Infeasible:
+    return Infeasible(
+        m.type,
+        "BUDGET_EXHAUSTED",
+        f"the time budget ran out before a {m.type} design or a proof that none exists was "
+        f"found; ask again with a larger time_budget_ms",
+    )
+
+
+def _fixed_design(m: Mechanism, spec: Spec, t: Targets) -> str:
+    try:
+        a = analyze(m.type, dict(spec.fixed))
+    except SynthError as e:
+        return f"the fixed parts do not run: {e.msg}"
+    return (
+        f"the fixed parts make time ratio {a.time_ratio:.9g}, stroke {a.stroke:.9g} and a "
+        f"minimum transmission angle of {a.transmission.min_deg:.4f}°; the targets are "
+        f"{t.time_ratio:g}, {t.stroke:g} and ≥ {t.bound_deg:g}°"
+    )
+
+
+def _with(spec: Spec) -> str:
+    if not spec.fixed:
+        return ""
+    return " with " + ", ".join(f"{k} {v:g}" for k, v in spec.fixed.items()) + " fixed"

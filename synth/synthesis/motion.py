@@ -1,0 +1,322 @@
+"""How the slider moves, as an objective or a limit: ``uniform_cutting_speed`` (the least speed
+fluctuation over the middle 80% of the working stroke, where a tool cuts),
+``min_peak_acceleration`` (the least peak |acceleration| over both strokes, in ω²·stroke) and
+``max_working_speed_fluctuation`` (a limit on that fluctuation, with those objectives).
+
+No closed form gives these measures: they are extremes over the crank's turn, found by root
+finding (``synth.analysis.quality``). So the designs come from a local NLP over each structural
+variant's free parameters (stroke units), solved by SLSQP:
+
+- the time ratio, stroke, transmission bound, validity conditions and the closed forms' domain
+  are the type's formulation (``synth.synthesis.formulation``: CasADi, exact derivatives),
+  the bounds the request's;
+- the motion measures come from the analysis (exact values by root finding): each is the
+  largest of a few terms (the speed or acceleration at each place along the turn where it
+  may peak), so the NLP takes it in epigraph form; the terms' derivatives are exact too
+  (``quality.motion_terms``: the envelope theorem at a peak, the implicit function theorem
+  at a dead centre or a window's end);
+- it starts from the designs the exact solvers found for the same request (every variant's
+  best-transmitting and smallest designs: each meets the targets), the most promising first,
+  until the request's deadline, at most ``STARTS`` per variant and ``MAX_ITER`` iterations
+  each. No other clock decides anything: the answer does not depend on the machine's load
+  unless the deadline cuts it short (and then the answer says so).
+
+The answer is a local optimum, verified like every candidate; ``tests/test_motion_search.py``
+checks it against an independent global search.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from scipy.optimize import minimize
+
+from ..analysis.kinematics import motion_terms
+from ..analysis.quality import PEAK, UNIFORM, MotionTerms, fluctuation
+from ..errors import SynthError
+from ..mechanisms import Mechanism, get
+from ..mechanisms.reduced import MAX_TRANSMISSION, MIN_SIZE
+from ..results import TOL, Candidate, Infeasible
+from .candidate import candidate
+from .diagnose import diagnose
+from .formulation import TIE, Formulation, formulate
+from .search import Targets, proposal, same, search
+from .solve import starts as halton
+
+STARTS = 4  # SLSQP runs per variant, from the best measured starts
+MAX_ITER = 300
+TERMS = 4  # the largest terms of a measure that its epigraph bounds
+# a measure's terms and their derivatives in the type's parameters (quality.MotionTerms)
+Pick = Callable[[MotionTerms], tuple[np.ndarray, np.ndarray]]
+SAMPLES = 64  # Halton points in the box, projected onto the equalities: starts beside the
+PROJECT = 12  # exact solvers' designs (Newton steps each)
+FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
+_local = threading.local()
+
+
+@dataclass(frozen=True)
+class Functions:
+    form: Formulation
+    g: ca.Function  # (x, p) -> (g, ∂g/∂x)
+
+
+def functions(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Functions:
+    """The formulation's constraints with their derivatives, once per thread and structure
+    (CasADi functions are not shared between threads here, as the solvers are not)."""
+    cache: dict = _local.__dict__.setdefault("functions", {})
+    key = (m.type, variant, free)
+    if key not in cache:
+        form = formulate(m, variant, free, "min_size")  # its constraints; the objective unused
+        x, p, g = (form.nlp[k] for k in ("x", "p", "g"))
+        cache[key] = Functions(form, ca.Function("g", [x, p], [g, ca.jacobian(g, x)]))
+    return cache[key]
+
+
+def local_optima(
+    m: Mechanism,
+    variant: frozenset[str],
+    free: tuple[str, ...],
+    fixed: dict[str, float],
+    bounds: dict[str, tuple[float, float]],
+    explicit: frozenset[str],
+    targets: tuple[float, float],
+    objective: str,
+    starts: list[dict[str, float]],
+    limit: float | None,
+    deadline: float,
+) -> list[dict[str, float]]:
+    """Local optima of a motion ``objective`` over one variant, from ``starts`` (designs,
+    stroke units); ``targets`` is (time ratio, cos of the transmission bound). The measure is
+    a maximum of terms (``quality.MotionTerms``), so it is minimised in epigraph form: t, with
+    t ≥ each of the ``TERMS`` largest terms (a peak that moves to another place along the
+    turn is then one constraint handing over to another, not a kink), with the terms' exact
+    derivatives; the ``limit`` bounds the fluctuation's terms alike. Designs in stroke units.
+    A default bound (not in ``explicit``) gives way to a start beyond it, as the exact
+    solvers' does to a length the targets set on their own."""
+    fn = functions(m, variant, free)
+    form = fn.form
+    pv = np.concatenate([[fixed[k] for k in form.fixed], targets])
+    n = len(free)
+
+    def design(y: np.ndarray) -> dict[str, float]:
+        return {**fixed, **dict(zip(free, y[:n], strict=True)), **dict.fromkeys(variant, 0.0)}
+
+    memo: dict[bytes, MotionTerms | None] = {}
+    columns = [m.names.index(k) for k in free]  # the free parameters among the type's
+
+    def terms(y: np.ndarray) -> MotionTerms | None:
+        key = y[:n].tobytes()
+        if key not in memo:
+            if len(memo) > 256:
+                memo.clear()
+            try:
+                memo[key] = motion_terms(m.type, design(y), gradient=True)
+            except SynthError:
+                memo[key] = None
+        return memo[key]
+
+    def largest(y: np.ndarray, pick: Pick) -> tuple[np.ndarray, np.ndarray]:
+        """The ``TERMS`` largest terms (the last repeated where there are fewer), and their
+        derivatives in the free parameters."""
+        got = terms(y)
+        if got is None:
+            return np.full(TERMS, FAIL), np.zeros((TERMS, n))
+        values, dp = pick(got)
+        order = np.argsort(values)[::-1][:TERMS]
+        order = np.concatenate([order, np.full(TERMS - order.size, order[-1])])
+        return values[order], dp[order][:, columns]
+
+    def bounded(pick: Pick, cap: float | None):
+        """The constraint cap − each of the largest terms ≥ 0 (cap None: the epigraph's t)."""
+
+        def fun(y):
+            return (y[n] if cap is None else cap) - largest(y, pick)[0]
+
+        def jac(y):
+            out = np.zeros((TERMS, y.size))
+            out[:, :n] = -largest(y, pick)[1]
+            out[:, n] = 1.0 if cap is None else 0.0
+            return out
+
+        return {"type": "ineq", "fun": fun, "jac": jac}
+
+    lbg, ubg = form.lbg, form.ubg
+    eq = lbg == ubg
+    below, above = np.isfinite(lbg) & ~eq, np.isfinite(ubg) & ~eq
+
+    def rows(y):  # y: x, or x and t
+        g, jac = fn.g(y[:n], pv)
+        jac = np.hstack([np.asarray(jac), np.zeros((jac.shape[0], 1))])  # t appears in none
+        return np.asarray(g).ravel(), jac
+
+    def inequalities(y):
+        g = rows(y)[0]
+        return np.concatenate([g[below] - lbg[below], ubg[above] - g[above]])
+
+    def inequalities_jac(y):
+        j = rows(y)[1]
+        return np.vstack([j[below], -j[above]])
+
+    def project(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
+        """Minimum-norm Newton steps from x onto the time-ratio and stroke equalities."""
+        for _ in range(PROJECT):
+            r = rows(x)
+            res = r[0][eq] - lbg[eq]
+            if np.max(np.abs(res), initial=0.0) <= 1e-12:
+                return x
+            step, *_ = np.linalg.lstsq(r[1][eq][:, :n], res, rcond=None)
+            x = np.clip(x - step, lo, hi)
+            if not np.all(np.isfinite(x)):
+                return None
+        return None
+
+    # ties (a free scale that leaves the motion as it is) to the smaller design, as the
+    # formulation's max_transmission_angle does: the scale is then no flat direction
+    links = np.array([float(m.parameter(k).link) for k in free] + [0.0])
+    pick = _PICK[objective]
+    constraints = [
+        {"type": "eq", "fun": lambda y: rows(y)[0][eq] - lbg[eq], "jac": lambda y: rows(y)[1][eq]},
+        {"type": "ineq", "fun": inequalities, "jac": inequalities_jac},
+        bounded(pick, None),
+    ]
+    if limit is not None:
+        constraints.append(bounded(_PICK[UNIFORM], limit))
+
+    def box_of(s: dict[str, float]) -> list[tuple[float, float]]:
+        return [bounds[k] if k in explicit else (min(bounds[k][0], s[k]), max(bounds[k][1], s[k]))
+                for k in free]  # fmt: skip
+
+    # the starts: the exact solvers' designs and projected Halton points, the best measured first
+    wide = box_of(starts[0]) if starts else [bounds[k] for k in free]
+    lo, hi = (np.array([b[i] for b in wide]) for i in (0, 1))
+    points = [np.clip([s[k] for k in free], lo, hi) for s in starts]
+    for x in halton(lo, hi, lo > 0, SAMPLES):
+        x = project(x, lo, hi)
+        if x is not None and np.all(inequalities(x) >= -1e-9):
+            points.append(x)
+    measured = sorted(
+        ((float(pick(got)[0].max()), x) for x in points if (got := terms(x)) is not None),
+        key=lambda vx: vx[0],
+    )
+    out = []
+    for first, x0 in measured[:STARTS]:
+        if time.monotonic() >= deadline:
+            break
+
+        def cap(_):
+            if time.monotonic() >= deadline:
+                raise StopIteration  # SLSQP ends with its last iterate (projected below)
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # SLSQP's notes on clipping to the bounds
+            res = minimize(lambda y: y[n] + TIE * (links @ y), np.append(x0, first),
+                           jac=lambda y: np.eye(n + 1)[n] + TIE * links, method="SLSQP",
+                           bounds=[*zip(lo, hi, strict=True), (0.0, None)],
+                           constraints=constraints, callback=cap,
+                           options={"maxiter": MAX_ITER, "ftol": 1e-12})  # fmt: skip
+        x = project(res.x[:n], lo, hi)  # SLSQP meets equalities to ~1e-8; verification: 1e-9
+        if x is not None:
+            out.append(design(x))
+    return out
+
+
+_PICK: dict[str, Pick] = {
+    UNIFORM: lambda t: (t.middle, t.middle_dp),
+    PEAK: lambda t: (
+        np.concatenate([t.working, t.returning]),
+        np.vstack([t.working_dp, t.returning_dp]),
+    ),
+}
+
+
+def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any],
+           limit: float | None):  # fmt: skip
+    """A motion objective: per type and variant, SLSQP (``local_optima``) from the designs the
+    exact solvers give for the request (best-transmitting and smallest), the most promising
+    first; the optima and those designs, verified, ranked by the measure (the limit met)."""
+    found: list[Candidate] = []
+    infeasible = []
+    for i, spec in enumerate(specs):
+        m = get(spec.type)
+        if m.facts is None:  # its constraints are the closed forms' (``formulation``)
+            infeasible.append(Infeasible(
+                m.type, "OBJECTIVE_UNSUPPORTED",
+                f"{m.type} has no closed forms, on which the motion objectives' search stands;"
+                " ask for pareto, max_transmission_angle or min_size",
+            ))  # fmt: skip
+            continue
+        best_t = replace(t, objective=MAX_TRANSMISSION)
+        s = search(m, spec, i, best_t)
+        pool = list(s.proposals)
+        if t.bound_deg > 0:
+            pool += search(m, spec, i, replace(t, objective=MIN_SIZE)).proposals
+        mine = []
+        for p in pool:
+            c = candidate(m, p, t, s.variants, extras)
+            if c is not None:
+                mine.append(c)
+        for v in s.variants:
+            starts = [
+                {k: x / t.stroke for k, x in c.params.items()}
+                for c in sorted(mine, key=lambda c: c.objective_value)
+                if m.variant(c.params) == v.parts
+            ]
+            if not starts or not v.free:
+                continue
+            optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
+                                  v.problem.explicit, (t.time_ratio, t.cos_bound), t.objective,
+                                  starts, limit, t.deadline)  # fmt: skip
+            for d in optima:
+                p = proposal(m, i, {k: x * t.stroke for k, x in d.items()}, "slsqp", t)
+                c = None if p is None else candidate(m, p, t, s.variants, extras)
+                if c is not None:
+                    mine.append(_smallest_member(m, i, c, t, s.variants, extras))
+        kept = [c for c in mine if limit is None or fluctuation(c.motion) <= limit * (1 + TOL)]
+        if not kept and not mine:
+            infeasible.append(diagnose(m, spec, best_t, s))
+        elif not kept:
+            least = min(fluctuation(c.motion) for c in mine)
+            if t.objective != UNIFORM:  # how uniform it can be: that objective's optimum
+                alone = motion([spec], replace(t, objective=UNIFORM), 1, extras, None)[0]
+                least = min([least] + [c.objective_value for c in alone])
+            infeasible.append(Infeasible(
+                m.type, "FLUCTUATION_UNREACHABLE",
+                f"{m.type}'s speed fluctuation over the middle 80% of the working stroke is at "
+                f"least {least:.6g} (the least the search finds) at time ratio "
+                f"{t.time_ratio:g}, stroke {t.stroke:g} and bound {t.bound_deg:g}°, above the "
+                f"limit {limit:g}",
+            ))  # fmt: skip
+        found += _distinct(kept, t.stroke)
+    found.sort(key=lambda c: (round(c.objective_value, 12), c.size, c.type))
+    return found[:max_candidates], infeasible
+
+
+def _smallest_member(m: Mechanism, i: int, c: Candidate, t: Targets, variants, extras):
+    """The smallest member of a candidate's family (the same motion and angles), verified."""
+    f = c.family
+    if f is None:
+        return c
+    (free,) = f.free
+    lo = f.range[free][0]
+    if lo >= c.params[free]:
+        return c
+    params = {**c.params, free: lo, **{k: r * lo for k, (_, r) in f.tied.items()}}
+    p = proposal(m, i, params, c.method, t)
+    smaller = None if p is None else candidate(m, p, t, variants, extras)
+    return smaller or c
+
+
+def _distinct(cands: list[Candidate], stroke: float) -> list[Candidate]:
+    """One candidate per design (the first of those within ``SAME`` × stroke of each other)."""
+    out: list[Candidate] = []
+    for c in sorted(cands, key=lambda c: c.objective_value):
+        if not any(same(c.params, o.params, stroke) for o in out):
+            out.append(c)
+    return out

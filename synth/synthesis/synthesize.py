@@ -1,0 +1,271 @@
+"""synthesize(): time ratio, stroke and transmission bound → every good design, verified.
+
+The designs come from ``synth.synthesis.search`` (each type's reduced solver, IPOPT where it cannot
+answer), predicted by the types' closed forms. For one criterion they are ranked and
+re-analysed (``synth.synthesis.candidate``) best first until ``max_candidates`` meet the targets to
+1e-9; the default answer is each type's front (``synth.synthesis.front``), and the objectives on how
+the slider moves run a local NLP (``synth.synthesis.motion``). A type with no design gets a
+reason with numbers (``synth.synthesis.diagnose``).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Collection, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from ..analysis.kinematics import check_drawn, check_include
+from ..analysis.quality import MOTION_OBJECTIVES
+from ..errors import InvalidParameters
+from ..mechanisms import all_types, get
+from ..mechanisms.reduced import MAX_TRANSMISSION, MIN_SIZE
+from ..results import Candidate, SynthesisResult, Tolerance
+from .candidate import candidate, predicted_rank, rank
+from .diagnose import diagnose
+from .front import PARETO, pareto
+from .motion import motion
+from .search import DEFAULT, Searched, Solver, Spec, Targets, search
+
+__all__ = ["MAX_CANDIDATES", "OBJECTIVES", "Solver", "Spec", "check", "synthesize"]
+
+OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE, *MOTION_OBJECTIVES)
+MAX_CANDIDATES = 50
+# the solvers work in the stroke's unit: a stroke within STROKES and bounds within SCALE of it
+# either way keep their ratios and squares finite and non-zero (_check_scale)
+STROKES, SCALE = (1e-100, 1e100), 1e24
+PER_TYPE = 5  # candidates per type when max_candidates is not given (pareto: per type's front)
+
+
+def synthesize(
+    time_ratio: float,
+    stroke: float,
+    min_transmission_angle_deg: float = 0.0,
+    mechanisms: Sequence[Spec | Mapping[str, Any]] | None = None,
+    objective: str = PARETO,
+    max_candidates: int | None = None,
+    time_budget_ms: float = 2000.0,
+    *,
+    include: Collection[str] = (),
+    tolerance: Tolerance | None = None,
+    max_working_speed_fluctuation: float | None = None,
+    solver: Solver = DEFAULT,
+) -> SynthesisResult:
+    """Every good design for the targets, verified and ranked (POST /v1/synthesize).
+
+    ``objective``: ``pareto`` (each type's trade-off front between its smallest design that
+    meets the bound and its best-transmitting one: ``synth.synthesis.front``), or one criterion:
+    ``max_transmission_angle`` (ties to the smaller design) or ``min_size`` (the smallest sum
+    of link lengths meeting the bound); or one of how the slider moves (``motion_search``):
+    ``uniform_cutting_speed`` (the least speed fluctuation over the middle 80% of the working
+    stroke, where a tool cuts) or ``min_peak_acceleration`` (the least peak acceleration over
+    both strokes, in ω²·stroke). ``max_working_speed_fluctuation`` (≥ 1) limits that
+    fluctuation (with the motion objectives). ``max_candidates`` counts in all; by default it is
+    ``PER_TYPE`` (pareto: per type of the request, at most ``MAX_CANDIDATES``).
+    ``solver`` says how (``Solver``): ``Solver(accelerators=False)`` solves every type as one
+    without a reduced solver would be, by cold multistart IPOPT on the formulation: the
+    generic path, for cross-checks.
+    ``include`` and ``tolerance`` add to each candidate what they add to an analysis
+    (``synth.analyze``): motion quality, sensitivities, the envelope.
+
+    >>> r = synthesize(2.0, 450.0, mechanisms=[{"type": "crank_shaper",
+    ...                "fixed": {"pivot_distance": 240.0, "ram_link": 0.0}}])
+    >>> [round(r.candidates[0].params[k], 9) for k in ("crank", "lever")]
+    [120.0, 450.0]
+    """
+    t0 = time.monotonic()
+    specs = check(time_ratio, stroke, min_transmission_angle_deg, mechanisms, objective,
+                  max_candidates, time_budget_ms, include=include,
+                  max_working_speed_fluctuation=max_working_speed_fluctuation)  # fmt: skip
+    per_type = max_candidates or PER_TYPE  # the most one type's front takes
+    if max_candidates is None:
+        max_candidates = min(PER_TYPE * (len(specs) if objective == PARETO else 1), MAX_CANDIDATES)
+    deadline = t0 + time_budget_ms / 1000
+    targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline, solver)
+    extras = {"include": include, "tolerance": tolerance}
+    if objective == PARETO:
+        cands, infeasible = pareto(specs, targets, max_candidates, per_type, extras)
+    elif objective in MOTION_OBJECTIVES:
+        extras["include"] = sorted({*include, "motion"})  # what the objective measures
+        cands, infeasible = motion(
+            specs, targets, max_candidates, extras, max_working_speed_fluctuation
+        )
+    else:
+        cands, infeasible = _single(specs, targets, max_candidates, extras)
+    return SynthesisResult(
+        candidates=tuple(cands),
+        infeasible=tuple(infeasible),
+        complete=time.monotonic() < targets.deadline,
+        elapsed_ms=(time.monotonic() - t0) * 1000,
+    )
+
+
+def _single(specs, t: Targets, max_candidates: int, extras: dict[str, Any]):
+    """One criterion: the best ``max_candidates`` designs of all types, ranked."""
+    searched = [search(get(spec.type), spec, i, t) for i, spec in enumerate(specs)]
+    found, left = _verified(searched, t, max_candidates, extras)
+    infeasible = [
+        diagnose(get(spec.type), spec, t, s)
+        for i, (spec, s) in enumerate(zip(specs, searched, strict=True))
+        if not any(c.spec == i for c in found) and not left[i]
+    ]
+    return sorted((c.candidate for c in found), key=rank(t.objective))[:max_candidates], infeasible
+
+
+@dataclass(frozen=True)
+class _Found:
+    spec: int
+    candidate: Candidate
+
+
+def _verified(
+    searched: list[Searched], t: Targets, max_candidates: int, extras: dict[str, Any]
+) -> tuple[list[_Found], list[bool]]:
+    """Verify the proposals best first (predicted) until ``max_candidates`` pass: a design
+    that cannot be among the answer is never analysed. Also, per spec, whether proposals were
+    left unverified (its type has designs, just not among the best). What the search found is
+    verified even past the budget (an analysis each, under a millisecond): a slow type must
+    not cost the others their answers."""
+    pool = sorted((p for s in searched for p in s.proposals), key=predicted_rank(t.objective))
+    found: list[_Found] = []
+    left = [False] * len(searched)
+    for k, p in enumerate(pool):
+        if len(found) >= max_candidates:
+            for q in pool[k:]:
+                left[q.spec] = True
+            break
+        c = candidate(get(p.type), p, t, searched[p.spec].variants, extras)
+        if c is not None:
+            found.append(_Found(p.spec, c))
+    return found, left
+
+
+def check(
+    time_ratio: float,
+    stroke: float,
+    min_transmission_angle_deg: float = 0.0,
+    mechanisms: Sequence[Spec | Mapping[str, Any]] | None = None,
+    objective: str = PARETO,
+    max_candidates: int | None = None,
+    time_budget_ms: float = 2000.0,
+    *,
+    include: Collection[str] = (),
+    max_working_speed_fluctuation: float | None = None,
+    **_: Any,
+) -> list[Spec]:
+    """What ``synthesize`` checks before it solves (its arguments' meaning); the specs, every
+    quick-return type when ``mechanisms`` is None. Takes (and ignores) ``synthesize``'s other
+    arguments. Raises ``InvalidParameters`` located at the
+    argument, e.g. ``("mechanisms", 0, "bounds", "crank")``."""
+    if mechanisms is None:
+        specs = [Spec(t) for t in all_types() if get(t).quick_return]
+    else:
+        specs = [_spec(s, i) for i, s in enumerate(mechanisms)]
+    _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
+    for i, s in enumerate(specs):
+        _check_scale(s, i, stroke)
+    _check_limit(max_working_speed_fluctuation, objective)
+    check_include(include)
+    for s in specs:
+        check_drawn(s.type, include)
+    if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
+        raise InvalidParameters(
+            f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
+        )
+    return specs
+
+
+def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
+    checks = [
+        ("time_ratio", tr, math.isfinite(tr) and tr >= 1, "a finite number ≥ 1"),
+        (
+            "stroke",
+            stroke,
+            STROKES[0] <= stroke <= STROKES[1],
+            f"a length in [{STROKES[0]:g}, {STROKES[1]:g}]",
+        ),
+        (
+            "min_transmission_angle_deg",
+            bound,
+            math.isfinite(bound) and 0 <= bound < 90,
+            "an angle in [0°, 90°)",
+        ),
+        ("objective", objective, objective in OBJECTIVES, "one of " + ", ".join(OBJECTIVES)),
+        (
+            "max_candidates",
+            max_candidates,
+            max_candidates is None
+            or (isinstance(max_candidates, int) and 1 <= max_candidates <= MAX_CANDIDATES),
+            f"an integer from 1 to {MAX_CANDIDATES}",
+        ),
+    ]
+    for name, value, ok, what in checks:
+        if not ok:
+            raise InvalidParameters(f"{name} must be {what}, got {value!r}", (name,))
+    if objective == MIN_SIZE and bound == 0:
+        raise InvalidParameters(
+            "min_transmission_angle_deg must be > 0 with the objective min_size: without a "
+            "bound the smallest designs are linkages that lock (a 0° transmission angle)",
+            ("min_transmission_angle_deg",),
+        )
+
+
+def _check_scale(s: Spec, i: int, stroke: float) -> None:
+    """Bounds within ``SCALE`` of the stroke either way (0 aside): the solvers work in the
+    stroke's unit, where their ratios and squares must stay finite and non-zero."""
+    for k, (lo, hi) in s.bounds.items():
+        if any(x != 0 and not 1 / SCALE <= abs(x) / stroke <= SCALE for x in (lo, hi)):
+            raise InvalidParameters(
+                f"{s.type}.{k} bounds [{lo!r}, {hi!r}]: each must lie within {1 / SCALE:g} … "
+                f"{SCALE:g} × the stroke ({stroke:g}) in size",
+                ("mechanisms", i, "bounds", k),
+            )
+
+
+def _check_limit(limit: float | None, objective: str) -> None:
+    if limit is None:
+        return
+    if not (math.isfinite(limit) and limit >= 1):
+        raise InvalidParameters(
+            f"max_working_speed_fluctuation must be a finite number ≥ 1 (the largest speed "
+            f"against the mean: 1 is a uniform speed), got {limit!r}",
+            ("max_working_speed_fluctuation",),
+        )
+    if objective not in MOTION_OBJECTIVES:
+        raise InvalidParameters(
+            f"max_working_speed_fluctuation is taken with the objectives "
+            f"{' and '.join(MOTION_OBJECTIVES)}, not {objective}",
+            ("max_working_speed_fluctuation",),
+        )
+
+
+def _spec(s: Spec | Mapping[str, Any], i: int) -> Spec:
+    if not isinstance(s, Spec):
+        s = Spec(s["type"], dict(s.get("fixed") or {}), dict(s.get("bounds") or {}))
+    m = get(s.type)
+    both = set(s.fixed) & set(s.bounds)
+    if both:
+        raise InvalidParameters(
+            f"{s.type} {', '.join(sorted(both))}: both fixed and bounded; give one",
+            ("mechanisms", i, "bounds", sorted(both)[0]),
+        )
+    for k, v in s.fixed.items():
+        try:
+            m.value(k, v)
+        except InvalidParameters as e:
+            raise InvalidParameters(e.msg, ("mechanisms", i, "fixed", k)) from None
+    for k, (lo, hi) in s.bounds.items():
+        q = m.parameter(k)
+        why = (
+            "need finite bounds" if not (math.isfinite(lo) and math.isfinite(hi))
+            else f"lower bound {lo:g} > upper bound {hi:g}" if lo > hi
+            else None if q.signed or lo > 0 or (lo == 0 and q.zero_means)
+            else f"a length's bounds must be ≥ 0 (0 means {q.zero_means})" if q.zero_means
+            else "a length's bounds must be > 0"
+        )  # fmt: skip
+        if why:
+            raise InvalidParameters(
+                f"{s.type}.{k} bounds [{lo!r}, {hi!r}]: {why}", ("mechanisms", i, "bounds", k)
+            )
+    return Spec(s.type, dict(s.fixed), {k: (float(a), float(b)) for k, (a, b) in s.bounds.items()})
