@@ -57,8 +57,8 @@ test: $(VENV)/.dev
 # the envelope against dense pin paths on more designs, and the motion objectives' referee
 # for the crank-rocker
 stress: $(VENV)/.dev
-	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q tests/test_stress.py tests/test_global_search.py \
-		tests/test_quality.py tests/test_motion_search.py
+	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q tests/referees/test_stress.py tests/referees/test_global_search.py \
+		tests/referees/test_quality.py tests/referees/test_motion_search.py
 
 # the design atlas the service ships (GET /v1/atlas) and the README's charts: docs/atlas/,
 # resumed if interrupted; api/atlas.json is its summary
@@ -70,8 +70,12 @@ atlas: $(VENV)/.dev
 bench: $(VENV)/.dev
 	$(BIN)/python -m benchmarks
 
+# the style and the types: ruff's lint and its format check over the repository, and mypy
+# --strict over synth/ (pyproject.toml, [tool.mypy])
 lint: $(VENV)/.dev
 	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy synth
 
 # Regenerate the lock files after changing pyproject.toml (needs uv: pip install uv): one lock
 # for every supported Python (markers where they differ), with the setuptools that builds the

@@ -13,6 +13,7 @@ from pydantic import Field, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 CORES = max(1, len(os.sched_getaffinity(0)))
+DEFAULT_BUDGET_MS = 2000.0  # a request's time_budget_ms where it gives none (``default_budget_ms``)
 
 
 class Settings(BaseSettings):
@@ -57,7 +58,7 @@ class Settings(BaseSettings):
     @property
     def default_budget_ms(self) -> float:
         """A synthesis's budget when its request gives none."""
-        return min(2000.0, self.max_budget_ms)
+        return min(DEFAULT_BUDGET_MS, self.max_budget_ms)
 
 
 @lru_cache

@@ -22,17 +22,19 @@ from collections.abc import AsyncIterator
 from concurrent.futures import BrokenExecutor, Executor, ProcessPoolExecutor, ThreadPoolExecutor
 from contextlib import asynccontextmanager
 from functools import partial
-from typing import Any
+from multiprocessing.context import BaseContext
+from multiprocessing.process import BaseProcess
+from typing import Any, cast
 
 import synth
 
 from .config import Settings, get_settings
+from .operations import OPERATIONS
 
 # what a synthesis leaves of its budget for its reply (at most a tenth of it): verifying what
 # it found by its deadline, encoding, an event loop busy with other requests; with it, a
 # synthesis's wall time stays within its budget under load (benchmarks/overload.py)
 REPLY_S = 0.1
-_OPS = {"analyze": synth.analyze, "synthesize": synth.synthesize, "sweep": synth.analysis.sweep}
 
 
 class Busy(Exception):
@@ -45,7 +47,7 @@ class Busy(Exception):
 
 
 def _call(op: str, kwargs: dict[str, Any]) -> Any:
-    return _OPS[op](**kwargs)
+    return OPERATIONS[op].run(**kwargs)
 
 
 def _warm() -> None:
@@ -56,9 +58,27 @@ def _warm() -> None:
         synth.analysis.model.model(m, frozenset())
 
 
+class _Spawn:
+    """The "spawn" start method's context, keeping each process it starts (``started``): the
+    context a process pool launches its workers with (``mp_context``)."""
+
+    def __init__(self) -> None:
+        self.context = multiprocessing.get_context("spawn")
+        self.started: list[BaseProcess] = []
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.context, name)
+
+    def Process(self, *args: Any, **kwargs: Any) -> BaseProcess:
+        process = self.context.Process(*args, **kwargs)
+        self.started.append(process)
+        return process
+
+
 class Engine:
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
+        self._workers: list[BaseProcess] = []  # the process pool's, as it starts them
         self.executor = self._new_executor()
         self.slots = Slots(settings.workers)
         self._replacing: asyncio.Lock | None = None
@@ -70,8 +90,9 @@ class Engine:
             # when a worker imports it, so set before the workers start
             os.environ.setdefault("OMP_NUM_THREADS", "1")
             os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-            ctx = multiprocessing.get_context("spawn")  # no fork of a threaded server
-            return ProcessPoolExecutor(n, mp_context=ctx)
+            context = _Spawn()  # no fork of a threaded server
+            self._workers = context.started
+            return ProcessPoolExecutor(n, mp_context=cast(BaseContext, context))
         return ThreadPoolExecutor(n, thread_name_prefix="solver")
 
     @classmethod
@@ -79,7 +100,8 @@ class Engine:
         """The app's engine, made on first use (also when no lifespan ran)."""
         if not hasattr(app.state, "engine"):
             app.state.engine = cls(get_settings())
-        return app.state.engine
+        engine: Engine = app.state.engine
+        return engine
 
     async def run(self, op: str, inline: bool = False, arrival: float | None = None,
                   **kwargs: Any) -> Any:  # fmt: skip
@@ -128,10 +150,8 @@ class Engine:
         waiting for its requests (uvicorn's graceful-shutdown timeout, ``api.serve``), so
         nobody waits for their solves; a solve in a thread ends with the process (uvicorn
         ends it by the signal it caught)."""
-        executor = self.executor
-        workers = list((getattr(executor, "_processes", None) or {}).values())
-        executor.shutdown(wait=False, cancel_futures=True)
-        for p in workers:  # a process pool's (ProcessPoolExecutor has no way to stop them)
+        self.executor.shutdown(wait=False, cancel_futures=True)
+        for p in self._workers:  # a process pool's: ProcessPoolExecutor has no way to stop them
             p.terminate()
 
 

@@ -5,6 +5,7 @@ import gc
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
+from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exception_handlers import http_exception_handler
@@ -17,8 +18,10 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 import synth
 from synth.errors import UnknownMechanism
 
+from .body_limit import too_large
 from .engine import Busy, Engine
-from .guard import Gate, capped, error_item, too_large
+from .errors import capped, error_item
+from .gate import Gate
 from .routers import analyze, atlas, mechanisms, sweep, synthesize
 from .routers.common import Located
 from .schemas import Health
@@ -76,9 +79,9 @@ async def http_error(request: Request, exc: StarletteHTTPException) -> Response:
 @app.exception_handler(RequestValidationError)
 async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse:
     """FastAPI's 422, made safe to encode whatever the input held and bounded in size
-    (``guard.error_item``, ``guard.capped``)."""
+    (``errors.error_item``, ``errors.capped``)."""
 
-    def item(e: dict) -> dict:
+    def item(e: dict[str, Any]) -> dict[str, Any]:
         if e["type"] == "json_invalid":  # FastAPI locates it at a character: the msg says where
             e = {"loc": ["body"], "msg": e["ctx"]["error"], "type": e["type"]}
         more = {"input": e["input"]} if "input" in e else {}

@@ -8,6 +8,7 @@ offset takes either sign), and every size is capped.
 from __future__ import annotations
 
 import itertools
+from collections.abc import Callable
 from dataclasses import MISSING
 from dataclasses import fields as dataclass_fields
 from typing import Annotated, Any, Literal, Union, get_type_hints
@@ -22,19 +23,39 @@ from pydantic import (
 
 from synth import results
 from synth.analysis.kinematics import ANALYSIS_INCLUDE, INCLUDE, MAX_CURVE_POINTS
+from synth.analysis.quality import CUT
 from synth.analysis.sweep import MAX_POINTS
 from synth.mechanisms import Mechanism, Parameter, all_types, get
-from synth.synthesis.synthesize import MAX_CANDIDATES
+from synth.synthesis.synthesize import MAX_CANDIDATES, PER_TYPE
+from synth.targets import OBJECTIVES, PARETO
 
-from .guard import MAX_ERRORS
+from .body_limit import MAX_BODY_BYTES
+from .config import DEFAULT_BUDGET_MS, Settings
+from .errors import MAX_ERRORS
 
 LENGTH_MIN, LENGTH_MAX = 1e-9, 1e12
 STRICT = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 
 
+def _default(setting: str) -> Any:
+    """A setting's default (the texts below say what a server does unless configured)."""
+    return Settings.model_fields[setting].default
+
+
+def _number(x: float) -> str:
+    """``x`` as the texts write it: its digits grouped by three from 10 000 on."""
+    return f"{x:g}" if abs(x) < 10_000 else f"{x:,.0f}".replace(",", " ")
+
+
+# what the texts say of a request's wait for a solver, and of the working stroke a tool cuts
+_QUEUE = "half" if _default("queue_share") == 0.5 else f"{_default('queue_share'):.0%}"
+_QUEUE_MAX = f"at most {_number(_default('max_queue_ms') / 1000)} s"
+_MIDDLE = f"middle {1 - 2 * CUT:.0%} of the working stroke"
+
+
 class Strict(BaseModel):
     """A request's object: finite numbers, strict types, no unknown fields. Unknown fields get
-    an error each, as many as a reply lists (``guard.MAX_ERRORS``); more are one error that
+    an error each, as many as a reply lists (``errors.MAX_ERRORS``); more are one error that
     names a few: pydantic's and FastAPI's error lists cost the event loop ~5 µs an error
     (100 000 unknown fields: 0.5 s) before a reply is cut to size."""
 
@@ -119,7 +140,7 @@ def _spec(m: Mechanism) -> type[BaseModel]:
     )
 
 
-def _union(make) -> Any:
+def _union(make: Callable[[Mechanism], type[BaseModel]]) -> Any:
     """One model per registered type, told apart by ``type``."""
     models = tuple(make(get(t)) for t in all_types())
     return Annotated[Union[models], Field(discriminator="type")]  # noqa: UP007
@@ -198,9 +219,11 @@ class AnalyzeRequest(Extras):
 BUDGET: Any = Field(
     None,
     gt=0.0,
-    description="from the request's arrival; omitted: 2000, or the server's largest budget if "
-    "that is less; at most the server's largest budget (SYNTH_MAX_BUDGET_MS, 60 000 by "
-    "default). A request waits for a solver at most half of it (at most 1 s), else 503",
+    description=f"from the request's arrival; omitted: {_number(DEFAULT_BUDGET_MS)}, or the "
+    "server's largest budget if that is less; at most the server's largest budget "
+    f"({Settings.model_config['env_prefix']}MAX_BUDGET_MS, "
+    f"{_number(_default('max_budget_ms'))} by default). A request waits for a solver at most "
+    f"{_QUEUE} of it ({_QUEUE_MAX}), else 503",
 )
 
 
@@ -215,14 +238,9 @@ class SynthesizeRequest(Extras):
         max_length=24,
         description="omitted: every quick-return type, nothing fixed",
     )
-    objective: Literal[
-        "pareto",
-        "max_transmission_angle",
-        "min_size",
-        "uniform_cutting_speed",
-        "min_peak_acceleration",
-    ] = Field(
-        "pareto",
+    objective: Literal[tuple(OBJECTIVES)] = Field(  # type: ignore[valid-type]
+        PARETO,
+        json_schema_extra={"x-titles": {**OBJECTIVES}},  # the playground's words for each
         description="pareto: per type, the trade-off front between the smallest design that "
         "meets the bound (min_size) and the best-transmitting one (max_transmission_angle), "
         "points spread evenly in angle, each the smallest design with at least its angle "
@@ -230,7 +248,7 @@ class SynthesizeRequest(Extras):
         "max_transmission_angle: the best minimum transmission angle, ties to the smallest "
         "design; min_size: the smallest sum of link lengths meeting the bound (which must "
         "then be > 0°); uniform_cutting_speed: the least speed fluctuation (largest speed over "
-        "mean speed) over the middle 80% of the working stroke, where a tool cuts; "
+        f"mean speed) over the {_MIDDLE}, where a tool cuts; "
         "min_peak_acceleration: the least peak acceleration over both strokes, in ω²·stroke. "
         "The last two are local optima from many starts (method slsqp), each candidate "
         "carrying its motion",
@@ -239,7 +257,7 @@ class SynthesizeRequest(Extras):
         None,
         ge=1.0,
         le=1e3,
-        description="a limit on the speed fluctuation over the middle 80% of the working stroke "
+        description=f"a limit on the speed fluctuation over the {_MIDDLE} "
         "(≥ 1: 1 is a uniform speed), with the objectives uniform_cutting_speed and "
         "min_peak_acceleration",
     )
@@ -247,8 +265,8 @@ class SynthesizeRequest(Extras):
         None,
         ge=1,
         le=MAX_CANDIDATES,
-        description="in all; omitted: 5 (pareto: 5 per type of the request, at most "
-        f"{MAX_CANDIDATES}, a front of one point taking one)",
+        description=f"in all; omitted: {PER_TYPE} (pareto: {PER_TYPE} per type of the request, "
+        f"at most {MAX_CANDIDATES}, a front of one point taking one)",
     )
     time_budget_ms: float | None = BUDGET
 
@@ -283,11 +301,15 @@ class Refused(BaseModel):
 
 # what every POST may answer besides 200 and 422 (README, "What a client can rely on")
 REFUSALS: dict[int | str, dict[str, Any]] = {
-    413: {"model": Refused, "description": "the body is over 4 MiB (the connection is closed)"},
+    413: {
+        "model": Refused,
+        "description": f"the body is over {MAX_BODY_BYTES / 2**20:g} MiB (the connection is "
+        "closed)",
+    },
     503: {
         "model": Refused,
-        "description": "no solver was free within the wait the budget allows (half of it, at "
-        "most 1 s): try again after Retry-After seconds",
+        "description": f"no solver was free within the wait the budget allows ({_QUEUE} of it, "
+        f"{_QUEUE_MAX}): try again after Retry-After seconds",
         "headers": {"Retry-After": {"description": "seconds", "schema": {"type": "integer"}}},
     },
 }
@@ -298,7 +320,14 @@ class Health(BaseModel):
     version: str
 
 
+def _declared(model: type[BaseModel], record: Any) -> dict[str, Any]:
+    """The attributes of ``record`` that ``model`` declares as fields."""
+    return {name: getattr(record, name) for name in model.model_fields if hasattr(record, name)}
+
+
 class ParameterInfo(BaseModel):
+    model_config = ConfigDict(from_attributes=True)  # as in the registry (``MechanismInfo.of``)
+
     name: str
     symbol: str = Field(description="the textbook symbol")
     description: str
@@ -330,29 +359,9 @@ class MechanismInfo(BaseModel):
 
     @classmethod
     def of(cls, m: Mechanism) -> MechanismInfo:
-        return cls(
-            type=m.type,
-            title=m.title,
-            description=m.description,
-            parameters=[
-                ParameterInfo(
-                    name=q.name,
-                    symbol=q.symbol,
-                    description=q.description,
-                    required=q.required,
-                    default=q.default,
-                    default_rule=q.default_rule,
-                    signed=q.signed,
-                    zero_means=q.zero_means,
-                    bounds=q.bounds,
-                )
-                for q in m.parameters
-            ],
-            validity=[c.text for c in m.conditions],
-            quick_return=m.quick_return,
-            sources=list(m.sources),
-            drawing=[tuple(d) for d in m.drawing],
-        )
+        """The registry's record as served: its fields of the names declared here, and its
+        conditions' words."""
+        return cls.model_validate({**_declared(cls, m), "validity": [c.text for c in m.conditions]})
 
 
 class PinPath(BaseModel):

@@ -30,7 +30,7 @@ from .connection import Connection
 APP = "api.main:app"
 # on SIGTERM: stop accepting at once, give requests in flight this long, then cancel them and
 # exit (uvicorn ends the process by the signal, solver threads and all): every process is gone
-# within 10 s (tests/test_faults.py)
+# within 10 s (tests/service/test_faults.py)
 SHUTDOWN_S = 5
 # how long a thread holds the interpreter before another may take it (Python's default: 5 ms):
 # the event loop waits that long behind a solver thread at each step, so /health under load

@@ -1,9 +1,11 @@
-"""A bounded load generator for the service on loopback: N clients, keep-alive connections.
+"""The load generator for the service on loopback: clients, each on its own keep-alive
+connection, sending their requests in turn; only 127.0.0.1 is targeted.
 
-    python benchmarks/load.py --port 8000 --clients 16 --requests 2000 --path /v1/analyze
+    python -m benchmarks.load --port 8000 --clients 16 --requests 2000 --path /v1/analyze
 
-Each client sends its share of requests (bounded in count and in --seconds) and records
-latencies; prints throughput and p50/p95/p99 (JSON with --json). Only 127.0.0.1 is targeted.
+prints throughput and p50/p95/p99 (JSON with --json). ``drive`` is the generator the service
+and overload benchmarks share: ``run`` (N clients, a bounded count of requests), ``alternate``
+(one client, requests in turn) and ``benchmarks.overload`` are ways of driving it.
 """
 
 from __future__ import annotations
@@ -14,6 +16,9 @@ import json
 import statistics
 import threading
 import time
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
 
 BODIES = {
     "/v1/analyze": {"mechanism": {"type": "drag_link_slider", "params": {
@@ -23,73 +28,134 @@ BODIES = {
         "type": "drag_link_slider", "fixed": {"ground": 0.1, "crank": 0.225, "follower": 0.275,
                                               "connecting_rod": 0.3}}]},
 }  # fmt: skip
+JSON = {"Content-Type": "application/json"}
+# a request a client sends: the path it is POSTed to, its body, and what its answer counts under
+Request = tuple[str, bytes, Any]
 
 
-def run(port: int, path: str, clients: int, requests: int, seconds: float, bodies=None) -> dict:
-    bodies = bodies or [BODIES[path]]
-    payloads = [json.dumps(b).encode() for b in bodies]
-    latencies: list[float] = []
-    statuses: dict[int, int] = {}
+@dataclass(frozen=True)
+class Sent:
+    """A request's answer: its tag, its status (the error's name where the connection
+    failed: the client connects again), and how long it took."""
+
+    tag: Any
+    status: int | str
+    ms: float
+
+
+@dataclass
+class Driven:
+    sent: list[Sent] = field(default_factory=list)
+    health_ms: list[float] = field(default_factory=list)  # the /health prober's answers
+    seconds: float = 0.0
+
+
+def drive(
+    port: int,
+    clients: Sequence[Iterable[Request]],
+    seconds: float,
+    total: int | None = None,
+    probe_s: float | None = None,
+) -> Driven:
+    """Each of ``clients`` (its requests, in order) on its own keep-alive connection at once,
+    each until its requests end, ``seconds`` have passed or ``total`` requests in all are
+    answered; with ``probe_s``, meanwhile a GET /health every ``probe_s`` seconds on another
+    connection."""
+    stop = time.monotonic() + seconds
     lock = threading.Lock()
-    deadline = time.monotonic() + seconds
+    out = Driven()
 
-    def client(k: int) -> None:
+    def going() -> bool:
+        return time.monotonic() < stop and (total is None or len(out.sent) < total)
+
+    def client(requests: Iterable[Request]) -> None:
         conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-        mine, codes = [], {}
-        for i in range(k, requests, clients):
-            if time.monotonic() > deadline:
+        for path, body, tag in requests:
+            if not going():
                 break
             t0 = time.perf_counter()
-            conn.request("POST", path, payloads[i % len(payloads)],
-                         {"Content-Type": "application/json"})  # fmt: skip
-            r = conn.getresponse()
-            r.read()
-            mine.append(time.perf_counter() - t0)
-            codes[r.status] = codes.get(r.status, 0) + 1
+            status: int | str
+            try:
+                conn.request("POST", path, body, JSON)
+                r = conn.getresponse()
+                r.read()
+                status = r.status
+            except OSError as e:
+                status = type(e).__name__
+                conn.close()
+                conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+            ms = (time.perf_counter() - t0) * 1000
+            with lock:
+                out.sent.append(Sent(tag, status, ms))
         conn.close()
-        with lock:
-            latencies.extend(mine)
-            for c, n in codes.items():
-                statuses[c] = statuses.get(c, 0) + n
 
+    def prober(every: float) -> None:
+        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
+        while going():
+            t0 = time.perf_counter()
+            conn.request("GET", "/health")
+            conn.getresponse().read()
+            out.health_ms.append((time.perf_counter() - t0) * 1000)
+            time.sleep(every)
+        conn.close()
+
+    threads = [threading.Thread(target=client, args=(c,)) for c in clients]
+    if probe_s is not None:
+        threads.append(threading.Thread(target=prober, args=(probe_s,)))
     t0 = time.perf_counter()
-    threads = [threading.Thread(target=client, args=(k,)) for k in range(clients)]
     for t in threads:
         t.start()
     for t in threads:
         t.join()
-    wall = time.perf_counter() - t0
+    out.seconds = time.perf_counter() - t0
+    return out
+
+
+def statuses(sent: Iterable[Sent]) -> dict[int | str, int]:
+    """How many answers had each status."""
+    counts: dict[int | str, int] = {}
+    for s in sent:
+        counts[s.status] = counts.get(s.status, 0) + 1
+    return counts
+
+
+def run(
+    port: int,
+    path: str,
+    clients: int,
+    requests: int,
+    seconds: float,
+    bodies: Sequence[dict[str, Any]] | None = None,
+) -> dict[str, Any]:
+    """``clients`` clients sending ``requests`` in all to ``path`` (request i: ``bodies[i %
+    len(bodies)]``, by client i % clients), for at most ``seconds``: throughput, latency
+    quantiles, statuses."""
+    payloads = [json.dumps(b).encode() for b in bodies or [BODIES[path]]]
+    shares = [[(path, payloads[i % len(payloads)], None) for i in range(k, requests, clients)]
+              for k in range(clients)]  # fmt: skip
+    d = drive(port, shares, seconds)
+    latencies = [s.ms / 1e3 for s in d.sent]
     q = statistics.quantiles(latencies, n=100) if len(latencies) > 1 else [latencies[0]] * 99
     return {
-        "path": path, "clients": clients, "requests": len(latencies), "seconds": wall,
-        "throughput_rps": len(latencies) / wall, "p50_ms": q[49] * 1e3, "p95_ms": q[94] * 1e3,
-        "p99_ms": q[98] * 1e3, "statuses": statuses,
+        "path": path, "clients": clients, "requests": len(latencies), "seconds": d.seconds,
+        "throughput_rps": len(latencies) / d.seconds, "p50_ms": q[49] * 1e3,
+        "p95_ms": q[94] * 1e3, "p99_ms": q[98] * 1e3, "statuses": statuses(d.sent),
     }  # fmt: skip
 
 
-def alternate(port: int, requests: list[tuple[str, dict]], rounds: int) -> list[dict]:
+def alternate(port: int, requests: list[tuple[str, dict[str, Any]]], rounds: int) -> list[dict]:
     """One client, one keep-alive connection: the requests in turn, ``rounds`` times, so that
     the machine's load touches each alike. Per request: median and p90 latency, statuses."""
-    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
     payloads = [(path, json.dumps(b).encode()) for path, b in requests]
-    latencies: list[list[float]] = [[] for _ in requests]
-    statuses: list[dict[int, int]] = [{} for _ in requests]
-    try:
-        for _ in range(rounds):
-            for k, (path, payload) in enumerate(payloads):
-                t0 = time.perf_counter()
-                conn.request("POST", path, payload, {"Content-Type": "application/json"})
-                r = conn.getresponse()
-                r.read()
-                latencies[k].append(time.perf_counter() - t0)
-                statuses[k][r.status] = statuses[k].get(r.status, 0) + 1
-    finally:
-        conn.close()
+    turns = [(path, body, k) for _ in range(rounds) for k, (path, body) in enumerate(payloads)]
+    sent = drive(port, [turns], float("inf")).sent
     out = []
-    for (path, _), ts, codes in zip(requests, latencies, statuses, strict=True):
+    for k, (path, _) in enumerate(requests):
+        mine = [s for s in sent if s.tag == k]
+        ts = [s.ms / 1e3 for s in mine]
         q = statistics.quantiles(ts, n=10) if len(ts) > 1 else [ts[0]] * 9
         out.append({"path": path, "requests": len(ts), "p50_ms": statistics.median(ts) * 1e3,
-                    "p90_ms": q[8] * 1e3, "statuses": codes})  # fmt: skip
+                    "p90_ms": q[8] * 1e3, "statuses": statuses(mine)})  # fmt: skip
     return out
 
 

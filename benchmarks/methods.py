@@ -168,7 +168,7 @@ def on_nlp(local: LocalSolve) -> Method:
     local solves by ``local``; no reduced solver, no verification."""
 
     def run(target: dict[str, Any]) -> Outcome:
-        spec = synthesize._spec(target["mechanisms"][0], 0)
+        spec = synthesize.checked_spec(target["mechanisms"][0], 0)
         m = get(spec.type)
         t = search.Targets(
             target["time_ratio"], target["stroke"], target["min_transmission_angle_deg"],

@@ -23,18 +23,18 @@ mix. The load generator shares the machine's cores with the server: a floor.
 from __future__ import annotations
 
 import argparse
-import http.client
+import itertools
 import json
 import random
 import statistics
-import threading
-import time
 from pathlib import Path
 
 from api.examples import DRAG_LINK
 
+from . import load
 from .common import descendants, report, table
-from .service import default_body, free_port, serve
+from .server import serving
+from .service import default_body
 
 BUDGETS_MS = (300.0, 500.0, 800.0, 1000.0, 2000.0)
 CLIENTS = (16, 64)
@@ -79,64 +79,21 @@ def quantiles(xs: list[float]) -> dict:
 
 
 def drive(port: int, clients: int, seconds: float, requests: int | None = None) -> dict:
-    """``clients`` keep-alive clients sending the mix (shuffled, seeded) for ``seconds`` (or
-    until ``requests`` in all), and the /health prober."""
-    bodies = [(path, json.dumps(b).encode(), budget) for path, b, budget in mix()]
-    stop = time.monotonic() + seconds
-    lock = threading.Lock()
-    sent = 0
-    statuses: dict[str, int] = {}
-    done: list[tuple[str, float | None, str, float]] = []  # path, budget, status, ms
-    health: list[float] = []
-
-    def client(k: int) -> None:
-        nonlocal sent
-        order = random.Random(k).sample(bodies, len(bodies))
-        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-        i = 0
-        while time.monotonic() < stop and (requests is None or sent < requests):
-            path, payload, budget = order[i % len(order)]
-            i += 1
-            t0 = time.perf_counter()
-            try:
-                conn.request("POST", path, payload, {"Content-Type": "application/json"})
-                r = conn.getresponse()
-                r.read()
-                key = str(r.status)
-            except OSError as e:
-                key = type(e).__name__
-                conn.close()
-                conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-            ms = (time.perf_counter() - t0) * 1000
-            with lock:
-                sent += 1
-                statuses[key] = statuses.get(key, 0) + 1
-                done.append((path, budget, key, ms))
-        conn.close()
-
-    def prober() -> None:
-        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-        while time.monotonic() < stop and (requests is None or sent < requests):
-            t0 = time.perf_counter()
-            conn.request("GET", "/health")
-            conn.getresponse().read()
-            health.append((time.perf_counter() - t0) * 1000)
-            time.sleep(0.05)
-        conn.close()
-
-    threads = [threading.Thread(target=client, args=(k,)) for k in range(clients)]
-    threads.append(threading.Thread(target=prober))
-    t0 = time.perf_counter()
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
+    """``clients`` keep-alive clients sending the mix (each in its own seeded shuffle, over
+    and over) for ``seconds`` (or until ``requests`` in all), and the /health prober."""
+    bodies = [(path, json.dumps(b).encode(), (path, budget)) for path, b, budget in mix()]
+    orders = [itertools.cycle(random.Random(k).sample(bodies, len(bodies)))
+              for k in range(clients)]  # fmt: skip
+    d = load.drive(port, orders, seconds, total=requests, probe_s=0.05)
+    done = [(*s.tag, str(s.status), s.ms) for s in d.sent]  # path, budget, status, ms
+    statuses = {str(k): n for k, n in load.statuses(d.sent).items()}
     errors = sum(n for k, n in statuses.items() if not k.isdigit() or (k[0] == "5" and k != "503"))
-    return {"clients": clients, "requests": sent, "seconds": time.perf_counter() - t0,
+    return {"clients": clients, "requests": len(d.sent), "seconds": d.seconds,
             "classes": [budget_class(done, b) for b in BUDGETS_MS],
             "synthesis_wall_ms": quantiles([ms for p, _, k, ms in done
                                             if p == "/v1/synthesize" and k == "200"]),
-            "health_ms": quantiles(health), "statuses": statuses, "errors": errors}  # fmt: skip
+            "health_ms": quantiles(d.health_ms), "statuses": statuses,
+            "errors": errors}  # fmt: skip
 
 
 def budget_class(done: list[tuple[str, float | None, str, float]], budget: float) -> dict:
@@ -172,17 +129,12 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--seconds", type=float, default=30.0, help="per client count")
     a = ap.parse_args(argv)
     seconds, volume = (3.0, 500) if a.quick else (float(a.seconds), 20_000)
-    port = free_port()
-    proc = serve(port, "shipped")
-    try:
+    with serving("shipped", defaults=True) as (port, proc):
         drive(port, 4, seconds / 3)  # warm-up: every process's models and solvers
         rows = [drive(port, n, seconds) for n in CLIENTS]
         before = rss_kb(proc.pid)
         memory = drive(port, 16, 600.0, requests=volume)
         after = rss_kb(proc.pid)
-    finally:
-        proc.terminate()
-        proc.wait(120)
     flat = [{"clients": r["clients"], "requests": r["requests"], "errors": r["errors"],
              "refused_503": r["statuses"].get("503", 0),
              "synth_p99_ms": r["synthesis_wall_ms"]["p99"],

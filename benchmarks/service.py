@@ -2,9 +2,9 @@
 
     python -m benchmarks.service [--quick] [--servers shipped,...]
 
-Starts each server configuration on a free port (``shipped`` is the command `make serve` and
-the image run), waits for /health and a warm-up, then drives three workloads with the bounded
-load generator (benchmarks/load.py):
+Starts each server configuration (``benchmarks.server``: ``shipped`` is the command `make
+serve` and the image run) with its own default settings, waits for a warm-up, then drives
+three workloads with the load generator (``benchmarks.load``):
 
 - ``analyze``: /v1/analyze, eight designs without curves;
 - ``synthesize``: /v1/synthesize, the drag-link project of the sources (time ratio, stroke
@@ -26,20 +26,13 @@ HTTP, in analyses.
 from __future__ import annotations
 
 import argparse
-import os
-import socket
 import statistics
-import subprocess
-import sys
-import time
-import urllib.request
-from pathlib import Path
 
 from . import load
 from .analysis import DESIGNS, QUICK_RETURN
 from .common import report, table
+from .server import SERVERS, serving
 
-ROOT = Path(__file__).resolve().parent.parent
 CLIENTS = (1, 4, 16)
 INVALID_SHARE = 0.2  # two requests in ten: a design that cannot be assembled, an unmet target
 WORKLOADS = {"analyze": "/v1/analyze", "synthesize": "/v1/synthesize",
@@ -76,40 +69,6 @@ def default_body(mtype: str, time_ratio: float = 1.6, bound: float = 20.0) -> di
             "mechanisms": [{"type": mtype}]}  # fmt: skip
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-# the configurations compared: a command (after the port is known) and its environment
-_UVICORN = [sys.executable, "-m", "uvicorn", "api.main:app", "--no-access-log", "--port"]
-SERVERS = {
-    # what ships: a server process per core, analyses in the event loop, solver threads
-    "shipped": ([sys.executable, "-m", "api.serve", "--port"], {}),
-    # one server process with a pool of solver processes (what shipped before this benchmark)
-    "one_process_pool": (_UVICORN, {"WEB_CONCURRENCY": "1"}),
-    # the shipped split, but uvicorn's own --workers: Nagle stays on (api/serve.py)
-    "uvicorn_workers": ([*_UVICORN[:-1], "--workers", "2", "--port"], {"WEB_CONCURRENCY": "2"}),
-}
-
-
-def serve(port: int, server: str) -> subprocess.Popen:
-    cmd, settings = SERVERS[server]
-    env = {k: v for k, v in os.environ.items() if k != "WEB_CONCURRENCY" and "SYNTH_" not in k}
-    proc = subprocess.Popen([*cmd, str(port)], cwd=ROOT, env={**env, **settings},
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
-    deadline = time.monotonic() + 60
-    while time.monotonic() < deadline:
-        try:
-            with urllib.request.urlopen(f"http://127.0.0.1:{port}/health", timeout=1):
-                return proc
-        except OSError:
-            time.sleep(0.1)
-    proc.kill()
-    raise RuntimeError("the service did not answer /health within 60 s")
-
-
 def paired(port: int, rounds: int) -> list[dict]:
     """Per type: a default synthesis request for it alone against a summary analysis of a
     design of it, alternated on one connection; their median latencies and the ratio."""
@@ -139,10 +98,8 @@ def repeated(port: int, repeats: int, requests: int, seconds: float) -> list[dic
 
 
 def measure(server: str, requests: int, seconds: float, rounds: int) -> tuple[list, list, list]:
-    port = free_port()
-    proc = serve(port, server)
     rows, pairs, again = [], [], []
-    try:
+    with serving(server, defaults=True) as (port, _):
         for workload, path in WORKLOADS.items():
             mix = bodies(workload)
             load.run(port, path, 2, 4 * len(mix), 60, mix)  # warm-up: workers, solvers
@@ -152,9 +109,6 @@ def measure(server: str, requests: int, seconds: float, rounds: int) -> tuple[li
         if server == "shipped":
             pairs = paired(port, rounds)
             again = repeated(port, 5 if rounds > 10 else 1, requests, seconds / 2)
-    finally:
-        proc.terminate()
-        proc.wait(120)
     return rows, pairs, again
 
 

@@ -31,7 +31,7 @@ from synth.mechanisms import Mechanism, all_types, get
 from synth.results import Analysis
 from synth.synthesis.formulation import relevant
 
-SEED = 6  # GitHub issue 6
+SEED = 6  # the random targets' seed: the same targets every run
 N_FEASIBLE = 100
 N_INFEASIBLE = 24
 FIXED_SHARE = 0.4

@@ -7,13 +7,13 @@
 """
 
 from . import atlas, mechanisms
-from ._version import __version__ as __version__
 from .analysis.kinematics import analyze, analyze_many, joints
 from .analysis.sweep import sweep
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
 from .mechanisms import register
 from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
 from .synthesis import Solver, Spec, synthesize
+from .version import __version__ as __version__
 
 __all__ = [
     "Analysis",

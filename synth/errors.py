@@ -8,6 +8,8 @@ condition with its numbers, so a caller can fix the input without reading the co
 
 from __future__ import annotations
 
+from typing import Any
+
 
 class SynthError(ValueError):
     """Base of every error this library raises on purpose."""
@@ -20,11 +22,11 @@ class SynthError(ValueError):
         self.loc = tuple(loc)
         self.kind = kind
 
-    def __reduce__(self):  # survive pickling (a process pool sends errors back)
+    def __reduce__(self) -> tuple[Any, ...]:  # survive pickling (a process pool sends errors back)
         return (_restore, (type(self), self.__dict__))
 
 
-def _restore(cls: type[SynthError], state: dict) -> SynthError:
+def _restore(cls: type[SynthError], state: dict[str, Any]) -> SynthError:
     err = cls.__new__(cls)
     Exception.__init__(err, state["msg"])
     err.__dict__.update(state)

@@ -18,7 +18,7 @@ settings.register_profile("medium", max_examples=1_000, **common)
 settings.register_profile("stress", max_examples=10_000, **common)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 
-# the toy types register themselves on import: only test_seventh_type.py's own process, which
-# names them in SYNTH_TYPES, may collect them (the doctests would import them here too)
+# the toy types register themselves on import: only library/test_seventh_type.py's own process,
+# which names them in SYNTH_TYPES, may collect them (the doctests would import them here too)
 if not os.environ.get("SYNTH_TYPES"):
-    collect_ignore = ["toy_type.py", "toy_checks.py"]
+    collect_ignore = ["support/toy_type.py", "support/toy_checks.py"]

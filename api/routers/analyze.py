@@ -5,7 +5,7 @@ from typing import Annotated
 from fastapi import APIRouter, Body, Request
 
 from ..examples import ANALYZE
-from ..guard import Route
+from ..json_route import Route
 from ..schemas import REFUSALS, AnalyzeRequest, AnalyzeResponse
 from .common import EngineDep, run_design, tolerance
 

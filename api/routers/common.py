@@ -6,23 +6,13 @@ from typing import Annotated, Any
 
 from fastapi import Depends, Request
 
-from synth.analysis.kinematics import check as check_analysis
-from synth.analysis.sweep import check as check_sweep
 from synth.errors import InvalidDesign, InvalidParameters, SynthError
 from synth.results import Tolerance
-from synth.synthesis.synthesize import check as check_synthesis
 
 from ..engine import Engine
-from ..guard import arrival
+from ..gate import arrival
+from ..operations import OPERATIONS
 from ..schemas import Extras
-
-# each operation's own checks of its arguments (cheap, no solving): run before a request waits
-# for a solver, so a request synth refuses gets its 422 at once, under any load
-CHECKS: dict[str, Callable[..., Any]] = {
-    "analyze": check_analysis,
-    "synthesize": check_synthesis,
-    "sweep": check_sweep,
-}
 
 Loc = tuple[str | int, ...]
 
@@ -67,8 +57,8 @@ async def run(
     from the request's arrival) once its checks pass; a domain error goes where ``locate``
     places it in the request body."""
     try:
-        if not inline:  # inline, the operation itself raises the same at once
-            CHECKS[op](**kwargs)
+        if not inline:  # inline, the operation itself raises the same at once; else its checks
+            OPERATIONS[op].check(**kwargs)  # before it waits for a solver: a 422 under any load
         return await engine.run(op, inline, arrival(request), **kwargs)
     except SynthError as e:
         raise Located(e, locate(e)) from None

@@ -5,7 +5,7 @@ from typing import Annotated
 from fastapi import APIRouter, Body, Request
 
 from ..examples import SWEEP
-from ..guard import Route
+from ..json_route import Route
 from ..schemas import REFUSALS, SweepRequest, SweepResponse
 from .common import EngineDep, budget, run_design
 

@@ -7,7 +7,7 @@ from fastapi import APIRouter, Body, Request
 from synth.errors import SynthError
 
 from ..examples import SYNTHESIZE
-from ..guard import Route
+from ..json_route import Route
 from ..schemas import REFUSALS, SynthesizeRequest, SynthesizeResponse
 from .common import EngineDep, Loc, budget, run, tolerance
 

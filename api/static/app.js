@@ -539,9 +539,18 @@ async function route(run) {
   }
 }
 
+function buildObjectives(schema) {
+  // the objectives a request may name, in the service's order, in the words its schema gives
+  const o = schema.components.schemas.SynthesizeRequest.properties.objective;
+  const titles = o["x-titles"] || {};
+  $("objective").replaceChildren(...o.enum.map((k) => el("option", { value: k }, titles[k] || k)));
+  $("objective").value = o.default;
+}
+
 async function init() {
-  const r = await api("v1/mechanisms");
+  const [r, schema] = await Promise.all([api("v1/mechanisms"), api("openapi.json")]);
   for (const m of r.data) TYPES[m.type] = m;
+  buildObjectives(schema.data);
   buildTypes();
   for (const prefix of ["a", "s"]) {
     const sel = $(`${prefix}-type`);

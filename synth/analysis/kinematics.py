@@ -33,7 +33,7 @@ from ..results import (
 )
 from . import quality
 from .model import Model, model
-from .roots import TWO_PI, stationary_points, stationary_points_many
+from .roots import TWO_PI, Points, stationary_points, stationary_points_many
 
 MAX_CURVE_POINTS = 100_000
 # the numbers an analysis's curves may carry, points × (each curve, and x and y of each pin):
@@ -110,8 +110,19 @@ def analyze_many(
     return out
 
 
-def _analysis(m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include,
-              tolerance) -> Analysis:  # fmt: skip
+def _analysis(
+    m: Mechanism,
+    p: dict[str, float],
+    variant: frozenset[str],
+    f: Model,
+    pv: np.ndarray,
+    found: Points,
+    crank_speed: float,
+    crank_acceleration: float,
+    deg: np.ndarray | None,
+    include: Collection[str],
+    tolerance: Tolerance | None,
+) -> Analysis:
     """``analyze``'s answer from the stationary points ``found`` of the design's rows."""
     rows, theta, values = found
     summary = _summary(m, p, f, rows, theta, values)
@@ -160,7 +171,9 @@ def worst_transmission(mechanism: str, params: Mapping[str, float]) -> tuple[flo
     return tuple(out)
 
 
-def _prepared(mechanism: str, params: Mapping[str, float]):
+def _prepared(
+    mechanism: str, params: Mapping[str, float]
+) -> tuple[Mechanism, dict[str, float], frozenset[str], Model, np.ndarray, Points]:
     """The completed design, its variant's compiled model, its parameter vector, and the
     stationary points of its rows (the dead centres and transmission extremes)."""
     m = get(mechanism)
@@ -225,7 +238,9 @@ def check_drawn(mechanism: str, include: Collection[str]) -> None:
         )
 
 
-def _ends(rows, theta, values) -> tuple[float, float, float, float]:
+def _ends(
+    rows: np.ndarray, theta: np.ndarray, values: np.ndarray
+) -> tuple[float, float, float, float]:
     """The slider's extremes: crank angles (radians) and positions (t_min, t_max, s_min, s_max)."""
     on_s = rows == 0
     s_theta, s_val = theta[on_s], values[on_s]
@@ -233,7 +248,9 @@ def _ends(rows, theta, values) -> tuple[float, float, float, float]:
     return float(s_theta[i_min]), float(s_theta[i_max]), float(s_val[i_min]), float(s_val[i_max])
 
 
-def _worst_joint(rows, theta, values) -> tuple[int, float, float] | None:
+def _worst_joint(
+    rows: np.ndarray, theta: np.ndarray, values: np.ndarray
+) -> tuple[int, float, float] | None:
     """(row, crank angle, cos μ) where the transmission is worst, None without joints."""
     joint = rows > 0
     if not np.any(joint):
@@ -274,7 +291,14 @@ def _pins(f: Model, pv: np.ndarray, deg: np.ndarray) -> dict[str, tuple[np.ndarr
     return {k: (g[2 * i].copy(), g[2 * i + 1].copy()) for i, k in enumerate(f.names)}
 
 
-def _summary(m: Mechanism, p: dict[str, float], f: Model, rows, theta, values) -> dict:
+def _summary(
+    m: Mechanism,
+    p: dict[str, float],
+    f: Model,
+    rows: np.ndarray,
+    theta: np.ndarray,
+    values: np.ndarray,
+) -> dict[str, Any]:
     reversals = int(np.count_nonzero(rows == 0))
     if reversals < 2:
         raise InvalidDesign("the slider does not move: no dead centres found", (), "stroke")
@@ -355,7 +379,9 @@ def check(
     _asked(mechanism, include, crank_angles_deg, samples)
 
 
-def curve_angles(crank_angles_deg: Sequence[float] | None, samples: int | None):
+def curve_angles(
+    crank_angles_deg: Sequence[float] | None, samples: int | None
+) -> np.ndarray | None:
     """The crank angles of the curves asked for, in degrees (None: no curves), checked."""
     if crank_angles_deg is None and samples is None:
         return None
@@ -376,7 +402,7 @@ def curve_angles(crank_angles_deg: Sequence[float] | None, samples: int | None):
     return deg
 
 
-def _curves(f: Model, pv, omega, alpha, deg: np.ndarray) -> Curves:
+def _curves(f: Model, pv: np.ndarray, omega: float, alpha: float, deg: np.ndarray) -> Curves:
     if deg.size == 0:
         empty = np.empty(0)
         return Curves(deg, empty, empty, empty, empty)

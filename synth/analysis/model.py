@@ -12,11 +12,14 @@ from __future__ import annotations
 import functools
 import itertools
 import threading
+from collections.abc import Callable
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
+import numpy.typing as npt
 
-from ..mechanisms import Mechanism, all_types, get
+from ..mechanisms import Mechanism, all_types, get, rod
 from ..mechanisms.fourbar.construction import construction
 from ..numerics.native import bind, native
 
@@ -25,6 +28,9 @@ EACH = 32 * GRID  # the most angles ``_Batched.each`` keeps a buffer for (a batc
 POLISH_STEPS = 8  # safeguarded Newton steps a compiled polish takes (``Polisher``)
 
 _local = threading.local()
+
+# the arrays a compiled function reads and writes in place: (θ, p, out, run, bindings)
+_Buffer = tuple[np.ndarray, np.ndarray, np.ndarray, Callable[[], None], Any]
 
 
 KINDS = ("kinematics", "motion", "pins", "envelope")
@@ -56,7 +62,8 @@ class Model:
         self.fn = _Batched(self.name, th, pv, ca.vertcat(g, g1, g2))
         self.polish = Polisher(f"{self.name}_polish", th, pv, g1, g2)
         self._rows = (th, pv, ca.vertcat(g, g1))
-        self.dead = self.dead_polish = None
+        self.dead: _Batched | None = None
+        self.dead_polish: Polisher | None = None
         if kind == "kinematics" and m.dead_centres is not None:
             h = m.dead_centres(p, th)
             dh = ca.jacobian(h, th)
@@ -79,7 +86,9 @@ class Model:
         return _Batched(f"{self.name}_dp", th, pv, ca.vec(ca.jacobian(g, pv)))
 
 
-def _rows(m: Mechanism, p: dict, th: ca.SX, kind: str) -> tuple[ca.SX, tuple, np.ndarray]:
+def _rows(
+    m: Mechanism, p: dict[str, Any], th: ca.SX, kind: str
+) -> tuple[ca.SX, tuple[str, ...], np.ndarray]:
     """A kind's rows (see ``Model``), their names and their axes."""
     none = np.zeros(0, dtype=int)
     if kind == "kinematics":
@@ -88,6 +97,7 @@ def _rows(m: Mechanism, p: dict, th: ca.SX, kind: str) -> tuple[ca.SX, tuple, np
     if kind == "motion":
         s1 = ca.jacobian(m.position(p, th), th)
         return ca.vertcat(s1, ca.jacobian(s1, th)), (), none
+    assert m.joints is not None  # the pins' kinds are built for the types that have joints
     pins = m.joints(p, th)
     coords = [(axis, ca.SX(c)) for xy in pins.values() for axis, c in enumerate(xy)]
     if kind == "envelope":
@@ -108,14 +118,14 @@ class _Batched:
     def __init__(self, name: str, th: ca.SX, pv: ca.SX, out: ca.SX) -> None:
         out = ca.densify(out)  # structural zeros (a fixed pivot, a constant row) as numbers
         self.fn = native(ca.Function(name, [th, pv], [out], {"cse": True}))
-        self.buffers: dict[int, tuple] = {}
-        self.each_buffers: dict[int, tuple] = {}
+        self.buffers: dict[int, _Buffer] = {}
+        self.each_buffers: dict[int, _Buffer] = {}
 
-    def __call__(self, theta, pv: np.ndarray) -> np.ndarray:
+    def __call__(self, theta: npt.ArrayLike, pv: np.ndarray) -> np.ndarray:
         theta = np.atleast_1d(theta)
         n = theta.size
         if n > GRID:  # curves: the conversions are small against the work
-            return self.fn(theta[None, :], pv).full()
+            return cast(np.ndarray, self.fn(theta[None, :], pv).full())
         if n not in self.buffers:
             self.buffers[n] = self._buffer(n)
         x, p, out, run, _ = self.buffers[n]
@@ -128,7 +138,7 @@ class _Batched:
         gives it: the same operations, so the same results, for several designs at once."""
         n = theta.size
         if n > EACH:
-            return self.fn(theta[None, :], pv.T).full()
+            return cast(np.ndarray, self.fn(theta[None, :], pv.T).full())
         if n not in self.each_buffers:
             self.each_buffers[n] = self._buffer(n, shared=False)
         x, p, out, run, _ = self.each_buffers[n]
@@ -136,7 +146,7 @@ class _Batched:
         run()
         return out.T.copy()
 
-    def _buffer(self, width: int, shared: bool = True) -> tuple:
+    def _buffer(self, width: int, shared: bool = True) -> _Buffer:
         x = np.zeros(width)
         p = np.zeros(self.fn.nnz_in(1) if shared else (width, self.fn.nnz_in(1)))
         out = np.zeros((width, self.fn.nnz_out(0)))  # column-major (rows, width)
@@ -167,9 +177,18 @@ class Polisher:
         out = ca.vertcat(x, step, fx, b - a)
         fn = ca.Function(name, [x0, lo, hi, rising, w, pv], [out], {"cse": True})
         self.fn, self.rows, self.np = native(fn), d.numel(), pv.numel()
-        self.buffers: dict[int, tuple] = {}
+        # per number of roots: the arguments, the result, run and its bindings
+        self.buffers: dict[int, tuple[list[np.ndarray], np.ndarray, Callable[[], None], Any]] = {}
 
-    def __call__(self, x0, lo, hi, rising, rows, pv) -> np.ndarray:
+    def __call__(
+        self,
+        x0: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        rising: np.ndarray,
+        rows: np.ndarray,
+        pv: np.ndarray,
+    ) -> np.ndarray:
         """(x, the last step, d at the point before it, the bracket's width) per root: shape
         (4, n). ``rows``: each root's row; ``pv``: the parameters, (n, p) or shared (p,)."""
         n = len(x0)
@@ -188,7 +207,7 @@ class Polisher:
 
 def model(m: Mechanism, variant: frozenset[str], kind: str = "kinematics") -> Model:
     """The compiled model, cached per thread: CasADi functions are never shared by threads."""
-    cache: dict[tuple, Model] = _local.__dict__.setdefault("models", {})
+    cache: dict[tuple[str, frozenset[str], str], Model] = _local.__dict__.setdefault("models", {})
     key = (m.type, variant, kind)
     if key not in cache:
         cache[key] = Model(m, variant, kind)
@@ -204,13 +223,14 @@ def compile_all() -> None:
         for k in range(len(optional) + 1):
             for parts, kind in itertools.product(itertools.combinations(optional, k), KINDS):
                 f = Model(m, frozenset(parts), kind)
-                fns = (f.fn.fn, f._dp.fn, f.polish.fn, f.dead and f.dead.fn,
-                       f.dead_polish and f.dead_polish.fn)  # fmt: skip
+                fns = (f.fn.fn, f._dp.fn, f.polish.fn, f.dead.fn if f.dead else None,
+                       f.dead_polish.fn if f.dead_polish else None)  # fmt: skip
                 for fn in fns:
                     if fn is not None and fn.class_name() != "External":
                         raise RuntimeError(
                             f"{fn.name()}: no C compiler or cache (synth.numerics.native)"
                         )
-    for fn in (construction().fn, construction().taylor_fn):  # the four-bars' reduced synthesis
+    # the reduced synthesis's: the four-bar construction, the connecting rod
+    for fn in (construction().fn, construction().taylor_fn, rod.function()):
         if fn.class_name() != "External":
             raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.numerics.native)")

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
@@ -33,13 +34,11 @@ from ..results import (
     SpeedFluctuation,
     Tolerance,
 )
+from ..targets import UNIFORM
 from .model import Model, model
 from .roots import TWO_PI, _rtsafe, stationary_points
 
 CUT = 0.1  # a tool cuts over the middle 80% of the working stroke: 10% run-in, 10% run-out
-# the objectives on how the slider moves (synth.synthesis.motion), and what each minimises
-UNIFORM, PEAK = "uniform_cutting_speed", "min_peak_acceleration"
-MOTION_OBJECTIVES = (UNIFORM, PEAK)
 
 
 def fluctuation(motion: Motion | None) -> float:
@@ -106,7 +105,8 @@ def motion_terms(
     rows, x, values = stationary_points(fm, pv)
     v_at, a_at = x[rows == 0], x[rows == 1]  # where |s′| and |s″| may peak
 
-    def fd(t):  # s − level and s′, for the ends of the middle of the working stroke
+    # s − level and s′, for the ends of the middle of the working stroke
+    def fd(t: np.ndarray) -> np.ndarray:
         g, g1, _ = f(t, pv)
         return np.array([g[0] - levels, g1[0]])
 
@@ -160,9 +160,11 @@ def motion_terms(
         """d(|s″| / stroke) at the stroke's peaks and at the dead centres."""
         a = np.concatenate([a_in, a_d])
         da = np.concatenate([da_in, da_dead])
-        return (
-            np.sign(a)[:, None] * da - np.abs(a)[:, None] * d_stroke[None, :] / st.stroke
-        ) / st.stroke
+        return cast(
+            np.ndarray,
+            (np.sign(a)[:, None] * da - np.abs(a)[:, None] * d_stroke[None, :] / st.stroke)
+            / st.stroke,
+        )
 
     working_dp = accel_dp(mp[n_v : n_v + n_w, 1], a_w)
     returning_dp = accel_dp(mp[n_v + n_w : n_v + n_w + n_r, 1], a_r)
@@ -209,8 +211,8 @@ def sensitivities(
     names = [q.name for q in m.parameters if q.name not in variant]
     keep = [i for i, q in enumerate(m.parameters) if q.name not in variant]
 
-    def per(dv: np.ndarray | None) -> dict[str, float] | None:
-        return None if dv is None else {n: float(dv[i]) for n, i in zip(names, keep, strict=True)}
+    def per(dv: np.ndarray) -> dict[str, float]:
+        return {n: float(dv[i]) for n, i in zip(names, keep, strict=True)}
 
     deviation = None
     if tolerance is not None:
@@ -224,10 +226,13 @@ def sensitivities(
             "stroke": worst_case(d_stroke),
             "min_transmission_angle_deg": worst_case(d_mu),
         }
-    return Sensitivities(per(d_ratio), per(d_stroke), per(d_mu), tolerance, deviation)
+    mu = None if d_mu is None else per(d_mu)
+    return Sensitivities(per(d_ratio), per(d_stroke), mu, tolerance, deviation)
 
 
-def envelope(m: Mechanism, variant: frozenset[str], p: dict, pv: np.ndarray) -> Envelope:
+def envelope(
+    m: Mechanism, variant: frozenset[str], p: dict[str, float], pv: np.ndarray
+) -> Envelope:
     """The bounding box of every pivot and every pin's path over a revolution."""
     moving = model(m, variant, "envelope")
     rows, _, values = stationary_points(moving, pv)

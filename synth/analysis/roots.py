@@ -9,24 +9,32 @@ from __future__ import annotations
 import functools
 import math
 import sys
+from collections.abc import Callable
+from typing import cast
 
 import numpy as np
 
 from ..errors import InvalidDesign
-from .model import EACH, GRID, Model
+from .model import EACH, GRID, Model, Polisher
 
 TWO_PI = 2 * math.pi
 EPS4 = 4 * sys.float_info.epsilon
 BATCH = EACH // GRID  # designs whose grids one compiled call evaluates
 
+Points = tuple[np.ndarray, np.ndarray, np.ndarray]  # (row, θ, value) of each stationary point
+# (rows, the brackets' lower and upper ends, g' at each end, the row's scale), and (rows, θ)
+# where g' is 0 or undefined on the grid
+Brackets = tuple[
+    tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    tuple[np.ndarray, np.ndarray],
+]
 
-def stationary_points(
-    f: Model, pv: np.ndarray, n: int = GRID
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+
+def stationary_points(f: Model, pv: np.ndarray, n: int = GRID) -> Points:
     """Every stationary point of every row that changes the sign of its derivative.
 
     Returns (row, θ, value) arrays. Roots are bracketed on an n-point grid, refined where the
-    motion is fast (see ``_refine``), and polished by safeguarded Newton steps on g' with g''
+    motion is fast (see ``refine``), and polished by safeguarded Newton steps on g' with g''
     (``_polish``: compiled, all roots in one call).
     """
     grid, widths = _grid(n)
@@ -37,11 +45,12 @@ def stationary_points(
         raise InvalidDesign(msg, (), "assembly")
     if f.kind == "kinematics":  # row 0 is the slider's position
         _refuse_dwell(grid, g1[0])
-    grid, widths, g1 = _refine(f, pv, grid, widths, g1, g2)
+    grid, widths, g1 = refine(f, pv, grid, widths, g1, g2)
     (rows, lo, hi, f_lo, f_hi, scale), (zr, zx) = _brackets(grid, widths, g1)
     nr = g1.shape[0]
 
-    def derivatives(x, i):  # g', g'' of roots i, each of its own row
+    # g', g'' of roots i, each of its own row
+    def derivatives(x: np.ndarray, i: np.ndarray) -> np.ndarray:
         return f.fn(x, pv).reshape(3, nr, -1)[1:, rows[i], np.arange(i.size)]
 
     x = _polish(f.polish, derivatives, rows, lo, hi, f_lo, f_hi, scale, pv)
@@ -53,7 +62,7 @@ def stationary_points(
     return rows, x, values
 
 
-def stationary_points_many(f: Model, pvs: np.ndarray) -> list[tuple | None]:
+def stationary_points_many(f: Model, pvs: np.ndarray) -> list[Points | None]:
     """``stationary_points`` of several designs of one variant (``pvs``: one row each) in
     shared compiled calls, with the same results to the bit: each step is the one design's,
     on the same numbers. None for a design that ``stationary_points`` refuses (it says why).
@@ -76,13 +85,14 @@ def stationary_points_many(f: Model, pvs: np.ndarray) -> list[tuple | None]:
     parts, zeros = [(plain[rows], *brackets)], [(plain[zr], zx)]
     for d in np.nonzero(refine)[0]:
         own = slice(d * nr, (d + 1) * nr)
-        (rows, *brackets), (zr, zx) = _brackets(*_refine(f, pvs[d], grid, widths, g1[own], g2[own]))
+        (rows, *brackets), (zr, zx) = _brackets(*refine(f, pvs[d], grid, widths, g1[own], g2[own]))
         parts.append((rows + d * nr, *brackets))
         zeros.append((zr + d * nr, zx))
     rows, lo, hi, f_lo, f_hi, scale = (np.concatenate(c) for c in zip(*parts, strict=True))
     design = rows // nr
 
-    def derivatives(x, i):  # g', g'' of roots i, each of its own row and design
+    # g', g'' of roots i, each of its own row and design
+    def derivatives(x: np.ndarray, i: np.ndarray) -> np.ndarray:
         return f.fn.each(x, pvs[design[i]]).reshape(3, nr, -1)[1:, rows[i] % nr, np.arange(i.size)]
 
     x = _polish(f.polish, derivatives, rows % nr, lo, hi, f_lo, f_hi, scale, pvs[design])
@@ -98,7 +108,7 @@ def stationary_points_many(f: Model, pvs: np.ndarray) -> list[tuple | None]:
             for d, o in enumerate(np.split(order, cuts))]  # fmt: skip
 
 
-def _brackets(grid: np.ndarray, widths: np.ndarray, g1: np.ndarray):
+def _brackets(grid: np.ndarray, widths: np.ndarray, g1: np.ndarray) -> Brackets:
     """Where each row's g' changes sign between neighbouring grid points: (rows, the
     brackets' ends, g' there, the row's scale); and where it is 0 on the grid, or undefined
     (a change point's flat configuration, where the derivative of sqrt(0) is): (rows, θ)."""
@@ -127,7 +137,17 @@ def _next(a: np.ndarray) -> np.ndarray:
     return np.concatenate((a[:, 1:], a[:, :1]), axis=1)
 
 
-def _polish(polisher, fd, rows, lo, hi, f_lo, f_hi, scale, pv) -> np.ndarray:
+def _polish(
+    polisher: Polisher,
+    fd: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    rows: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    f_lo: np.ndarray,
+    f_hi: np.ndarray,
+    scale: np.ndarray,
+    pv: np.ndarray,
+) -> np.ndarray:
     """The roots of each one's row of fd (x, rows -> (value, derivative), vectorised) in the
     brackets [lo, hi], where it changes sign from f_lo to f_hi, to machine precision: the
     compiled Newton steps (``model.Polisher``) from the secant point, and ``_rtsafe`` for
@@ -142,7 +162,16 @@ def _polish(polisher, fd, rows, lo, hi, f_lo, f_hi, scale, pv) -> np.ndarray:
     return x
 
 
-def _compiled(polisher, rows, lo, hi, f_lo, f_hi, scale, pv) -> tuple[np.ndarray, np.ndarray]:
+def _compiled(
+    polisher: Polisher,
+    rows: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    f_lo: np.ndarray,
+    f_hi: np.ndarray,
+    scale: np.ndarray,
+    pv: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """The compiled Newton steps of ``_polish`` from the secant point: the points they reach,
     and which of them are roots (``pv``: the parameters, shared (p,) or each root's (n, p))."""
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -156,7 +185,14 @@ def _compiled(polisher, rows, lo, hi, f_lo, f_hi, scale, pv) -> tuple[np.ndarray
     return x, done
 
 
-def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
+def _rtsafe(
+    fd: Callable[[np.ndarray], np.ndarray],
+    lo: np.ndarray,
+    hi: np.ndarray,
+    f_lo: np.ndarray,
+    f_hi: np.ndarray,
+    scale: np.ndarray,
+) -> np.ndarray:
     """The roots of fd (x -> (value, derivative), vectorised) in the brackets [lo, hi], where
     it changes sign from f_lo to f_hi: Newton from the secant point while it stays in the
     bracket and at least halves the step before last, else bisection (rtsafe), to machine
@@ -166,7 +202,7 @@ def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
         x = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     x = np.where(np.isfinite(x), x, 0.5 * (lo + hi))
     if x.size == 0:
-        return x
+        return cast(np.ndarray, x)
     # one evaluation of fd for all roots per step, the steps in Python floats: numpy's
     # per-operation overhead on a handful of roots cost more than the evaluations
     x, lo, hi, dx_old = x.tolist(), lo.tolist(), hi.tolist(), (hi - lo).tolist()
@@ -198,11 +234,15 @@ def _rtsafe(fd, lo, hi, f_lo, f_hi, scale) -> np.ndarray:
     return np.array(x)
 
 
-def _dead_centres(f: Model, pvs, design, on_s, x, width: float) -> np.ndarray:
+def _dead_centres(
+    f: Model, pvs: np.ndarray, design: np.ndarray, on_s: np.ndarray, x: np.ndarray, width: float
+) -> np.ndarray:
     """Move the slider's stationary points (``on_s``) onto the zeros of the type's dead-centre
     function, searched within a grid cell (and a quarter of the gap to the next one) of
     each; the roots of several designs (``design``: each root's row of ``pvs``), each
     design's on their own."""
+    dead, polisher = f.dead, f.dead_polish
+    assert dead is not None and polisher is not None  # a type with a dead-centre function
     count = np.bincount(design[on_s], minlength=len(pvs))
     on_s = np.nonzero(on_s & (count[design] >= 2))[0]
     if on_s.size == 0:
@@ -213,18 +253,27 @@ def _dead_centres(f: Model, pvs, design, on_s, x, width: float) -> np.ndarray:
     np.fill_diagonal(gap, np.inf)
     w = np.minimum(width, 0.25 * gap.min(axis=1))
     lo, hi, pv = t - w, t + w, pvs[d]
-    h_lo, h_hi = f.dead.each(np.concatenate([lo, hi]), np.concatenate([pv, pv]))[0].reshape(2, -1)
+    h_lo, h_hi = dead.each(np.concatenate([lo, hi]), np.concatenate([pv, pv]))[0].reshape(2, -1)
     ok = np.sign(h_lo) * np.sign(h_hi) < 0
     scale = np.maximum(np.abs(h_lo), np.abs(h_hi))[ok]
     pv = pv[ok]
     x = x.copy()
-    x[on_s[ok]] = _polish(f.dead_polish, lambda y, i: f.dead.each(y, pv[i]),
+    x[on_s[ok]] = _polish(polisher, lambda y, i: dead.each(y, pv[i]),
                           np.zeros(pv.shape[0], dtype=int), lo[ok], hi[ok], h_lo[ok], h_hi[ok],
                           scale, pv)  # fmt: skip
     return x
 
 
-def _refine(f: Model, pv, grid, widths, g1, g2, levels: int = 3, split: int = 16):
+def refine(
+    f: Model,
+    pv: np.ndarray,
+    grid: np.ndarray,
+    widths: np.ndarray,
+    g1: np.ndarray,
+    g2: np.ndarray,
+    levels: int = 3,
+    split: int = 16,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Subdivide the cells where a pair of roots could hide between two grid points.
 
     A cell whose ends have the same sign of g' can still hold two roots if g' turns inside it
@@ -247,19 +296,19 @@ def _refine(f: Model, pv, grid, widths, g1, g2, levels: int = 3, split: int = 16
 
 
 def _hiding(g1: np.ndarray, g2: np.ndarray, widths: np.ndarray) -> np.ndarray:
-    """Per row and cell (``_refine``): whether a pair of roots of the row's g' could hide in
+    """Per row and cell (``refine``): whether a pair of roots of the row's g' could hide in
     the cell."""
     nxt1, nxt2 = _next(g1), _next(g2)
     with np.errstate(invalid="ignore"):
         fast = (np.abs(g1) < np.abs(g2) * widths) | (np.abs(nxt1) < np.abs(nxt2) * widths)
-        return fast & (g1 * nxt1 > 0) & (g2 * nxt2 <= 0)
+        return cast(np.ndarray, fast & (g1 * nxt1 > 0) & (g2 * nxt2 <= 0))
 
 
 def _dwells(ds: np.ndarray) -> np.ndarray:
     """Per row of ds/dθ on the grid: whether the slider stands still (``_refuse_dwell``)."""
     still = ds == 0
     ring = np.concatenate((still[:, -1:], still, still[:, :1]), axis=1)  # around the revolution
-    return np.any(ring[:, :-2] & ring[:, 1:-1] & ring[:, 2:], axis=1)
+    return cast(np.ndarray, np.any(ring[:, :-2] & ring[:, 1:-1] & ring[:, 2:], axis=1))
 
 
 def _refuse_dwell(grid: np.ndarray, ds: np.ndarray) -> None:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -19,7 +19,8 @@ from scipy.optimize import minimize_scalar
 
 from ..errors import InvalidParameters, SynthError
 from ..mechanisms import get
-from ..results import Extremum, SweepResult
+from ..numerics.dense import bisect
+from ..results import Analysis, Extremum, SweepResult
 from .kinematics import analyze, analyze_many
 
 MAX_POINTS = 10_000
@@ -75,7 +76,7 @@ def sweep(
     deadline = time.monotonic() + (time_budget_ms / 1000 if time_budget_ms else math.inf)
     held = {k: v for k, v in params.items() if k != vary}
 
-    def at(v: float):
+    def at(v: float) -> Analysis | None:
         try:
             return analyze(mechanism, {**held, vary: v})
         except SynthError:
@@ -109,7 +110,9 @@ def sweep(
     )
 
 
-def _intervals(ok, values: np.ndarray, valid: list[bool]) -> list[tuple[float, float]]:
+def _intervals(
+    ok: Callable[[float], bool], values: np.ndarray, valid: list[bool]
+) -> list[tuple[float, float]]:
     """The valid intervals within [values[0], values[-1]], each boundary bisected to one ulp."""
     out: list[tuple[float, float]] = []
     if not valid:
@@ -117,10 +120,12 @@ def _intervals(ok, values: np.ndarray, valid: list[bool]) -> list[tuple[float, f
     lo = float(values[0]) if valid[0] else None
     for k in range(1, len(values)):
         if valid[k] != valid[k - 1]:
-            edge = _bisect(ok, float(values[k - 1]), float(values[k]), valid[k - 1])
+            a, b = float(values[k - 1]), float(values[k])
+            edge = bisect(ok, *((a, b) if valid[k - 1] else (b, a)))[0]
             if valid[k]:
                 lo = edge
             else:
+                assert lo is not None  # set where the valid run began
                 out.append((lo, edge))
                 lo = None
     if lo is not None:
@@ -128,19 +133,12 @@ def _intervals(ok, values: np.ndarray, valid: list[bool]) -> list[tuple[float, f
     return out
 
 
-def _bisect(ok, a: float, b: float, ok_a: bool) -> float:
-    """The last valid point next to the flip between a and b."""
-    while True:
-        mid = 0.5 * (a + b)
-        if mid in (a, b):
-            return a if ok_a else b
-        if ok(mid) == ok_a:
-            a = mid
-        else:
-            b = mid
-
-
-def _tr_range(at, values, runs, intervals) -> dict[str, Extremum] | None:
+def _tr_range(
+    at: Callable[[float], Analysis | None],
+    values: np.ndarray,
+    runs: Sequence[Analysis | None],
+    intervals: list[tuple[float, float]],
+) -> dict[str, Extremum] | None:
     if not intervals:
         return None
     found: list[tuple[float, float]] = []
@@ -158,7 +156,7 @@ def _tr_range(at, values, runs, intervals) -> dict[str, Extremum] | None:
                 a = at(v)
                 return sign * a.time_ratio if a is not None else math.inf
 
-            v0 = min(inside, key=lambda tv, sign=sign: sign * tv[0])[1]
+            v0 = min(inside, key=lambda tv: sign * tv[0])[1]
             a_, b_ = max(lo, v0 - step), min(hi, v0 + step)
             if b_ > a_:
                 r = minimize_scalar(

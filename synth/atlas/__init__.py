@@ -3,6 +3,7 @@ a folder a run resumes from (``store``), drawn (``charts``), run from the comman
 (``python -m synth.atlas``)."""
 
 from .charts import charts
-from .compute import Atlas, Inputs, Point, atlas, point, reach
+from .compute import atlas, point, reach
+from .values import Atlas, Inputs, Point
 
 __all__ = ["Atlas", "Inputs", "Point", "atlas", "charts", "point", "reach"]

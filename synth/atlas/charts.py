@@ -37,7 +37,7 @@ def charts(a: Atlas, folder: Path) -> list[Path]:
 
     ratios, bounds = list(a.inputs.ratios), [0.25 * k for k in range(361)]
     best = {t: dict(a.best(t)) for t in a.inputs.types}
-    cells = [[frozenset(t for t in a.inputs.types if best[t][tr] is not None and best[t][tr] >= b)
+    cells = [[frozenset(t for t in a.inputs.types if (mu := best[t][tr]) is not None and mu >= b)
               for tr in ratios] for b in bounds]  # fmt: skip
     kinds = sorted({c for row in cells for c in row}, key=lambda c: (-len(c), sorted(c)))
     index = {c: k for k, c in enumerate(kinds)}

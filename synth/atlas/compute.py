@@ -21,75 +21,31 @@ again.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import asdict, dataclass, field
 from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
-from .._version import __version__
 from ..mechanisms import all_types, get
+from ..numerics.dense import bisect
 from ..synthesis import synthesize
+from ..targets import MAX_TRANSMISSION
 from . import store
+from .values import CHUNK, Atlas, Inputs, Point, Range
 
 DEFAULT_RATIOS = tuple(round(1.05 + 0.05 * k, 2) for k in range(60))  # 1.05 … 4.0
 DEFAULT_BOUNDS = (10.0, 20.0, 30.0, 40.0, 50.0)
-CHUNK = 32  # grid points per task: a million points are 31 250 tasks, not a million
 BUDGET_MS = 20_000.0  # per synthesis: IPOPT's types may need it; the exact ones take ~1 ms
 BISECT = 1e-9  # relative, in the time ratio: a range's ends
 POOLS = 4  # local pools a run may start (one more each time a worker dies)
 
 
-@dataclass(frozen=True)
-class Inputs:
-    """Everything that decides an atlas (``manifest.json``): the same inputs, the same atlas."""
-
-    types: tuple[str, ...]
-    ratios: tuple[float, ...]
-    bounds: tuple[float, ...]
-    chunk: int = CHUNK
-    version: str = __version__
-
-    def key(self) -> str:
-        return hashlib.sha256(json.dumps(asdict(self), sort_keys=True).encode()).hexdigest()[:16]
-
-
-@dataclass(frozen=True)
-class Point:
-    """One frontier point: the best angle at a time ratio, or why there is none."""
-
-    type: str
-    time_ratio: float
-    best_angle_deg: float | None
-    status: str  # certified, local or refused
-    design: dict[str, float] | None = None  # stroke units
-    reason: str | None = None
-
-
-@dataclass
-class Atlas:
-    inputs: Inputs
-    frontier: list[Point]
-    ranges: list[dict] = field(default_factory=list)  # type, bound, min, max (None: unreached)
-    computed: int = 0  # chunks computed by this run (the rest were read from the folder)
-
-    def best(self, mtype: str) -> list[tuple[float, float | None]]:
-        return [(p.time_ratio, p.best_angle_deg) for p in self.frontier if p.type == mtype]
-
-    def meets(self, time_ratio: float, bound_deg: float) -> list[str]:
-        """The types whose grid point at exactly this time ratio meets the bound."""
-        return [p.type for p in self.frontier if p.time_ratio == time_ratio
-                and p.best_angle_deg is not None and p.best_angle_deg >= bound_deg]  # fmt: skip
-
-
 def point(mtype: str, time_ratio: float) -> Point:
     """The frontier at one time ratio: a synthesis, verified."""
-    r = synthesize(time_ratio, 1.0, 0.0, [{"type": mtype}], objective="max_transmission_angle",
+    r = synthesize(time_ratio, 1.0, 0.0, [{"type": mtype}], objective=MAX_TRANSMISSION,
                    max_candidates=1, time_budget_ms=BUDGET_MS)  # fmt: skip
     if not r.candidates:
         why = r.infeasible[0]
@@ -133,8 +89,8 @@ def atlas(
     inputs = Inputs(types, tuple(map(float, ratios)), tuple(map(float, bounds)), chunk)
     tasks = chunks(inputs)
     folder = store.folder(out, inputs)
-    done = {k: store.read(folder, k) for k in range(len(tasks))} if folder else {}
-    done = {k: v for k, v in done.items() if v is not None}
+    found = {k: store.read(folder, k) for k in range(len(tasks))} if folder else {}
+    done = {k: v for k, v in found.items() if v is not None}
     todo = [k for k in range(len(tasks)) if k not in done]
     bar = progress(len(tasks), len(done)) if progress else None
     run = _dask(tasks, todo, scheduler, inputs) if scheduler else _run(tasks, todo, inline, workers)
@@ -152,7 +108,9 @@ def atlas(
     return result
 
 
-def _run(tasks, todo: list[int], inline: bool, workers: int | None) -> Iterable:
+def _run(
+    tasks: list[list[tuple[str, float]]], todo: list[int], inline: bool, workers: int | None
+) -> Iterator[tuple[int, list[Point]]]:
     """(chunk index, points) as each task finishes. A pool that breaks (a worker killed) is
     replaced and the unfinished tasks run again, up to ``POOLS`` pools in all."""
     if inline or not todo:
@@ -178,7 +136,9 @@ def _run(tasks, todo: list[int], inline: bool, workers: int | None) -> Iterable:
                     raise
 
 
-def _dask(tasks, todo: list[int], scheduler: str, inputs: Inputs) -> Iterable:
+def _dask(
+    tasks: list[list[tuple[str, float]]], todo: list[int], scheduler: str, inputs: Inputs
+) -> Iterator[tuple[int, list[Point]]]:
     """(chunk index, points) as each task finishes on a Dask cluster. A task whose worker is
     lost is run again by the scheduler, on another."""
     from dask.distributed import Client, as_completed
@@ -190,32 +150,23 @@ def _dask(tasks, todo: list[int], scheduler: str, inputs: Inputs) -> Iterable:
             yield futures[f], f.result()
 
 
-def reach(a: Atlas, mtype: str, bound: float) -> dict:
+def reach(a: Atlas, mtype: str, bound: float) -> Range:
     """The time ratios at which the type meets the bound, within the grid: the first and last
     grid points that meet it, each end bisected against its neighbour outside (None: no grid
     point meets it)."""
     pts = a.best(mtype)
     ok = [i for i, (_, mu) in enumerate(pts) if mu is not None and mu >= bound]
-    out = {"type": mtype, "bound_deg": bound, "min": None, "max": None}
+    out: Range = {"type": mtype, "bound_deg": bound, "min": None, "max": None}
     if not ok:
         return out
     lo, hi = ok[0], ok[-1]
-    out["min"] = pts[lo][0] if lo == 0 else _bisect(mtype, bound, pts[lo][0], pts[lo - 1][0])
-    out["max"] = (
-        pts[hi][0] if hi == len(pts) - 1 else _bisect(mtype, bound, pts[hi][0], pts[hi + 1][0])
-    )
+
+    def meets(tr: float) -> bool:
+        best = point(mtype, tr).best_angle_deg
+        return best is not None and best >= bound
+
+    # each end between the grid point that meets the bound and its neighbour that does not
+    out["min"] = pts[lo][0] if lo == 0 else bisect(meets, pts[lo][0], pts[lo - 1][0], BISECT)[0]
+    last = len(pts) - 1
+    out["max"] = pts[hi][0] if hi == last else bisect(meets, pts[hi][0], pts[hi + 1][0], BISECT)[0]
     return out
-
-
-def _bisect(mtype: str, bound: float, good: float, bad: float) -> float:
-    """The time ratio between ``good`` (where the type meets the bound: the grid said so) and
-    ``bad`` (where it does not) at which its best angle crosses the bound, on the side that
-    meets it."""
-    while abs(good - bad) > BISECT * good:
-        mid = 0.5 * (good + bad)
-        p = point(mtype, mid)
-        if p.best_angle_deg is not None and p.best_angle_deg >= bound:
-            good = mid
-        else:
-            bad = mid
-    return good

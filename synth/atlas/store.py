@@ -10,13 +10,11 @@ import os
 import tempfile
 from dataclasses import asdict
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from .compute import Atlas, Inputs, Point
+from .values import Atlas, Inputs, Point
 
 
-def folder(out, inputs: Inputs) -> Path | None:
+def folder(out: str | Path | None, inputs: Inputs) -> Path | None:
     if out is None:
         return None
     folder = Path(out)
@@ -37,8 +35,6 @@ def read(folder: Path, k: int) -> list[Point] | None:
     path = folder / "chunks" / f"{k:06d}.json"
     if not path.exists():
         return None
-    from .compute import Point
-
     return [Point(**p) for p in json.loads(path.read_text())]
 
 
@@ -63,7 +59,7 @@ def tables(a: Atlas, folder: Path) -> None:
     }  # fmt: skip
     _atomic(folder / "atlas.json", json.dumps(summary, indent=1))
 
-    def text(x) -> str:  # every digit kept; empty for none
+    def text(x: object) -> str:  # every digit kept; empty for none
         return "" if x is None else repr(x)
 
     with open(folder / "frontier.csv", "w", newline="") as f:

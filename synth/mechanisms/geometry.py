@@ -8,7 +8,7 @@ squares, ``atan2`` instead of ``acos`` (the README, *Numerical stability*).
 
 from __future__ import annotations
 
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import casadi as ca
 
@@ -23,12 +23,13 @@ def sqrt(x: S) -> S:
     return ca.sqrt(ca.fmax(x, 1e-300))
 
 
-def where(cond, a: S, b: S) -> S:
+def where(cond: Any, a: S, b: S) -> S:
     """a where cond else b, on floats (a Python branch) or symbols (``if_else``; the branch not
     taken may be inf or NaN without harm)."""
     if isinstance(cond, bool):
         return a if cond else b
-    return ca.if_else(cond, a, b)
+    # the stubs give Any where ``cond`` leaves the overload open (float, DM)
+    return ca.if_else(cond, a, b)  # type: ignore[no-any-return]
 
 
 def unit(x: S, y: S) -> tuple[S, S]:

@@ -9,14 +9,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import casadi as ca
 
 from ..errors import InvalidDesign, InvalidParameters, UnknownMechanism
+from ..numerics import ROUNDING
+
+if TYPE_CHECKING:
+    from .reduced import Problem, Reduced
 
 Params = Mapping[str, Any]  # parameter name -> float, DM, SX or MX
-ROUNDING = 1e-12  # relative slack of the non-strict validity conditions
 
 
 # Default synthesis bounds, × the stroke. A link from a tenth of the stroke (room for its pins
@@ -116,7 +119,7 @@ class Mechanism:
     # the exact reduced solver (an accelerator, synth.mechanisms.reduced): Problem -> Reduced,
     # None where it cannot take the problem (IPOPT on the formulation then solves it); raises
     # Unreachable for fixed parts that contradict the targets
-    reduced: Callable[[Any], Any] | None = None
+    reduced: Callable[[Problem], Reduced | None] | None = None
     # the pin positions {name: (x, y)} at crank angle θ, named as in the module docstring, the
     # slider's pin last, in CasADi maths (for drawings, and the envelope the frame must hold)
     joints: Callable[[Params, Any], dict[str, tuple[Any, Any]]] | None = None
@@ -212,7 +215,7 @@ def _check_value(mtype: str, q: Parameter, value: Any) -> float:
     return x
 
 
-def one_way(link, cos_half, end_offset) -> tuple:
+def one_way(link: Any, cos_half: Any, end_offset: Any) -> tuple[Any, Any]:
     """Margins (≥ 0) for a slider driven through ``link`` from a pin that swings ±half about
     the path's normal to move one way over each swing, so that the swing's ends are its dead
     centres (the closed forms' time ratio and stroke hold): at the ends the link leans from
@@ -226,7 +229,7 @@ def reach_condition(
     link: str,
     height: str,
     arm: str,
-    offsets: Callable[[Params], tuple],
+    offsets: Callable[[Params], tuple[Any, ...]],
     pin: str,
     output: str,
 ) -> Condition:

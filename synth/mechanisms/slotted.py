@@ -7,11 +7,15 @@ lever, so crank and pivot_distance are one family with a free scale.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
+from ..numerics import ROUNDING
 from .reduced import Problem, agree, differ, intersect, unreachable
 
 
-def check(p: Problem, time_ratio, stroke) -> None:
+def check(
+    p: Problem, time_ratio: Callable[[float], float], stroke: Callable[[float], float]
+) -> None:
     """Fixed parts that alone set the time ratio (crank and pivot_distance) or the stroke (the
     lever) must meet it: ``time_ratio(crank/pivot_distance)``, ``stroke(lever)``."""
     f = p.fixed
@@ -46,5 +50,5 @@ def scale(p: Problem, pivot_per_crank: float, reach: float = math.inf) -> float 
         if span is None:
             return None
         crank = span[0]
-    ok = crank <= reach * (1 + 1e-12) and p.allows("crank", crank)
+    ok = crank <= reach * (1 + ROUNDING) and p.allows("crank", crank)
     return crank if ok and p.allows("pivot_distance", crank * pivot_per_crank) else None

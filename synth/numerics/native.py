@@ -17,9 +17,12 @@ import shutil
 import subprocess
 import tempfile
 import threading
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import casadi as ca
+import numpy as np
 
 FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
 BUILD_SECONDS = 120  # the most one compilation may take
@@ -62,6 +65,54 @@ def bind(fn: ca.Function, args: list, out) -> tuple:
         buf.set_arg(i, memoryview(a))
     buf.set_res(0, memoryview(out))
     return run, buf
+
+
+class Points:
+    """A function of (x, p), x a point of ``dim`` numbers and p shared parameters, evaluated at
+    many points through preallocated arrays (``bind``): up to ``small`` points in a buffer for
+    their number, more in chunks of ``chunk`` (the last one padded). Each thread keeps its
+    own (a CasADi function is never shared between threads)."""
+
+    def __init__(self, fn: ca.Function, small: int = 16, chunk: int = 256) -> None:
+        self.fn, self.small, self.chunk = fn, small, chunk
+        self.dim, self.n_params, self.rows = fn.nnz_in(0), fn.nnz_in(1), fn.nnz_out(0)
+        self.buffers: dict[int, list[Any]] = {}
+
+    def __call__(self, x: np.ndarray, params: Sequence[float]) -> np.ndarray:
+        """The rows at each point of x (n, dim): shape (rows, n). ``params`` is copied into a
+        buffer unless it is the sequence that buffer last took (kept, so never another at its
+        address)."""
+        n = len(x)
+        if n <= self.small:
+            return self._run(n, x, params).T.copy()  # the buffer is reused by the next call
+        out = np.empty((self.rows, n))
+        for k in range(0, n, self.chunk):
+            part = x[k : k + self.chunk]
+            if len(part) < self.chunk:  # padded with its first point
+                part = np.concatenate([part, np.repeat(part[:1], self.chunk - len(part), 0)])
+            out[:, k : k + self.chunk] = self._run(self.chunk, part, params)[: n - k].T
+        return out
+
+    def one(self, point: Sequence[float], params: Sequence[float]) -> list[float]:
+        """The rows at one point, a list (the quickest way to a few numbers)."""
+        return self._run(1, point, params)[0].tolist()  # type: ignore[no-any-return]
+
+    def _run(
+        self, width: int, x: np.ndarray | Sequence[float], params: Sequence[float]
+    ) -> np.ndarray:
+        b = self.buffers.get(width)
+        if b is None:
+            xs, ps = np.zeros((width, self.dim)), np.zeros(self.n_params)  # x: (dim, width)
+            res = np.zeros((width, self.rows))
+            run, buf = bind(self.fn.map(width, [False, True], [False]), [xs, ps], res)
+            b = self.buffers[width] = [xs, ps, res, run, buf, None]
+        xs, ps, res, run = b[:4]
+        xs[:] = x
+        if params is not b[5]:
+            ps[:] = params
+            b[5] = params
+        run()
+        return res
 
 
 def _build(source: str, path: Path) -> bool:

@@ -4,13 +4,14 @@ orders in which the objectives rank proposals and candidates."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
-from ..analysis.quality import MOTION_OBJECTIVES, measure
+from ..analysis.quality import measure
 from ..analysis.verify import verify, verify_many
 from ..mechanisms import Mechanism
-from ..mechanisms.reduced import MAX_TRANSMISSION, MIN_SIZE
-from ..results import Candidate, Family
+from ..results import Analysis, Candidate, Family
+from ..targets import MAX_TRANSMISSION, MIN_SIZE, MOTION_OBJECTIVES
 from .search import Proposal, Searched, Targets, Variant
 
 
@@ -23,14 +24,20 @@ def candidate(
     return None if checked is None else made(m, p, checked, t, variants)
 
 
-def made(m: Mechanism, p: Proposal, checked, t: Targets, variants: list[Variant]) -> Candidate:
+def made(
+    m: Mechanism,
+    p: Proposal,
+    checked: tuple[Analysis, dict[str, float]],
+    t: Targets,
+    variants: list[Variant],
+) -> Candidate:
     """The candidate of a proposal that passed verification (``checked``: its analysis and
     residuals)."""
     a, residuals = checked
     params = a.params  # completed and checked by the analysis
     size = m.size(params)
     mu = a.transmission.min_deg
-    limits = {}
+    limits: dict[str, tuple[float, ...]] = {}
     for v in variants:
         if v.parts == m.variant(params):
             limits = {k: tuple(x * t.stroke for x in v.problem.bounds[k]) for k in v.free}
@@ -61,7 +68,9 @@ def made(m: Mechanism, p: Proposal, checked, t: Targets, variants: list[Variant]
     )
 
 
-def family(m: Mechanism, params: dict[str, float], limits: dict) -> Family | None:
+def family(
+    m: Mechanism, params: dict[str, float], limits: dict[str, tuple[float, ...]]
+) -> Family | None:
     """The type's free scale (``Mechanism.scale``) where the request leaves every length of
     it free: its range within the bounds (and validity), the others tied to it."""
     sc = m.scale
@@ -82,7 +91,9 @@ def family(m: Mechanism, params: dict[str, float], limits: dict) -> Family | Non
     )
 
 
-def active(params: dict[str, float], mu: float, t: Targets, bounds: dict) -> tuple[str, ...]:
+def active(
+    params: dict[str, float], mu: float, t: Targets, bounds: dict[str, tuple[float, ...]]
+) -> tuple[str, ...]:
     """The constraints at their limit (within 1e-6, relative): the bound, the variables' bounds."""
     out = []
     if t.bound_deg > 0 and mu - t.bound_deg <= 1e-6 * max(t.bound_deg, 1.0):
@@ -96,7 +107,9 @@ def active(params: dict[str, float], mu: float, t: Targets, bounds: dict) -> tup
     return tuple(out)
 
 
-def first(m: Mechanism, s: Searched, t: Targets, asked: Targets, extras) -> Candidate | None:
+def first(
+    m: Mechanism, s: Searched, t: Targets, asked: Targets, extras: dict[str, Any]
+) -> Candidate | None:
     """The best proposal of a search (by ``t``'s objective) that passes verification against
     the request (``asked``)."""
     variants = s.variants
@@ -108,7 +121,7 @@ def first(m: Mechanism, s: Searched, t: Targets, asked: Targets, extras) -> Cand
 
 
 def firsts(
-    m: Mechanism, found: list[tuple[Searched, Targets]], asked: Targets, extras
+    m: Mechanism, found: list[tuple[Searched, Targets]], asked: Targets, extras: dict[str, Any]
 ) -> list[Candidate | None]:
     """``first`` of each search (with the targets it ranks by), the best proposals of all of
     them verified together (``verify_many``); where one fails, its search's next proposals
@@ -131,13 +144,13 @@ def firsts(
     return out
 
 
-def predicted_rank(objective: str):
+def predicted_rank(objective: str) -> Callable[[Proposal], tuple[float, float, str]]:
     if objective == MIN_SIZE:
         return lambda p: (p.size, -p.angle_deg, p.type)
     return lambda p: (-round(p.angle_deg, 9), p.size, p.type)
 
 
-def rank(objective: str):
+def rank(objective: str) -> Callable[[Candidate], tuple[float, float, str]]:
     if objective == MIN_SIZE:
         return lambda c: (c.size, -c.min_transmission_angle_deg, c.type)
     # ties (e.g. slot drives, 90° for every design) go to the smaller mechanism

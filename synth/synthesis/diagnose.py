@@ -11,14 +11,17 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Hashable, Iterator
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
 from ..analysis.kinematics import analyze
 from ..errors import SynthError, Unreachable
 from ..mechanisms import Mechanism
-from ..mechanisms.reduced import MAX_TRANSMISSION, differ
+from ..mechanisms.reduced import differ
+from ..numerics.dense import bisect
 from ..results import TOL, Infeasible
+from ..targets import MAX_TRANSMISSION, time_ratio
 from .search import Searched, Spec, Targets, Variant, ipopt, predict, scaled
 
 GRID = 17  # time ratios scanned for the reachable range
@@ -90,10 +93,12 @@ def _angles(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
     found = _reduced(m, v, t, v.problem.beta)
     if found is not None:
         return list(found)
-    return [mu for _, mu in _optima(m, v, spec, t, "max_transmission_angle", 1.0)]
+    return [mu for _, mu in _optima(m, v, spec, t, MAX_TRANSMISSION, 1.0)]
 
 
-def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL):
+def _reduced(
+    m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL
+) -> Iterator[float] | None:
     """The predicted angles of the exact reduced optima at β (max transmission, no bound)
     that meet the time ratio and stroke to ``tol``, one by one (each costs a prediction), or
     None where the reduced solver is not exact there."""
@@ -108,9 +113,9 @@ def _reduced(m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL
         return iter(())
     if answer is None or not answer.exact:
         return None
-    tr = (math.pi + beta) / (math.pi - beta)
+    tr = time_ratio(beta)
 
-    def angles():
+    def angles() -> Iterator[float]:
         for d in answer.designs:
             got = predict(m, {**scaled(d, t.stroke), **dict.fromkeys(v.parts, 0.0)})
             if got and abs(got[0] - tr) <= tol * tr and abs(got[1] - t.stroke) <= tol * t.stroke:
@@ -138,10 +143,11 @@ def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
     below = t.beta < ends[0][1]
     out = []
     for k, tol in enumerate((NEAR_END, FAR_END) if below else (FAR_END, NEAR_END)):
-        bracket = _edge(scan.ok, *ends[k], tol)
+        inside, outside = bisect(scan.ok, ends[k][1], ends[k][0], tol)
+        bracket = (outside, inside)
         if abs(bracket[1] - bracket[0]) < abs(ends[k][1] - ends[k][0]):
             ends[k] = bracket
-        out.append((math.pi + bracket[1]) / (math.pi - bracket[1]))
+        out.append(time_ratio(bracket[1]))
     return out
 
 
@@ -149,7 +155,7 @@ def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
 class _Scan:
     """What a reachable range depends on (``key``: not the time ratio), and how to test a β."""
 
-    key: tuple
+    key: tuple[Hashable, ...]
     m: Mechanism = field(compare=False)
     v: Variant = field(compare=False)
     t: Targets = field(compare=False)
@@ -192,19 +198,14 @@ def forget_ranges() -> None:
     _ends.cache_clear()
 
 
-def _edge(ok, out: float, inside: float, tol: float) -> tuple[float, float]:
-    """Bisect between a β without a design and one with to ``tol`` (where it is not already):
-    the narrowed (outside, inside)."""
-    while abs(inside - out) > tol * max(1.0, abs(inside)):
-        mid = 0.5 * (out + inside)
-        if ok(mid):
-            inside = mid
-        else:
-            out = mid
-    return out, inside
-
-
-def _optima(m: Mechanism, v: Variant, spec: Spec, t: Targets, objective: str, cos_bound=None):
+def _optima(
+    m: Mechanism,
+    v: Variant,
+    spec: Spec,
+    t: Targets,
+    objective: str,
+    cos_bound: float | None = None,
+) -> Iterator[tuple[float, float]]:
     """(TR, min transmission°) of each verified local optimum of ``objective`` (IPOPT)."""
     for x, _ in ipopt(m, v, spec, t, objective, cos_bound=cos_bound):
         try:

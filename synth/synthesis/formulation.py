@@ -41,14 +41,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from .. import targets
 from ..mechanisms import Mechanism, get
 from ..mechanisms.reduced import ONE_WAY, STRICT
+from ..targets import MAX_TRANSMISSION, MIN_SIZE
 
-OBJECTIVES = ("max_transmission_angle", "min_size")
+SOLVED = (MAX_TRANSMISSION, MIN_SIZE)  # the objectives IPOPT solves on the formulation
 DIAGNOSTICS = ("max_time_ratio", "min_time_ratio")
 TIE = 1e-7  # weight of size against |cos μ| (costs < 1e-5° of transmission angle)
 SAMPLES = 64  # transmission samples per turn where a type has no closed forms
@@ -77,7 +80,7 @@ class Formulation:
     free: tuple[str, ...]
     fixed: tuple[str, ...]
     objective: str
-    nlp: dict  # x, p, f, g for nlpsol
+    nlp: dict[str, ca.SX]  # x, p, f, g for nlpsol
     lbg: np.ndarray
     ubg: np.ndarray
     n_extra: int  # variables after the free parameters (θa and δ without closed forms, t)
@@ -106,13 +109,13 @@ def formulate(
     x = ca.SX.sym("x", len(free))
     fx = ca.SX.sym("fixed", len(fixed))
     tr_t, cos_b = ca.SX.sym("tr"), ca.SX.sym("cos_bound")
-    beta_t = ca.pi * (tr_t - 1) / (tr_t + 1)
-    p = {k: 0.0 for k in variant}
+    beta_t = targets.beta(tr_t)
+    p: dict[str, Any] = {k: 0.0 for k in variant}  # floats and symbols
     p.update({k: x[i] for i, k in enumerate(free)})
     p.update({k: fx[i] for i, k in enumerate(fixed)})
     p.update({k: v for k, v in m.defaults(p).items() if k not in p})  # irrelevant placements
     extra, extra_lb, extra_ub, angles = [], [], [], np.zeros(0)
-    dead: list = []  # the dead centres' second-order rows (kinematics alone), ≥ 0
+    dead: list[ca.SX] = []  # the dead centres' second-order rows (kinematics alone), ≥ 0
     if m.facts is not None:
         facts = m.facts(p)
         beta, stroke, cosines = facts["beta"], facts["stroke"], list(facts["transmission_cos"])
@@ -137,7 +140,8 @@ def formulate(
     lb, ub = [0.0] * len(g), [0.0] * len(g)
     if objective not in DIAGNOSTICS:
         g.append(ca.if_else(beta_t == 0, beta, (beta - beta_t) * (beta + beta_t) / (2 * beta_t)))
-        lb.append(0.0), ub.append(0.0)
+        lb.append(0.0)
+        ub.append(0.0)
     n_eq = len(g)
     for c in cosines:
         g += [c - cos_b, -c - cos_b]
@@ -158,7 +162,7 @@ def formulate(
                 lb.append(STRICT if cond.strict else 0.0)
                 ub.append(ca.inf)
 
-    if objective == "max_transmission_angle" and cosines:
+    if objective == MAX_TRANSMISSION and cosines:
         t = ca.SX.sym("t")
         extra, extra_lb, extra_ub = [*extra, t], [*extra_lb, -ca.inf], [*extra_ub, ca.inf]
         for c in cosines:
@@ -166,7 +170,7 @@ def formulate(
             lb += [-ca.inf, -ca.inf]
             ub += [0.0, 0.0]
         f = t + TIE * size
-    elif objective in OBJECTIVES:
+    elif objective in SOLVED:
         f = size
     else:
         f = (-1 if objective == "max_time_ratio" else 1) * beta**2
@@ -176,7 +180,7 @@ def formulate(
     keep = np.array([ca.depends_on(ca.SX(gi), xs) for gi in g], dtype=bool)
     varying = [gi for gi, k in zip(g, keep, strict=True) if k]
     eqs = ca.vertcat(*(gi for gi, k in zip(g[:n_eq], keep, strict=False) if k))
-    lb, ub = np.array(lb, dtype=float), np.array(ub, dtype=float)
+    lo, hi = np.array(lb, dtype=float), np.array(ub, dtype=float)
     return Formulation(
         mtype=m.type,
         variant=variant,
@@ -184,8 +188,8 @@ def formulate(
         fixed=fixed,
         objective=objective,
         nlp={"x": xs, "p": params, "f": f, "g": ca.vertcat(*varying)},
-        lbg=lb[keep],
-        ubg=ub[keep],
+        lbg=lo[keep],
+        ubg=hi[keep],
         n_extra=len(extra),
         extra_lb=np.array(extra_lb, dtype=float),
         extra_ub=np.array(extra_ub, dtype=float),
@@ -195,6 +199,6 @@ def formulate(
         constant=ca.Function(
             "constant", [params], [ca.vertcat(*(g[i] for i in np.flatnonzero(~keep)))]
         ),
-        constant_lb=lb[~keep],
-        constant_ub=ub[~keep],
+        constant_lb=lo[~keep],
+        constant_ub=hi[~keep],
     )

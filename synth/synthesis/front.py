@@ -4,23 +4,26 @@ design that meets the bound and its best-transmitting one (docs/synthesis.md, *T
 from __future__ import annotations
 
 import time
+from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any
+from typing import Any, cast
 
 from ..mechanisms import get
-from ..mechanisms.reduced import MAX_TRANSMISSION, MIN_SIZE
-from ..results import Candidate, FrontPoint
+from ..results import Candidate, FrontPoint, Infeasible
+from ..targets import MAX_TRANSMISSION, MIN_SIZE
 from .candidate import firsts, predicted_rank, rank
 from .diagnose import diagnose
 from .search import Proposal, Searched, Spec, Targets, search
 
-PARETO = "pareto"
 MEASURE = "link_length_sum"  # the size the front minimises
 FLAT = 1e-9  # relative: a front whose ends are this close in angle and size is one point
 
+End = Candidate | Proposal  # a front's end: verified (a candidate) or predicted (a proposal)
 
-def pareto(specs, t: Targets, max_candidates: int, per_type: int, extras: dict[str, Any],
-            ):  # fmt: skip
+
+def pareto(
+    specs: Sequence[Spec], t: Targets, max_candidates: int, per_type: int, extras: dict[str, Any]
+) -> tuple[list[Candidate], list[Infeasible]]:
     """Each type's front, ``max_candidates`` points in all shared among the types (a front of
     one point takes one, none more than ``per_type``), the types in the order of their best
     angle. The fronts are planned on their ends' predictions (the reduced solvers' exact
@@ -36,8 +39,9 @@ def pareto(specs, t: Targets, max_candidates: int, per_type: int, extras: dict[s
         # without a bound there is no smallest design (it locks at 0°)
         low = search(m, spec, i, small_t) if t.bound_deg > 0 else None
         ends.append((i, top, low))
-    ends.sort(key=lambda e: predicted_rank(MAX_TRANSMISSION)(_head(e[1], best_t)))
-    flat = [_flat(_head(low, small_t), _head(top, best_t)) for _, top, low in ends]
+    # each type here has proposals, so a best one
+    ends.sort(key=lambda e: predicted_rank(MAX_TRANSMISSION)(cast(Proposal, head_of(e[1], best_t))))
+    flat = [_flat(head_of(low, small_t), head_of(top, best_t)) for _, top, low in ends]
     fronts = []
     for (i, top, low), n in zip(ends, _share(flat, max_candidates, per_type), strict=True):
         m = get(specs[i].type)
@@ -50,8 +54,15 @@ def pareto(specs, t: Targets, max_candidates: int, per_type: int, extras: dict[s
     return [c for f in fronts for c in f], infeasible
 
 
-def _front(spec: Spec, i: int, top: Searched, low: Searched | None, n: int, t: Targets,
-           extras) -> list[Candidate]:  # fmt: skip
+def _front(
+    spec: Spec,
+    i: int,
+    top: Searched,
+    low: Searched | None,
+    n: int,
+    t: Targets,
+    extras: dict[str, Any],
+) -> list[Candidate]:
     """n points of one type's front, best angle first, spread evenly in angle from its
     smallest design that meets the bound (``low``'s, the min_size optimum) to its best
     (``top``'s): the point at angle μ is the smallest design whose minimum transmission angle
@@ -65,7 +76,10 @@ def _front(spec: Spec, i: int, top: Searched, low: Searched | None, n: int, t: T
     m = get(spec.type)
     best_t, small_t = replace(t, objective=MAX_TRANSMISSION), replace(t, objective=MIN_SIZE)
     ends = [(top, best_t)] + ([(low, small_t)] if low is not None else [])
-    hi, lo = _head(top, best_t), _head(low, small_t)  # the ends: predicted, then verified
+    # the ends: predicted, then verified
+    hi: End | None = head_of(top, best_t)
+    lo: End | None = head_of(low, small_t)
+    assert hi is not None  # ``pareto`` asks for the front of a type with a best proposal
     for _ in range(2):
         found, near = [], low
         for mu in [] if n == 1 or _flat(lo, hi) else _angles(lo, hi, n):
@@ -81,8 +95,11 @@ def _front(spec: Spec, i: int, top: Searched, low: Searched | None, n: int, t: T
         if _same(best, hi) and _same(small, lo):
             break
         hi, lo = best, small
+    assert best is not None  # the loop returned where there was none
     if n == 1 or _flat(small, best):
-        which = (MIN_SIZE, MAX_TRANSMISSION) if _flat(small, best) else (MAX_TRANSMISSION,)
+        which: tuple[str, ...] = (
+            (MIN_SIZE, MAX_TRANSMISSION) if _flat(small, best) else (MAX_TRANSMISSION,)
+        )
         return [replace(best, front=FrontPoint(MEASURE, 0, 1, which))]
     points = [best] + ([small] if small is not None else []) + [c for c in got[len(ends) :] if c]
     kept: list[Candidate] = []  # the non-dominated, best angle first (found twice: the end)
@@ -96,7 +113,7 @@ def _front(spec: Spec, i: int, top: Searched, low: Searched | None, n: int, t: T
     return out
 
 
-def _angles(lo, hi, n: int) -> list[float]:
+def _angles(lo: End | None, hi: End, n: int) -> list[float]:
     """The inner points' angles of an n-point front between its ends (``_angle_size``; no
     small end: no bound)."""
     b = _angle_size(hi)[0]
@@ -106,12 +123,12 @@ def _angles(lo, hi, n: int) -> list[float]:
     return [a + (b - a) * k / (n - 1) for k in range(1, n - 1)]
 
 
-def _head(s: Searched | None, t: Targets):
+def head_of(s: Searched | None, t: Targets) -> Proposal | None:
     """A search's best proposal by its prediction (None for none)."""
     return min(s.proposals, key=predicted_rank(t.objective), default=None) if s else None
 
 
-def _same(x, y) -> bool:
+def _same(x: End | None, y: End | None) -> bool:
     """Whether two ends (``_angle_size``) are one in angle, or both missing."""
     if x is None or y is None:
         return x is y
@@ -119,7 +136,7 @@ def _same(x, y) -> bool:
     return abs(a - b) <= FLAT * max(abs(b), 1.0)
 
 
-def _flat(low, top) -> bool:
+def _flat(low: End | None, top: End | None) -> bool:
     """Whether a front is one point: its ends (``_angle_size``) agree in angle and size."""
     if low is None or top is None:
         return False
@@ -127,7 +144,7 @@ def _flat(low, top) -> bool:
     return b - a <= FLAT * b and abs(s_top - s_low) <= FLAT * s_top
 
 
-def _angle_size(end: Candidate | Proposal) -> tuple[float, float]:
+def _angle_size(end: End) -> tuple[float, float]:
     """A front's end, verified (a candidate) or predicted (a proposal): angle and size."""
     if isinstance(end, Candidate):
         return end.min_transmission_angle_deg, end.size

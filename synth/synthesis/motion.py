@@ -21,8 +21,8 @@ variant's free parameters (stroke units), solved by SLSQP:
   each. No other clock decides anything: the answer does not depend on the machine's load
   unless the deadline cuts it short (and then the answer says so).
 
-The answer is a local optimum, verified like every candidate; ``tests/test_motion_search.py``
-checks it against an independent global search.
+The answer is a local optimum, verified like every candidate;
+``tests/referees/test_motion_search.py`` checks it against an independent global search.
 """
 
 from __future__ import annotations
@@ -30,24 +30,24 @@ from __future__ import annotations
 import threading
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
 from scipy.optimize import minimize
 
 from ..analysis.kinematics import motion_terms
-from ..analysis.quality import PEAK, UNIFORM, MotionTerms, fluctuation
+from ..analysis.quality import MotionTerms, fluctuation
 from ..errors import SynthError
 from ..mechanisms import Mechanism, get
-from ..mechanisms.reduced import MAX_TRANSMISSION, MIN_SIZE
 from ..results import TOL, Candidate, Infeasible
+from ..targets import MAX_TRANSMISSION, MIN_SIZE, PEAK, UNIFORM
 from .candidate import candidate
 from .diagnose import diagnose
 from .formulation import TIE, Formulation, formulate
-from .search import Targets, proposal, same, search
+from .search import Proposal, Spec, Targets, Variant, proposal, same, search
 from .solve import starts as halton
 
 STARTS = 4  # SLSQP runs per variant, from the best measured starts
@@ -70,10 +70,12 @@ class Functions:
 def functions(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Functions:
     """The formulation's constraints with their derivatives, once per thread and structure
     (CasADi functions are not shared between threads here, as the solvers are not)."""
-    cache: dict = _local.__dict__.setdefault("functions", {})
+    cache: dict[tuple[str, frozenset[str], tuple[str, ...]], Functions] = (
+        _local.__dict__.setdefault("functions", {})
+    )
     key = (m.type, variant, free)
     if key not in cache:
-        form = formulate(m, variant, free, "min_size")  # its constraints; the objective unused
+        form = formulate(m, variant, free, MIN_SIZE)  # its constraints; the objective unused
         x, p, g = (form.nlp[k] for k in ("x", "p", "g"))
         cache[key] = Functions(form, ca.Function("g", [x, p], [g, ca.jacobian(g, x)]))
     return cache[key]
@@ -84,7 +86,7 @@ def local_optima(
     variant: frozenset[str],
     free: tuple[str, ...],
     fixed: dict[str, float],
-    bounds: dict[str, tuple[float, float]],
+    bounds: Mapping[str, tuple[float, float]],
     explicit: frozenset[str],
     targets: tuple[float, float],
     objective: str,
@@ -133,13 +135,13 @@ def local_optima(
         order = np.concatenate([order, np.full(TERMS - order.size, order[-1])])
         return values[order], dp[order][:, columns]
 
-    def bounded(pick: Pick, cap: float | None):
+    def bounded(pick: Pick, cap: float | None) -> dict[str, Any]:
         """The constraint cap − each of the largest terms ≥ 0 (cap None: the epigraph's t)."""
 
-        def fun(y):
+        def fun(y: np.ndarray) -> np.ndarray:
             return (y[n] if cap is None else cap) - largest(y, pick)[0]
 
-        def jac(y):
+        def jac(y: np.ndarray) -> np.ndarray:
             out = np.zeros((TERMS, y.size))
             out[:, :n] = -largest(y, pick)[1]
             out[:, n] = 1.0 if cap is None else 0.0
@@ -151,16 +153,16 @@ def local_optima(
     eq = lbg == ubg
     below, above = np.isfinite(lbg) & ~eq, np.isfinite(ubg) & ~eq
 
-    def rows(y):  # y: x, or x and t
+    def rows(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # y: x, or x and t
         g, jac = fn.g(y[:n], pv)
         jac = np.hstack([np.asarray(jac), np.zeros((jac.shape[0], 1))])  # t appears in none
         return np.asarray(g).ravel(), jac
 
-    def inequalities(y):
+    def inequalities(y: np.ndarray) -> np.ndarray:
         g = rows(y)[0]
         return np.concatenate([g[below] - lbg[below], ubg[above] - g[above]])
 
-    def inequalities_jac(y):
+    def inequalities_jac(y: np.ndarray) -> np.ndarray:
         j = rows(y)[1]
         return np.vstack([j[below], -j[above]])
 
@@ -210,7 +212,7 @@ def local_optima(
         if time.monotonic() >= deadline:
             break
 
-        def cap(_):
+        def cap(_: object) -> None:
             if time.monotonic() >= deadline:
                 raise StopIteration  # SLSQP ends with its last iterate (projected below)
 
@@ -227,17 +229,23 @@ def local_optima(
     return out
 
 
+# the terms ``local_optima`` picks from carry their derivatives (``gradient=True``)
 _PICK: dict[str, Pick] = {
-    UNIFORM: lambda t: (t.middle, t.middle_dp),
+    UNIFORM: lambda t: (t.middle, cast(np.ndarray, t.middle_dp)),
     PEAK: lambda t: (
         np.concatenate([t.working, t.returning]),
-        np.vstack([t.working_dp, t.returning_dp]),
+        np.vstack([cast(np.ndarray, t.working_dp), cast(np.ndarray, t.returning_dp)]),
     ),
 }
 
 
-def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any],
-           limit: float | None):  # fmt: skip
+def motion(
+    specs: Sequence[Spec],
+    t: Targets,
+    max_candidates: int,
+    extras: dict[str, Any],
+    limit: float | None,
+) -> tuple[list[Candidate], list[Infeasible]]:
     """A motion objective: per type and variant, SLSQP (``local_optima``) from the designs the
     exact solvers give for the request (best-transmitting and smallest), the most promising
     first; the optima and those designs, verified, ranked by the measure (the limit met)."""
@@ -258,6 +266,7 @@ def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any],
         if t.bound_deg > 0:
             pool += search(m, spec, i, replace(t, objective=MIN_SIZE)).proposals
         mine = []
+        p: Proposal | None  # a proposal of the pool, then of an optimum
         for p in pool:
             c = candidate(m, p, t, s.variants, extras)
             if c is not None:
@@ -298,7 +307,14 @@ def motion(specs, t: Targets, max_candidates: int, extras: dict[str, Any],
     return found[:max_candidates], infeasible
 
 
-def _smallest_member(m: Mechanism, i: int, c: Candidate, t: Targets, variants, extras):
+def _smallest_member(
+    m: Mechanism,
+    i: int,
+    c: Candidate,
+    t: Targets,
+    variants: list[Variant],
+    extras: dict[str, Any],
+) -> Candidate:
     """The smallest member of a candidate's family (the same motion and angles), verified."""
     f = c.family
     if f is None:

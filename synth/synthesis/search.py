@@ -18,14 +18,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
+from .. import targets
 from ..analysis.kinematics import analyze
 from ..errors import SynthError, Unreachable
 from ..mechanisms import Mechanism
 from ..mechanisms.reduced import Problem, Reduced, agree
-from ..mechanisms.registry import ROUNDING
+from ..numerics import ROUNDING
 from ..results import TOL, Infeasible
 from .formulation import relevant
 from .solve import built, multistart, starts
@@ -81,7 +83,7 @@ class Targets:
     @property
     def beta(self) -> float:
         """The crank angle by which the slow stroke exceeds π."""
-        return math.pi * (self.time_ratio - 1) / (self.time_ratio + 1)
+        return targets.beta(self.time_ratio)
 
 
 @dataclass(frozen=True)
@@ -144,9 +146,10 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets,
             out.reasons.append(Infeasible(m.type, u.code, u.reason))
             continue
         exact = answer is not None and answer.exact
-        if exact:
+        if exact and answer is not None:
             hints += answer.designs
-        variant = Variant(parts, names, fixed, problem, exact, answer.at if exact else ())
+        at = answer.at if exact and answer is not None else ()
+        variant = Variant(parts, names, fixed, problem, exact, at)
         designs = [(scaled(d, t.stroke), "closed_form") for d in (answer or Reduced()).designs]
         if not exact and not variant.free:  # nothing to solve: the fixed parts are the design
             designs = [({}, "closed_form")]
@@ -166,12 +169,21 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets,
     return out
 
 
-def build_problem(m, parts, names, fixed, spec: Spec, t: Targets, **changes) -> Problem:
+def build_problem(
+    m: Mechanism,
+    parts: frozenset[str],
+    names: tuple[str, ...],
+    fixed: dict[str, float],
+    spec: Spec,
+    t: Targets,
+    **changes: Any,
+) -> Problem:
     s = t.stroke
+    box = {k: bounds(m, k, spec, s) for k in names if k not in fixed}
     return Problem(
         variant=parts,
         fixed={k: v / s for k, v in fixed.items()},
-        bounds={k: tuple(b / s for b in bounds(m, k, spec, s)) for k in names if k not in fixed},
+        bounds={k: (lo / s, hi / s) for k, (lo, hi) in box.items()},
         beta=t.beta,
         cos_bound=t.cos_bound,
         objective=t.objective,
@@ -209,10 +221,12 @@ def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float
     cos = [abs(float(c)) for c in f["transmission_cos"]]
     angle = math.degrees(math.acos(min(1.0, max(cos)))) if cos else 90.0
     size = m.size(p)
-    return (math.pi + beta) / (math.pi - beta), float(f["stroke"]), angle, size
+    return targets.time_ratio(beta), float(f["stroke"]), angle, size
 
 
-def proposal(m: Mechanism, index: int, params, method: str, t: Targets) -> Proposal | None:
+def proposal(
+    m: Mechanism, index: int, params: dict[str, float], method: str, t: Targets
+) -> Proposal | None:
     """The design with its predicted angle and size, if the closed forms say it meets the
     targets (a closed form's spurious root, a design that does not run: None)."""
     got = predict(m, params)
@@ -234,7 +248,7 @@ def ipopt(
     objective: str,
     warm: list[dict[str, float]] = (),  # type: ignore[assignment]
     cos_bound: float | None = None,
-) -> Iterable[tuple[dict[str, float], str]]:
+) -> list[tuple[dict[str, float], str]]:
     """Local optima of the formulation (caller's units) from the warm starts and valid cold
     ones, each with how it was found."""
     free, fixed = v.free, v.fixed
@@ -282,7 +296,9 @@ def variants(m: Mechanism, spec: Spec) -> list[frozenset[str]]:
     return out
 
 
-def fixed_violation(m: Mechanism, variant: frozenset[str], fixed: Mapping[str, float]):
+def fixed_violation(
+    m: Mechanism, variant: frozenset[str], fixed: Mapping[str, float]
+) -> str | None:
     """The message of a validity condition broken by the fixed parts alone, if any."""
     p = {**fixed, **dict.fromkeys(variant, 0.0)}
     for c in m.conditions:

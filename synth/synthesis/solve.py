@@ -13,8 +13,9 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
@@ -29,7 +30,7 @@ MAX_ITER = 200
 EXCHANGES = 6  # solves per start where a type's transmission is sampled (``formulation``)
 MAX_WALL_S = 60.0  # one solve, a last resort: the request's deadline stops it (``_Deadline``)
 DEADLINE_STEP = 20  # iterations between two looks at the deadline (a few ms; 3% of the time)
-IPOPT = {
+IPOPT: dict[str, Any] = {
     "print_time": False,
     "show_eval_warnings": False,  # NaN in a line search is handled by IPOPT (it cuts the step)
     "ipopt.print_level": 0,
@@ -51,7 +52,9 @@ class Built:
 
 def built(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], objective: str) -> Built:
     """The formulation and its IPOPT solver, built once per thread and structure."""
-    cache: dict = _local.__dict__.setdefault("solvers", {})
+    cache: dict[tuple[str, frozenset[str], tuple[str, ...], str], Built] = (
+        _local.__dict__.setdefault("solvers", {})
+    )
     key = (m.type, variant, free, objective)
     if key not in cache:
         form = formulate(m, variant, free, objective)
@@ -66,7 +69,7 @@ class _Deadline(ca.Callback):
     """IPOPT's iteration callback: a nonzero answer stops the solve, once ``at`` (monotonic
     seconds, set before each solve) has passed."""
 
-    def __init__(self, name: str, nlp: dict) -> None:
+    def __init__(self, name: str, nlp: dict[str, ca.SX]) -> None:
         ca.Callback.__init__(self)
         self.nx, self.ng, self.np = (nlp[k].numel() for k in ("x", "g", "p"))
         self.at = float("inf")
@@ -89,7 +92,7 @@ class _Deadline(ca.Callback):
                 "lam_p": self.np}[ca.nlpsol_out(i)]  # fmt: skip
         return ca.Sparsity.dense(size, 1)
 
-    def eval(self, arg):
+    def eval(self, arg: Sequence[ca.DM]) -> list[int]:
         return [1 if time.monotonic() >= self.at else 0]
 
 
@@ -99,7 +102,7 @@ def starts(lo: np.ndarray, hi: np.ndarray, log: np.ndarray, n: int) -> np.ndarra
         return np.zeros((min(n, 1), 0))
     u = qmc.Halton(d=lo.size, scramble=False).random(n + 1)[1:]  # skip the corner point 0
     llo, lhi = np.log(np.where(log, lo, 1.0)), np.log(np.where(log, hi, 1.0))
-    return np.where(log, np.exp(llo + u * (lhi - llo)), lo + u * (hi - lo))
+    return cast(np.ndarray, np.where(log, np.exp(llo + u * (lhi - llo)), lo + u * (hi - lo)))
 
 
 def multistart(
@@ -120,6 +123,7 @@ def multistart(
         return  # the fixed parts alone break a constraint: no start can help
     n_free = len(form.free)
     lbx, ubx = np.concatenate([lo, form.extra_lb]), np.concatenate([hi, form.extra_ub])
+    x: np.ndarray | None  # None where a solve fails
     for i, x0 in enumerate(start_points):
         if time.monotonic() >= deadline:
             return
@@ -158,7 +162,7 @@ def _extra_start(form: Formulation, fixed: np.ndarray, x0: np.ndarray) -> np.nda
     return np.array(out)
 
 
-def _independent(form: Formulation, x: np.ndarray, pv: np.ndarray):
+def _independent(form: Formulation, x: np.ndarray, pv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The constraints' bounds, with an equality left free where it depends on the others at
     the start x (kinematics alone: a symmetric linkage's second dead centre follows from its
     first at time ratio 1, and IPOPT stalls on the redundant row); tried in the order stroke,

@@ -17,20 +17,18 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..analysis.kinematics import check_drawn, check_include
-from ..analysis.quality import MOTION_OBJECTIVES
 from ..errors import InvalidParameters
 from ..mechanisms import all_types, get
-from ..mechanisms.reduced import MAX_TRANSMISSION, MIN_SIZE
-from ..results import Candidate, SynthesisResult, Tolerance
+from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
+from ..targets import MIN_SIZE, MOTION_OBJECTIVES, OBJECTIVES, PARETO
 from .candidate import candidate, predicted_rank, rank
 from .diagnose import diagnose
-from .front import PARETO, pareto
+from .front import pareto
 from .motion import motion
 from .search import DEFAULT, Searched, Solver, Spec, Targets, search
 
-__all__ = ["MAX_CANDIDATES", "OBJECTIVES", "Solver", "Spec", "check", "synthesize"]
+__all__ = ["MAX_CANDIDATES", "Solver", "Spec", "check", "checked_spec", "synthesize"]
 
-OBJECTIVES = (PARETO, MAX_TRANSMISSION, MIN_SIZE, *MOTION_OBJECTIVES)
 MAX_CANDIDATES = 50
 # the solvers work in the stroke's unit: a stroke within STROKES and bounds within SCALE of it
 # either way keep their ratios and squares finite and non-zero (_check_scale)
@@ -101,7 +99,9 @@ def synthesize(
     )
 
 
-def _single(specs, t: Targets, max_candidates: int, extras: dict[str, Any]):
+def _single(
+    specs: list[Spec], t: Targets, max_candidates: int, extras: dict[str, Any]
+) -> tuple[list[Candidate], list[Infeasible]]:
     """One criterion: the best ``max_candidates`` designs of all types, ranked."""
     searched = [search(get(spec.type), spec, i, t) for i, spec in enumerate(specs)]
     found, left = _verified(searched, t, max_candidates, extras)
@@ -161,7 +161,7 @@ def check(
     if mechanisms is None:
         specs = [Spec(t) for t in all_types() if get(t).quick_return]
     else:
-        specs = [_spec(s, i) for i, s in enumerate(mechanisms)]
+        specs = [checked_spec(s, i) for i, s in enumerate(mechanisms)]
     _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
     for i, s in enumerate(specs):
         _check_scale(s, i, stroke)
@@ -176,7 +176,9 @@ def check(
     return specs
 
 
-def _check_targets(tr, stroke, bound, objective, max_candidates) -> None:
+def _check_targets(
+    tr: float, stroke: float, bound: float, objective: str, max_candidates: int | None
+) -> None:
     checks = [
         ("time_ratio", tr, math.isfinite(tr) and tr >= 1, "a finite number ≥ 1"),
         (
@@ -240,7 +242,9 @@ def _check_limit(limit: float | None, objective: str) -> None:
         )
 
 
-def _spec(s: Spec | Mapping[str, Any], i: int) -> Spec:
+def checked_spec(s: Spec | Mapping[str, Any], i: int) -> Spec:
+    """``s`` (the request's ``mechanisms[i]``) as a ``Spec``, its fixed parts and bounds
+    checked; raises ``InvalidParameters`` located in ``("mechanisms", i, ...)``."""
     if not isinstance(s, Spec):
         s = Spec(s["type"], dict(s.get("fixed") or {}), dict(s.get("bounds") or {}))
     m = get(s.type)

@@ -3,5 +3,7 @@
 - ``geometry``: the output pin over a revolution, Grashof's conditions and class, the scale.
 - ``construction``: the dead-centre construction, every design with the time ratio and the
   swing, one CasADi function compiled per thread.
-- ``solver``: the exact reduced synthesis on that construction.
+- ``search``: a grid, then Newton from its best points, on that construction.
+- ``solver``: the exact reduced synthesis: the best transmission, the smallest design, a
+  front continued point by point.
 """

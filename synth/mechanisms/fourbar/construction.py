@@ -23,26 +23,49 @@ ground line: f = max(c1, −c2) with c1, c2 = (a3² + a4² − (1 ∓ a2)²)/(2 
 The rest follows the four-bar: its scale is free (the smallest the bounds allow, to break
 ties), unless a fixed link sets it (further fixed links hold ratios of the construction's
 links); the crank-rocker's arm sets the stroke, 2 r5 sin(ψ/2) = 1, the drag-link's is half the
-stroke; a connecting rod follows ``reduced.rod``.
+stroke; a connecting rod follows ``rod.rule``.
+
+Everything above is one CasADi function of a point (ψ, λ) and the variant's numbers
+(``PARAMS``: every structural choice of a variant, the fixed link that sets the scale, a
+swinging arm, a rod, its path's placement, the objective, is a number there, so one function
+serves every variant), compiled (``synth.numerics.native``) and evaluated through
+preallocated buffers: a Newton step's few points, a design, and the grids of the search in
+chunks. Its derivatives (``Compiled.taylor``) are CasADi's automatic differentiation of it.
 """
 
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from ...errors import Unreachable
-from ..reduced import MIN_SIZE, ONE_WAY, STRICT, Problem, rod, unreachable
-from .compiled import MAX_WIDTH, ROWS, compiled
+from ...numerics.native import Points, native
+from .. import rod
+from ..reduced import Problem, unreachable
+from .geometry import grashof_margins, worst_cos
 
 BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
 
+# the parameter vector: the names of its entries, in order
+PARAMS = (
+    "ep_r", "ep_i",  # e^{iφ}, φ = π + σβ
+    "lo0", "lo1", "lo2", "lo3", "hi0", "hi1", "hi2", "hi3",  # the links' boxes (scale 1)
+    "free_scale", "set0", "set1", "set2", "set3",  # the scale free, or set by link i
+    "swings", "arm",  # the arm swings (r5 = 1/(2 sin(ψ/2))), else its length
+    "rod", *rod.PARAMS,  # a connecting rod (rod.rule)
+)  # fmt: skip
+ROWS = ("valid", "feasible", "f", "size", "k", "a2", "a3", "a4", "r5", "l", "h", "rod_cos",
+        "slack")  # fmt: skip
+# the rows ``Compiled.taylor`` gives at a point (ψ, u), λ = 1 + e^u: valid, f, the size, their
+# gradients and their Hessians' entries
+TAYLOR = ("valid", "f", "size", "f_psi", "f_u", "size_psi", "size_u", "f_psi_psi", "f_psi_u",
+          "f_u_u", "size_psi_psi", "size_psi_u", "size_u_u")  # fmt: skip
 
-def construction():
-    """This thread's compiled evaluation (``_fourbar_native``)."""
-    return compiled(BOUND_TOL, STRICT, ONE_WAY)
+_local = threading.local()
 
 
 @dataclass(frozen=True)
@@ -56,28 +79,90 @@ class Roles:
     swings: bool  # the arm swings with the rocker (stroke 2 r5 sin(ψ/2)); else stroke 2 r5
 
 
-def shape(sigma: int, beta: float, psi, lam):
-    """(a2, a3, a4, valid) of the construction, vectorised over ψ and λ."""
-    e_phi = -complex(math.cos(sigma * beta), math.sin(sigma * beta))  # e^{iφ}, φ = π + σβ
-    e_psi = np.exp(1j * psi)
-    z1 = (1 - e_psi) / ((1 - lam) * e_phi - (1 + lam) * e_psi)
-    a2 = np.abs(z1)
-    a3, a4 = lam * a2, np.abs((1 + lam) * z1 - 1)
-    longest = np.maximum(np.maximum(1.0, a3), a4)
-    valid = (
-        (z1.imag * (z1 * e_phi).imag < 0)  # sin θ sin(θ + φ) < 0: one assembly circuit
-        & (a2 <= np.minimum(1.0, a4))
-        & (a2 + longest <= 1 + a3 + a4 - longest)
-    )
-    return a2, a3, a4, valid
+def rows(psi, lam, p) -> ca.SX:
+    """The rows (``ROWS``) at (ψ, λ) with the parameters p (``PARAMS``), symbolic."""
+    q = {n: p[i] for i, n in enumerate(PARAMS)}
+    er, ei = q["ep_r"], q["ep_i"]
+    # z1 = (1 − e^{iψ}) / ((1 − λ) e^{iφ} − (1 + λ) e^{iψ}), in real arithmetic
+    cp, sp = ca.cos(psi), ca.sin(psi)
+    nr, ni = 1 - cp, -sp
+    dr, di = (1 - lam) * er - (1 + lam) * cp, (1 - lam) * ei - (1 + lam) * sp
+    dd = dr * dr + di * di
+    zr, zi = (nr * dr + ni * di) / dd, (ni * dr - nr * di) / dd
+    a2 = ca.sqrt(zr * zr + zi * zi)
+    a3 = lam * a2
+    wr, wi = (1 + lam) * zr - 1, (1 + lam) * zi
+    a4 = ca.sqrt(wr * wr + wi * wi)
+    # one assembly circuit, sin θ sin(θ + φ) < 0, and Grashof with the crank the shortest link
+    valid = zi * (zr * ei + zi * er) < 0
+    for margin in grashof_margins((1.0, a2, a3, a4), 1):
+        valid = ca.logic_and(valid, margin >= 0)
+    f = worst_cos(1.0, a2, a3, a4)
+    # the scale
+    rho = (1.0, a2, a3, a4)
+    lo = [q[f"lo{i}"] / r for i, r in enumerate(rho)]
+    hi = [q[f"hi{i}"] / r for i, r in enumerate(rho)]
+    kmin = ca.fmax(ca.fmax(lo[0], lo[1]), ca.fmax(lo[2], lo[3]))
+    kmax = ca.fmin(ca.fmin(hi[0], hi[1]), ca.fmin(hi[2], hi[3]))
+    k = ca.if_else(q["set0"], lo[0], ca.if_else(q["set1"], lo[1], ca.if_else(q["set2"], lo[2],
+                                                                              lo[3])))  # fmt: skip
+    k = ca.if_else(q["free_scale"], kmin, k)
+    feasible = ca.logic_and(valid, kmin <= kmax * (1 + BOUND_TOL))
+    # how far the design is from a link's bound: the scale's room, log(kmax/kmin), when it is
+    # free; else the free links' distance from their boxes (in log)
+    inf = ca.SX(math.inf)
+    rest = [
+        ca.if_else(q[f"set{i}"], inf, ca.fmin(ca.log(k / a), ca.log(b / k)))
+        for i, (a, b) in enumerate(zip(lo, hi, strict=True))
+    ]
+    slack = ca.if_else(
+        q["free_scale"], ca.log(kmax / kmin), ca.fmin(ca.fmin(rest[0], rest[1]),
+                                                      ca.fmin(rest[2], rest[3]))
+    )  # fmt: skip
+    r5 = ca.if_else(q["swings"], 0.5 / ca.sin(psi / 2), q["arm"])
+    # the connecting rod (none in a slot drive)
+    rod_l, rod_h, rod_cos, l_ok = rod.rule(r5, psi / 2, f, q)
+    with_rod = q["rod"]
+    l = ca.if_else(with_rod, rod_l, 0.0)
+    h = ca.if_else(with_rod, rod_h, ca.SX(math.nan))
+    rc = ca.if_else(with_rod, rod_cos, 0.0)
+    l_fin = ca.logic_or(ca.logic_not(with_rod), l_ok)
+    feasible = ca.logic_and(feasible, l_fin)
+    size = k * (1 + a2 + a3 + a4) + r5 + ca.if_else(l_fin, l, 0.0)
+    return ca.vertcat(valid, feasible, f, size, k, a2, a3, a4, r5, l, h, rc, slack)
 
 
-def worst_cos(a2, a3, a4):
-    """The largest |cos μ| of the coupler transmission over a revolution."""
-    base = a3 * a3 + a4 * a4
-    c1 = (base - (1 - a2) ** 2) / (2 * a3 * a4)
-    c2 = (base - (1 + a2) ** 2) / (2 * a3 * a4)
-    return np.maximum(c1, -c2)
+class Compiled:
+    """This thread's compiled construction: ``points`` (the rows at many points) and
+    ``taylor`` (the local model at one point, for Newton)."""
+
+    def __init__(self) -> None:
+        x, p = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAMS))
+        out = rows(x[0], x[1], p)
+        self.fn = native(ca.Function("fourbar_construction", [x, p], [out], {"cse": True}))
+        # at y = (ψ, u), λ = 1 + e^u (Newton's coordinates)
+        y = ca.SX.sym("y", 2)
+        at = rows(y[0], 1 + ca.exp(ca.fmin(y[1], 50.0)), p)
+        f, size = at[ROWS.index("f")], at[ROWS.index("size")]
+        (hf, gf), (hs, gs) = ca.hessian(f, y), ca.hessian(size, y)
+        local = ca.vertcat(at[ROWS.index("valid")], f, size, gf, gs,
+                           hf[0, 0], hf[0, 1], hf[1, 1], hs[0, 0], hs[0, 1], hs[1, 1])  # fmt: skip
+        self.taylor_fn = native(
+            ca.Function("fourbar_construction_taylor", [y, p], [local], {"cse": True})
+        )
+        self.points = Points(self.fn)
+        self._taylor = Points(self.taylor_fn)
+
+    def taylor(self, psi: float, u: float, params) -> list[float]:
+        """``TAYLOR`` at one point (ψ, u), a list (``params`` as for ``points``)."""
+        return self._taylor.one((psi, u), params)
+
+
+def construction() -> Compiled:
+    """This thread's compiled construction (CasADi functions are never shared by threads)."""
+    if not hasattr(_local, "compiled"):
+        _local.compiled = Compiled()
+    return _local.compiled
 
 
 class Construction:
@@ -122,30 +207,21 @@ class Construction:
             self.psi = (1e-9, math.pi - 1e-9)
 
     def evaluate(self, sigma: int, psi, lam):
-        """The designs at (ψ, λ), arrays: valid, feasible (within the bounds), f (the coupler's
-        worst cos), size, k (the four-bar's scale), ρ (its links at scale 1, the crank-rocker's
-        order), r5, l, h and the rod's worst cos; a point that is no design is NaN or False.
-        A few points (a Newton step's, a design's) are evaluated by the compiled function
-        (``_fourbar_native``), a grid by numpy."""
+        """The designs at (ψ, λ), arrays broadcast together: valid, feasible (within the
+        bounds), f (the coupler's worst cos), size, k (the four-bar's scale), ρ (its links at
+        scale 1, the crank-rocker's order), r5, l, h and the rod's worst cos; a point that is
+        no design is NaN or False."""
         psi, lam = np.asarray(psi, dtype=float), np.asarray(lam, dtype=float)
         shape = np.broadcast_shapes(psi.shape, lam.shape)
-        if 0 < math.prod(shape) <= MAX_WIDTH:
-            return self._compiled(sigma, psi, lam, shape)
-        with np.errstate(all="ignore"):
-            return self._evaluate(sigma, psi, lam)
-
-    def _compiled(self, sigma: int, psi, lam, shape):
-        flat = len(shape) == 1
-        if not flat or psi.shape != shape or lam.shape != shape:
-            psi, lam = (np.broadcast_to(a, shape).ravel() for a in (psi, lam))
-        out = construction().at(psi, lam, self._params(sigma))
-        e = dict(zip(ROWS, out if flat else out.reshape(len(ROWS), *shape), strict=True))
+        points = np.stack([np.broadcast_to(a, shape).ravel() for a in (psi, lam)], axis=1)
+        out = construction().points(points, self._params(sigma))
+        e = dict(zip(ROWS, out.reshape(len(ROWS), *shape), strict=True))
         e["valid"], e["feasible"] = e["valid"] > 0, e["feasible"] > 0
         e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
         return e
 
     def _params(self, sigma: int) -> list[float]:
-        """The compiled function's parameters (``_fourbar_native.PARAMS``) for sheet σ, kept
+        """The compiled function's parameters (``PARAMS``) for sheet σ, kept
         per sheet, bounds and rod: a copy of this construction (``copy.copy``, ``holding``)
         shares the cache but may differ in its rod or its bounds' arrays (replaced, never
         changed in place)."""
@@ -158,54 +234,15 @@ class Construction:
     def _make_params(self, sigma: int) -> list[float]:
         p, r = self.p, self.r
         sb = sigma * p.beta
-        rod_box = p.box(r.rod) if self.rod else (0.0, 0.0)
-        fixed_h = r.height is not None and r.height in p.fixed
-        h_box = p.bounds.get(r.height, (0.0, 0.0)) if r.height is not None else (0.0, 0.0)
+        the_rod = rod.params(p, r.rod, r.height) if self.rod else [0.0] * len(rod.PARAMS)
         return [-math.cos(sb), -math.sin(sb), *self.lo, *self.hi,
                 float(self.set_by is None), *(float(self.set_by == i) for i in range(4)),
-                float(r.swings), p.fixed.get(r.arm, 0.5),
-                float(self.rod), float(p.objective == MIN_SIZE), p.cos_bound, *rod_box,
-                float(r.height is None), float(fixed_h),
-                p.fixed[r.height] if fixed_h else 0.0, *h_box]  # fmt: skip
-
-    def _evaluate(self, sigma: int, psi, lam):
-        a2, a3, a4, valid = shape(sigma, self.p.beta, psi, lam)
-        rho = (1.0, a2, a3, a4)
-        f = worst_cos(a2, a3, a4)
-        lo = [b / r for b, r in zip(self.lo, rho, strict=True)]
-        hi = [b / r for b, r in zip(self.hi, rho, strict=True)]
-        kmin = np.maximum(np.maximum(lo[0], lo[1]), np.maximum(lo[2], lo[3]))
-        kmax = np.minimum(np.minimum(hi[0], hi[1]), np.minimum(hi[2], hi[3]))
-        k = kmin if self.set_by is None else lo[self.set_by]
-        feasible = valid & (kmin <= kmax * (1 + BOUND_TOL))
-        # how far the design is from a link's bound: the scale's room, log(kmax/kmin), when it
-        # is free; else the free links' distance from their boxes (in log)
-        if self.set_by is None:
-            slack = np.log(kmax / kmin)
-        else:
-            rest = [
-                np.minimum(np.log(k / a), np.log(b / k))
-                for i, (a, b) in enumerate(zip(lo, hi, strict=True))
-                if i != self.set_by
-            ]
-            slack = np.minimum(np.minimum(rest[0], rest[1]), rest[2])
-        r5 = (0.5 / np.sin(psi / 2) if self.r.swings else self.p.fixed.get(self.r.arm, 0.5)) + 0 * f
-        l, h, rod_cos = self._rod(r5, psi, f)
-        feasible &= np.isfinite(l)
-        size = k * (1 + a2 + a3 + a4) + r5 + np.where(np.isfinite(l), l, 0.0)
-        return {"valid": valid, "feasible": feasible, "f": f, "size": size, "k": k, "rho": rho,
-                "r5": r5, "l": l, "h": h, "rod_cos": rod_cos, "slack": slack}  # fmt: skip
-
-    def _rod(self, r5, psi, f):
-        """The connecting rod (``reduced.rod``); none in a slot drive."""
-        if not self.rod:
-            return 0.0 * r5, np.full(np.shape(r5), np.nan), 0.0 * r5
-        return rod(self.p, self.r.rod, self.r.height, r5, psi / 2, f)
+                float(r.swings), p.fixed.get(r.arm, 0.5), float(self.rod), *the_rod]  # fmt: skip
 
     def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict]:
         """The design at one point, and its evaluation (numbers; valid and feasible 1 or 0)."""
-        out = construction().at((psi,), (lam,), self._params(sigma))
-        one = dict(zip(ROWS, out[:, 0].tolist(), strict=True))
+        out = construction().points.one((psi, lam), self._params(sigma))
+        one = dict(zip(ROWS, out, strict=True))
         one["rho"] = [1.0, one.pop("a2"), one.pop("a3"), one.pop("a4")]
         r = self.r
         out = {n: one["k"] * x for n, x in zip(r.links, one["rho"], strict=True)}

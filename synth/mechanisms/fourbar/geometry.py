@@ -6,10 +6,12 @@ intersection of circle(A, coupler) and circle(O4, rocker) to the left of the dir
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import casadi as ca
 
+from ...numerics import ROUNDING
 from ..geometry import cos_law, sqrt, where
 from ..registry import Condition, Scale
 
@@ -74,24 +76,37 @@ def _triangle(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any]:
     return d2, sqrt(outer * inner) / (2 * d2)
 
 
+def grashof_margins(links: Sequence[Any], shortest: int) -> tuple[Any, ...]:
+    """Grashof with link ``shortest`` the shortest, as three margins ≥ 0: for each other link
+    x, the other two less the shortest and x (polymorphic).
+
+    "shortest + x ≤ the other two" for each other link x is equivalent to: ``shortest`` is the
+    shortest link and s + l ≤ p + q.
+    """
+    others = [k for k in range(len(links)) if k != shortest]
+    out = []
+    for x in others:
+        a, b = (k for k in others if k != x)
+        out.append(links[a] + links[b] - links[shortest] - links[x])
+    return tuple(out)
+
+
 def grashof_conditions(
     names: tuple[str, str, str, str], shortest: str, kind: str
 ) -> tuple[Condition, ...]:
-    """Grashof with ``shortest`` the shortest link, as three linear conditions.
-
-    "shortest + x ≤ the other two" for each other link x is equivalent to: ``shortest`` is the
-    shortest link and s + l ≤ p + q. ``names`` are the parameter names of the four links.
-    """
+    """Grashof with ``shortest`` the shortest link (``grashof_margins``), as three linear
+    conditions; ``names`` are the parameter names of the four links."""
+    k = names.index(shortest)
     others = [n for n in names if n != shortest]
     conds = []
-    for x in others:
+    for i, x in enumerate(others):
         a, b = (n for n in others if n != x)
         conds.append(
             Condition(
                 name=f"grashof_{x}",
                 text=f"{shortest} + {x} ≤ {a} + {b} (Grashof with the {shortest} the shortest "
                 f"link: a {kind})",
-                margin=lambda p, x=x, a=a, b=b: (p[a] + p[b] - p[shortest] - p[x],),
+                margin=lambda p, i=i: (grashof_margins([p[n] for n in names], k)[i],),
                 explain=lambda p, x=x, a=a, b=b: (
                     f"{shortest} {p[shortest]:g} + {x} {p[x]:g} = {p[shortest] + p[x]:g} > "
                     f"{a} {p[a]:g} + {b} {p[b]:g} = {p[a] + p[b]:g}: not a {kind} (Grashof with "
@@ -104,18 +119,24 @@ def grashof_conditions(
 
 
 def grashof_class(ground: float, crank: float, coupler: float, rocker: float) -> str:
-    """The four-bar's class by Grashof's criterion (s + l ≤ p + q counts as Grashof)."""
-    links = [ground, crank, coupler, rocker]
-    s, lng = min(links), max(links)
-    if s + lng > sum(links) - s - lng:
+    """The four-bar's class by Grashof's criterion (``grashof_margins``; on its limit, to
+    rounding, counts as Grashof), named by the shortest link (ground, crank, rocker, coupler
+    in that order among equals)."""
+    links = (ground, crank, coupler, rocker)
+    s = min((0, 1, 3, 2), key=lambda k: links[k])
+    if min(grashof_margins(links, s)) < -ROUNDING * max(links):
         return "triple-rocker"
-    if ground == s:
-        return "drag-link"
-    if crank == s:
-        return "crank-rocker"
-    if rocker == s:
-        return "rocker-crank"
-    return "double-rocker"
+    return {0: "drag-link", 1: "crank-rocker", 2: "double-rocker", 3: "rocker-crank"}[s]
+
+
+def worst_cos(ground: Any, crank: Any, coupler: Any, rocker: Any) -> Any:
+    """The largest |cos μ| of the coupler–rocker transmission over a revolution of a Grashof
+    crank-rocker: at the crank on the ground line, max(c1, −c2) with c1, c2 = (coupler² +
+    rocker² − (ground ∓ crank)²)/(2 coupler rocker) (polymorphic)."""
+    base = coupler * coupler + rocker * rocker
+    c1 = (base - (ground - crank) ** 2) / (2 * coupler * rocker)
+    c2 = (base - (ground + crank) ** 2) / (2 * coupler * rocker)
+    return ca.fmax(c1, -c2)
 
 
 def fourbar_scale(output: str) -> Scale:

@@ -32,6 +32,8 @@ stroke = 2 r5 sin(Δψ/2) when s is monotonic over the swing: r6 cos(Δψ/2) ≥
 
 from __future__ import annotations
 
+from typing import Any
+
 import casadi as ca
 
 from ..fourbar.geometry import fourbar_scale, grashof_conditions, output_pin
@@ -41,6 +43,7 @@ from ..registry import (
     ROD,
     Mechanism,
     Parameter,
+    Params,
     absent,
     one_way,
     reach_condition,
@@ -50,13 +53,13 @@ from ..registry import (
 LINKS = ("ground", "crank", "coupler", "rocker")
 
 
-def _swing(p):
+def _swing(p: Params) -> tuple[Any, Any]:
     """(γ at the extended toggle, γ at the folded one); ψ = π − γ, Δψ = γe − γf."""
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     return triangle_angle(r1, r4, r3 + r2), triangle_angle(r1, r4, r3 - r2)
 
 
-def _delta(p, th):
+def _delta(p: Params, th: Any) -> tuple[Any, Any, Any]:
     """cos δ, sin δ of the rocker relative to its mid-swing line, and cos μ at the coupler."""
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     vx, vy, cos_mu = output_pin(r1, r2, r3, r4, th)
@@ -66,14 +69,14 @@ def _delta(p, th):
     return mx * ux + my * uy, mx * uy - my * ux, cos_mu
 
 
-def _offsets(p):
+def _offsets(p: Params) -> tuple[Any, Any]:
     """Signed distances from C to the slider path at mid-swing and at the swing's ends."""
     ge, gf = _swing(p)
     h, r5 = p["slider_height"], p["rocker_arm"]
     return h - r5, h - r5 * ca.cos((ge - gf) / 2)
 
 
-def position(p, th):
+def position(p: Params, th: Any) -> Any:
     r5, r6, h = p["rocker_arm"], p["connecting_rod"], p["slider_height"]
     c, s, _ = _delta(p, th)
     if absent(r6):
@@ -81,7 +84,7 @@ def position(p, th):
     return r5 * s + leg(r6, h - r5 * c)
 
 
-def transmission(p, th):
+def transmission(p: Params, th: Any) -> dict[str, Any]:
     r5, r6, h = p["rocker_arm"], p["connecting_rod"], p["slider_height"]
     c, _, cos_mu = _delta(p, th)
     joints = {"coupler-rocker": cos_mu}
@@ -90,14 +93,14 @@ def transmission(p, th):
     return joints
 
 
-def defaults(p):
+def defaults(p: Params) -> dict[str, Any]:
     ge, gf = _swing(p)
     return {"slider_height": p["rocker_arm"] * ca.cos((ge - gf) / 2)}
 
 
-def joints(p, th):
+def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r1, r2, r4, r5 = p["ground"], p["crank"], p["rocker"], p["rocker_arm"]
-    vx, vy, _ = output_pin(*(p[n] for n in LINKS), th)
+    vx, vy, _ = output_pin(r1, r2, p["coupler"], r4, th)
     ge, gf = _swing(p)
     mx, my = -ca.cos((ge + gf) / 2), ca.sin((ge + gf) / 2)  # the mid-swing line
     h, s = p["slider_height"], position(p, th)  # R = O4 + h m + s m⊥, m⊥ = (−my, mx)
@@ -106,7 +109,7 @@ def joints(p, th):
             "R": (r1 + h * mx - s * my, h * my + s * mx)}  # fmt: skip
 
 
-def facts(p):
+def facts(p: Params) -> dict[str, Any]:
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     r5, r6 = p["rocker_arm"], p["connecting_rod"]
     # the folded toggle's O2D is shorter, so its angle to the ground line is the larger one

@@ -29,47 +29,51 @@ transmission at the ram link cos μ = (h − L cos ψ)/l; the slot drive alone t
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from ... import targets
 from ...errors import Unreachable
 from ..geometry import leg, lever
-from ..reduced import Problem, Reduced, rod
+from ..reduced import Problem, Reduced
 from ..registry import (
     ROD,
     Condition,
     Mechanism,
     Parameter,
+    Params,
     Scale,
     absent,
     one_way,
     reach_condition,
     register,
 )
+from ..rod import rod
 from ..slotted import check
 from ..slotted import scale as _scale
 
 
-def _lever(p, th):
+def _lever(p: Params, th: Any) -> tuple[Any, Any]:
     """cos ψ, sin ψ of the lever O4→B."""
     r2, d = p["crank"], p["pivot_distance"]
     return lever(r2, d, th)
 
 
-def _cos_psi_max(p):
+def _cos_psi_max(p: Params) -> Any:
     r2, d = p["crank"], p["pivot_distance"]
     return leg(d, r2) / d
 
 
-def _offsets(p):
+def _offsets(p: Params) -> tuple[Any, Any]:
     """The signed distances from the lever tip to the ram path at mid-swing and at the ends:
     the largest |·| over the swing is one of them (h − L cos ψ is monotonic in cos ψ)."""
     h, L = p["ram_height"], p["lever"]
     return h - L, h - L * _cos_psi_max(p)
 
 
-def position(p, th):
+def position(p: Params, th: Any) -> Any:
     L, l, h = p["lever"], p["ram_link"], p["ram_height"]
     c, s = _lever(p, th)
     if absent(l):
@@ -77,7 +81,7 @@ def position(p, th):
     return L * s + leg(l, h - L * c)
 
 
-def transmission(p, th):
+def transmission(p: Params, th: Any) -> dict[str, Any]:
     L, l, h = p["lever"], p["ram_link"], p["ram_height"]
     if absent(l):
         return {}
@@ -85,18 +89,18 @@ def transmission(p, th):
     return {"ram_link-ram": (h - L * c) / l}
 
 
-def defaults(p):
+def defaults(p: Params) -> dict[str, Any]:
     return {"ram_height": p["lever"] * _cos_psi_max(p)}
 
 
-def joints(p, th):
+def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r2, d, L, h = p["crank"], p["pivot_distance"], p["lever"], p["ram_height"]
     c, s = _lever(p, th)
     return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (-d, 0.0),
             "P": (-d + L * c, L * s), "R": (-d + h, position(p, th))}  # fmt: skip
 
 
-def facts(p):
+def facts(p: Params) -> dict[str, Any]:
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["ram_link"]
     half = ca.atan2(r2, leg(d, r2))  # ψmax = asin(r2/d)
     return {
@@ -111,18 +115,17 @@ def reduced(p: Problem) -> Reduced:
     """The time ratio fixes crank/pivot_distance = sin ψmax = sin(β/2), the stroke fixes the
     lever, 1/(2 sin ψmax); the crank is a free scale (the smallest allowed: ties, and the
     size), up to the block's reach, pivot_distance + crank ≤ lever. A ram link and its path
-    follow ``reduced.rod`` (the lever tip swings ±ψmax); the slot drive transmits at 90°."""
+    follow ``rod.rule`` (the lever tip swings ±ψmax); the slot drive transmits at 90°."""
     if p.beta <= 0:
         raise Unreachable("TIME_RATIO_UNREACHABLE", "crank_shaper has time ratio > 1 always")
     f = p.fixed
     k = f["crank"] / f["pivot_distance"] if {"crank", "pivot_distance"} <= f.keys() else None
     k = k or math.sin(p.beta / 2)  # sin ψmax: the fixed pair's (checked against the target)
 
-    def time_ratio(ratio: float) -> float:
-        half = math.asin(ratio)
-        return (math.pi + 2 * half) / (math.pi - 2 * half)
+    def ratio_of(sin_half: float) -> float:  # the time ratio of crank/pivot_distance
+        return targets.time_ratio(2 * math.asin(sin_half))
 
-    check(p, time_ratio, lambda lever: 2 * lever * k)
+    check(p, ratio_of, lambda lever: 2 * lever * k)
     lever = f.get("lever", 0.5 / k)
     crank = _scale(p, 1 / k, reach=lever * k / (1 + k))
     if crank is None or not p.allows("lever", lever):

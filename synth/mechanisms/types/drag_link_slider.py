@@ -23,62 +23,73 @@ Valid: Grashof with the ground the shortest link (a drag-link); r6 > r5. Closed 
 TDC/BDC with the follower on the ground line, O2B = r4 ± r1; θ2a, θ2b from eqs. (3a)/(3b);
 TR = (π − θ2a + θ2b)/(π + θ2a − θ2b); stroke = 2 r5; rod → piston μ_min = acos(r5/r6).
 Coupler → follower: cos μ = (r3² + r4² − |AO4|²)/(2 r3 r4), extremes with the *crank* on the
-ground line, |AO4| = r2 ∓ r1 (the seed evaluates it at TDC/BDC instead: not the minimum).
+ground line, |AO4| = r2 ∓ r1 (not at TDC/BDC, where Podhorodeski et al. evaluate it: not the
+minimum).
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from ..fourbar.geometry import fourbar_scale, grashof_conditions, output_pin, output_pin_height
-from ..fourbar.solver import FourBar, Roles, worst_cos
+from ...numerics import ROUNDING
+from ..fourbar.geometry import (
+    fourbar_scale,
+    grashof_conditions,
+    output_pin,
+    output_pin_height,
+    worst_cos,
+)
+from ..fourbar.solver import FourBar, Roles
 from ..geometry import ahead, cos_law, leg, triangle_angle
-from ..reduced import Problem, Reduced, agree, differ, rod, unreachable
-from ..registry import ROD, Condition, Mechanism, Parameter, register
+from ..reduced import Problem, Reduced, agree, differ, unreachable
+from ..registry import ROD, Condition, Mechanism, Parameter, Params, register
+from ..rod import rod
 
 LINKS = ("ground", "crank", "coupler", "follower")
 
 
-def _pin_c(p, th):
+def _pin_c(p: Params, th: Any) -> tuple[Any, Any, Any]:
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     vx, vy, cos_mu = output_pin(r1, r2, r3, r4, th)
     k = p["follower_arm"] / r4
     return r1 + k * vx, k * vy, cos_mu
 
 
-def position(p, th):
+def position(p: Params, th: Any) -> Any:
     cx, cy, _ = _pin_c(p, th)
     r1, r5, r6 = p["ground"], p["follower_arm"], p["connecting_rod"]
     return r1 + ahead(cx - r1, leg(r6, cy), (r6 - r5) * (r6 + r5))
 
 
-def dead_centres(p, th):
+def dead_centres(p: Params, th: Any) -> Any:
     """B_y: the piston is at a dead centre exactly when the follower lies on the ground line,
     as ds/dθ = −r5 φ' sin φ (1 + r5 cos φ/root), the last factor > 0 (r6 > r5). Near a change
     point the follower nearly stalls right there (the four-bar folds flat onto the ground
     line), so ds/dθ has a near-triple zero that double precision locates only to ~1e-5 rad,
     while B_y's zero is simple; near a kite's, B passes the crank pivot, where B_y is taken
     from O2 to keep its own digits."""
-    return output_pin_height(*(p[n] for n in LINKS), th)
+    r1, r2, r3, r4 = (p[n] for n in LINKS)
+    return output_pin_height(r1, r2, r3, r4, th)
 
 
-def transmission(p, th):
+def transmission(p: Params, th: Any) -> dict[str, Any]:
     _, cy, cos_mu = _pin_c(p, th)
     return {"coupler-follower": cos_mu, "connecting_rod-slider": cy / p["connecting_rod"]}
 
 
-def joints(p, th):
+def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r1, r2, r4, r5 = p["ground"], p["crank"], p["follower"], p["follower_arm"]
-    vx, vy, _ = output_pin(*(p[n] for n in LINKS), th)
+    vx, vy, _ = output_pin(r1, r2, p["coupler"], r4, th)
     return {"O2": (0.0, 0.0), "A": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (r1, 0.0),
             "B": (r1 + vx, vy), "C": (r1 + r5 * vx / r4, r5 * vy / r4),
             "D": (position(p, th), 0.0)}  # fmt: skip
 
 
-def facts(p):
+def facts(p: Params) -> dict[str, Any]:
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     r5, r6 = p["follower_arm"], p["connecting_rod"]
     t2a = triangle_angle(r2, r4 + r1, r3)  # eq. (3a)
@@ -96,8 +107,8 @@ def facts(p):
 def reduced(p: Problem) -> Reduced | None:
     """Podhorodeski, Nokleby & Wittchen (2005), eqs. (7)–(13), where ground, crank and
     follower are fixed: zero, one or two couplers give the time ratio (follower_arm =
-    stroke/2, the rod by ``reduced.rod``); any other problem goes to the four-bar solver
-    (``_fourbar_synthesis``)."""
+    stroke/2, the rod by ``rod.rule``); any other problem goes to the four-bar solver
+    (``fourbar.solver``)."""
     if "follower_arm" in p.fixed and not agree(2 * p.fixed["follower_arm"], 1.0):
         raise unreachable(
             "follower_arm {} gives stroke {}, not {}".format(
@@ -113,7 +124,7 @@ def reduced(p: Problem) -> Reduced | None:
     b = (r4 - r1) * math.sin(f)
     c = 2 * r4 * r1 / r2
     rr = math.hypot(a, b)
-    if rr < c * (1 - 1e-12):
+    if rr < c * (1 - ROUNDING):
         return Reduced([])
     # eq. (12) in the double-root-safe form atan2(sqrt((R − C)(R + C)), C); at the time
     # ratio's extreme over the coupler the roots merge (R = C, up to rounding)
@@ -124,7 +135,7 @@ def reduced(p: Problem) -> Reduced | None:
     t2a = np.array(sorted({math.atan2(b, a) - half, math.atan2(b, a) + half}))
     couplers = np.sqrt(r2**2 + (r4 + r1) ** 2 - 2 * r2 * (r4 + r1) * np.cos(t2a))  # eq. (13)
     # the crank-rocker each inverts, ground 1: crank r1/r2, coupler r4/r2, rocker r3/r2
-    cos_mu = worst_cos(r1 / r2, r4 / r2, couplers / r2)
+    cos_mu = np.array([worst_cos(1.0, r1 / r2, r4 / r2, c) for c in couplers / r2])
     rods = rod(p, "connecting_rod", None, np.full(couplers.shape, arm), 0.0, cos_mu)[0]
     designs = [
         {"coupler": float(coupler), "follower_arm": arm, "connecting_rod": float(length), **p.fixed}

@@ -22,13 +22,15 @@ from __future__ import annotations
 
 import math
 import sys
+from typing import Any
 
 import casadi as ca
 
+from ...numerics import ROUNDING
 from ...results import TOL
+from ...targets import MAX_TRANSMISSION
 from ..geometry import leg, sqrt, where
 from ..reduced import (
-    MAX_TRANSMISSION,
     Problem,
     Reduced,
     clip,
@@ -36,12 +38,12 @@ from ..reduced import (
     judge,
     unreachable,
 )
-from ..registry import ROD, Condition, Mechanism, Parameter, register
+from ..registry import ROD, Condition, Mechanism, Parameter, Params, register
 
 EPS = sys.float_info.epsilon
 
 
-def position(p, th):
+def position(p: Params, th: Any) -> Any:
     r2, r3, e = p["crank"], p["coupler"], p["offset"]
     # r3² − (e − B_y)² as (r3 − e + B_y)(r3 + e − B_y) with 1 ± sin θ = 2 sin²(θ/2 ± π/4):
     # exact near the coupler's upright positions, where a design on its limit has a dead point
@@ -56,18 +58,18 @@ def position(p, th):
     return where(bx < -r2 / 2, folded, bx + root)
 
 
-def transmission(p, th):
+def transmission(p: Params, th: Any) -> dict[str, Any]:
     r2, r3, e = p["crank"], p["coupler"], p["offset"]
     return {"coupler-slider": (e - r2 * ca.sin(th)) / r3}
 
 
-def joints(p, th):
+def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r2 = p["crank"]
     return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)),
             "C": (position(p, th), p["offset"])}  # fmt: skip
 
 
-def facts(p):
+def facts(p: Params) -> dict[str, Any]:
     r2, r3, e = p["crank"], p["coupler"], p["offset"]
     # β = asin(e/(r3−r2)) − asin(e/(r3+r2)) with atan2; odd in e: TR < 1 is the mirror's 1/TR
     beta = ca.atan2(e, leg(r3 - r2, e)) - ca.atan2(e, leg(r3 + r2, e))
@@ -110,7 +112,8 @@ def reduced(p: Problem) -> Reduced:
         if len(p.fixed) > 1:  # the first fixed part sets the design; the others must agree
             judge(p, facts, design)
         return Reduced([design] if _allowed(p, design) else [])
-    designs, seen = [], []
+    designs: list[dict[str, float]] = []
+    seen: list[float] = []
     solved: dict[tuple[float, float], float | None] = {}  # the signs' boxes often agree
     for sign in (1, -1):
         box = _q_box(p, s, c, sign)
@@ -120,7 +123,7 @@ def reduced(p: Problem) -> Reduced:
         if (lo, hi) not in solved:
             solved[lo, hi] = _optimum(p, s, c, lo, hi) if lo < hi else None
         q = solved[lo, hi]
-        if q is not None and not any(abs(q - o) <= 1e-12 * max(q, o) for o in seen):
+        if q is not None and not any(abs(q - o) <= ROUNDING * max(q, o) for o in seen):
             seen.append(q)
             designs.append(_design(p, q, sign, s, c))
     return Reduced(designs)

@@ -2,7 +2,7 @@
 
 The crank pin B = r(cos θ, sin θ) slides in a slot of the yoke, which moves along x:
 
-    s(θ) = r cos θ        (the seed measures x = r(1 − cos θ) from one extreme: the same curve)
+    s(θ) = r cos θ        (measured from one extreme, x = r(1 − cos θ): the same curve)
 
 =====  ==========  =========================
 name   symbol      meaning
@@ -17,30 +17,31 @@ drives along the slot's normal, so the transmission angle is 90° throughout.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import casadi as ca
 
 from ...errors import Unreachable
 from ...results import TOL
 from ..reduced import Problem, Reduced, judge
-from ..registry import Mechanism, Parameter, register
+from ..registry import Mechanism, Parameter, Params, register
 
 
-def position(p, th):
+def position(p: Params, th: Any) -> Any:
     return p["crank"] * ca.cos(th)
 
 
-def transmission(p, th):
+def transmission(p: Params, th: Any) -> dict[str, Any]:
     return {}
 
 
-def joints(p, th):
+def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r = p["crank"]
     return {"O2": (0.0, 0.0), "B": (r * ca.cos(th), r * ca.sin(th)),
             "yoke": (position(p, th), 0.0)}  # fmt: skip
 
 
-def facts(p):
+def facts(p: Params) -> dict[str, Any]:
     return {"beta": 0.0, "stroke": 2 * p["crank"], "transmission_cos": ()}
 
 

@@ -24,23 +24,25 @@ TR = (π − acos(d/r2)) / acos(d/r2); stroke = 2L; transmission cos μ = L cos 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import casadi as ca
 
 from ...errors import Unreachable
+from ...targets import MIN_SIZE
 from ..geometry import ahead, leg, lever, sqrt, where
-from ..reduced import MIN_SIZE, STRICT, Problem, Reduced
-from ..registry import ROD, Condition, Mechanism, Parameter, Scale, register
+from ..reduced import STRICT, Problem, Reduced
+from ..registry import ROD, Condition, Mechanism, Parameter, Params, Scale, register
 from ..slotted import check
 from ..slotted import scale as _scale
 
 
-def _lever(p, th):
+def _lever(p: Params, th: Any) -> tuple[Any, Any]:
     r2, d = p["crank"], p["pivot_distance"]
     return lever(r2, d, th)
 
 
-def position(p, th):
+def position(p: Params, th: Any) -> Any:
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["connecting_rod"]
     c, s = _lever(p, th)
     # sqrt(l² − L² cos² ψ) with l ∓ L cos ψ = (l − L) + L(1 ∓ cos ψ), 1 ∓ cos ψ from the
@@ -54,19 +56,19 @@ def position(p, th):
     return ahead(-L * s, sqrt(where(x > 0, up, down)), (l - L) * (l + L))
 
 
-def transmission(p, th):
+def transmission(p: Params, th: Any) -> dict[str, Any]:
     c, _ = _lever(p, th)
     return {"connecting_rod-ram": p["lever"] * c / p["connecting_rod"]}
 
 
-def joints(p, th):
+def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r2, d, L = p["crank"], p["pivot_distance"], p["lever"]
     c, s = _lever(p, th)
     return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (-d, 0.0),
             "P": (-d - L * c, -L * s), "R": (-d, position(p, th))}  # fmt: skip
 
 
-def facts(p):
+def facts(p: Params) -> dict[str, Any]:
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["connecting_rod"]
     q = ca.atan2(leg(r2, d), d)  # acos(d/r2)
     return {

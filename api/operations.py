@@ -1,0 +1,28 @@
+"""The operations the service runs, by name: each the library's function and its checks."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import synth
+from synth.analysis.kinematics import check as check_analysis
+from synth.analysis.sweep import check as check_sweep
+from synth.synthesis.synthesize import check as check_synthesis
+
+
+@dataclass(frozen=True)
+class Operation:
+    """``run``: the library's function; ``check``: its checks of the same arguments (cheap, no
+    solving: a request synth refuses gets its 422 before it waits for a solver)."""
+
+    run: Callable[..., Any]
+    check: Callable[..., Any]
+
+
+OPERATIONS: dict[str, Operation] = {
+    "analyze": Operation(synth.analyze, check_analysis),
+    "synthesize": Operation(synth.synthesize, check_synthesis),
+    "sweep": Operation(synth.sweep, check_sweep),
+}

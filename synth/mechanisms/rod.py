@@ -1,0 +1,130 @@
+"""The rule for a connecting rod from a pin to a straight path, shared by the types with one:
+written once, in CasADi maths (``rule``), compiled for numbers (``rod``) and built into the
+four-bar construction's function."""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Mapping
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..numerics import ROUNDING
+from ..numerics.native import Points, native
+from ..targets import MIN_SIZE
+from .reduced import ONE_WAY, STRICT, Problem
+
+# the rule's parameters: the objective, the rod's box and its path's placement
+PARAMS = ("min_size", "cos_bound", "rod_lo", "rod_hi", "on_line", "height_fixed", "height",
+          "height_lo", "height_hi")  # fmt: skip
+
+_local = threading.local()
+
+
+def rule(arm: Any, half: Any, cos_other: Any, q: Mapping[str, Any]) -> tuple[Any, Any, Any, Any]:
+    """The connecting rod from a pin at ``arm`` from its pivot to a straight path: its
+    length l, its path's placement h and its worst cos μ.
+
+    A pin that swings ±``half`` about the path's normal (a placement h; ``on_line`` 0)
+    transmits worst at mid-swing or at the swing's ends, where its offset from the path is
+    g1 = |h − arm| or g2 = |h − arm x|, x = cos(half). The slider moves one way over the swing
+    (so the swing's ends are its dead centres, as the closed forms take them) exactly when
+    g2 ≤ x l: at the ends the rod may not lean further from the path's normal than the pin's
+    own turn (kept ``ONE_WAY`` from it). The shortest rod with worst cos ≤ c is then
+    max(g1/c, g2/m), m = min(c, x − ONE_WAY), least at h = arm (m + c x)/(m + c) (the
+    midpoint when x > c). With max transmission, c is ``cos_other``, the other joints' worst
+    cos: a rod that cannot transmit as well within its upper bound sits there, h at the
+    midpoint (the least worst offset) as far as the one way allows; else the shortest rod
+    that transmits no worse (ties go to the smaller design). With min size c is cos(bound).
+    A pin that turns fully about a centre on the path (``on_line`` 1) needs l > arm, and
+    transmits worst at w = arm.
+
+    Symbolic: (l, h, the rod's worst cos, l_ok), with ``q`` the entries of ``PARAMS``; where
+    the bounds allow no rod, l_ok is 0 and l, and where no h is found h, are NaN (flags, not
+    NaN propagation: C's fmin and fmax drop a NaN).
+    """
+    nan, inf = ca.SX(math.nan), ca.SX(math.inf)
+    rlo, rhi = q["rod_lo"], q["rod_hi"]
+    c = ca.if_else(q["min_size"], q["cos_bound"], cos_other)
+    # on the line (the pin turns fully about a centre on the path)
+    w_line = arm
+    short_line = ca.fmax(ca.fmax(rlo, w_line / c), w_line + STRICT)
+    len_line = ca.if_else(q["min_size"], short_line, ca.if_else(short_line <= rhi, short_line,
+                                                                rhi))  # fmt: skip
+    # a swinging pin
+    xc = ca.cos(half)
+    m_ok = xc > ONE_WAY  # no rod moves the slider one way past a swing of ±90° (less the margin)
+    m = ca.fmin(c, xc - ONE_WAY)
+    pos = c > 0
+
+    def place(h: Any) -> Any:  # the caller's placement, or one within its bounds
+        return ca.if_else(q["height_fixed"], q["height"],
+                          ca.fmin(ca.fmax(h, q["height_lo"]), q["height_hi"]))  # fmt: skip
+
+    # the shortest rod with worst cos ≤ c; none to find where c = 0 (nothing else limits the
+    # transmission: the rod sits at its upper bound)
+    h = place(ca.if_else(pos, arm * (m + c * xc) / ca.if_else(pos, m + c, 1.0), arm))
+    g1, g2 = ca.fabs(h - arm), ca.fabs(h - arm * xc)
+    short = ca.if_else(pos, ca.fmax(rlo, ca.fmax(g1 / c, g2 / m)), inf)
+    short_nan = ca.logic_and(pos, ca.logic_not(m_ok))
+    h_nan = ca.logic_and(short_nan, ca.logic_not(q["height_fixed"]))
+    # at the upper bound: the midpoint, moved as little as the one way needs
+    lean = (xc - ONE_WAY) * rhi  # the most the one way allows at the upper bound
+    mid = place(ca.fmin(ca.fmax(arm * (1 + xc) / 2, arm * xc - lean), arm * xc + lean))
+    limited_ok = ca.fabs(mid - arm * xc) <= lean * (1 + ROUNDING)
+    use_short = ca.logic_and(ca.logic_not(short_nan), short <= rhi)
+    len_swing = ca.if_else(q["min_size"], short, ca.if_else(use_short, short, rhi))
+    neither = ca.logic_and(ca.logic_not(use_short), ca.logic_not(limited_ok))
+    swing_nan = ca.if_else(q["min_size"], short_nan, neither)
+    h = ca.if_else(ca.logic_or(q["min_size"], use_short), h, mid)
+    h_nan = ca.logic_and(h_nan, ca.logic_or(q["min_size"], use_short))
+    w_swing = ca.fmax(ca.fabs(h - arm), ca.fabs(h - arm * xc))
+    line = q["on_line"]
+    length = ca.if_else(line, len_line, len_swing)
+    length_nan = ca.logic_and(ca.logic_not(line), swing_nan)
+    w = ca.if_else(line, w_line, w_swing)
+    l_ok = ca.logic_and(ca.logic_not(length_nan),
+                        ca.logic_and(length <= rhi * (1 + ROUNDING), length < inf))  # fmt: skip
+    l_ok = ca.logic_and(l_ok, ca.fmin(length, rhi) < inf)
+    rod_l = ca.if_else(l_ok, ca.fmin(length, rhi), nan)
+    rod_h = ca.if_else(ca.logic_or(line, h_nan), nan, h)
+    rod_cos = ca.if_else(ca.logic_and(l_ok, ca.logic_not(ca.logic_and(ca.logic_not(line), h_nan))),
+                         w / ca.fmin(length, rhi), nan)  # fmt: skip
+    return rod_l, rod_h, rod_cos, l_ok
+
+
+def params(p: Problem, name: str, height: str | None) -> list[float]:
+    """``PARAMS`` for the rod ``name`` of a problem (``height``: its path's placement, None for a
+    path through the pivot)."""
+    lo, hi = p.box(name)
+    fixed = height is not None and height in p.fixed
+    h_box = p.bounds.get(height, (0.0, 0.0)) if height is not None else (0.0, 0.0)
+    return [float(p.objective == MIN_SIZE), p.cos_bound, lo, hi, float(height is None),
+            float(fixed), p.fixed[height] if fixed else 0.0, *h_box]  # fmt: skip
+
+
+def rod(
+    p: Problem, name: str, height: str | None, arm: Any, half: Any, cos_other: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``rule`` at the points (arm, half, cos_other), arrays broadcast together: (l, h, the rod's
+    worst cos); l is NaN where the bounds allow no rod."""
+    x = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (arm, half, cos_other)))
+    out = _compiled()(np.stack([a.ravel() for a in x], axis=1), params(p, name, height))
+    return out[0].reshape(x[0].shape), out[1].reshape(x[0].shape), out[2].reshape(x[0].shape)
+
+
+def function() -> ca.Function:
+    """``rule`` at x = (arm, half, cos_other) with the parameters p (``PARAMS``)."""
+    x, q = ca.SX.sym("x", 3), ca.SX.sym("p", len(PARAMS))
+    l, h, c, _ = rule(x[0], x[1], x[2], {n: q[i] for i, n in enumerate(PARAMS)})
+    return native(ca.Function("connecting_rod", [x, q], [ca.vertcat(l, h, c)], {"cse": True}))
+
+
+def _compiled() -> Points:
+    """This thread's compiled ``rule``."""
+    if not hasattr(_local, "points"):
+        _local.points = Points(function())
+    return _local.points  # type: ignore[no-any-return]

@@ -1,0 +1,40 @@
+"""What a synthesis aims at, named once: the time ratio as the crank angle β, and the
+objectives a request may name.
+
+A quick-return's slow stroke takes the crank through π + β and the quick one through π − β,
+so the time ratio is TR = (π + β)/(π − β) and β = π (TR − 1)/(TR + 1).
+
+>>> round(time_ratio(beta(2.5)), 12)
+2.5
+"""
+
+from __future__ import annotations
+
+import math
+
+# the objectives: the reduced solvers' and IPOPT's two, the front between them, and the two on
+# how the slider moves (``synth.synthesis.motion``)
+MAX_TRANSMISSION = "max_transmission_angle"
+MIN_SIZE = "min_size"
+PARETO = "pareto"
+UNIFORM = "uniform_cutting_speed"
+PEAK = "min_peak_acceleration"
+MOTION_OBJECTIVES = (UNIFORM, PEAK)
+# every objective a request may name, the default first, each with the words a person reads
+OBJECTIVES = {
+    PARETO: "Trade-off front (size against transmission)",
+    MAX_TRANSMISSION: "Best transmission angle",
+    MIN_SIZE: "Smallest design",
+    UNIFORM: "Most uniform cutting speed",
+    PEAK: "Least peak acceleration",
+}
+
+
+def beta(time_ratio: float) -> float:
+    """The crank angle by which the slow stroke exceeds π: π (TR − 1)/(TR + 1)."""
+    return math.pi * (time_ratio - 1) / (time_ratio + 1)
+
+
+def time_ratio(beta: float) -> float:
+    """The time ratio (π + β)/(π − β) of the crank angle β (``beta``'s inverse)."""
+    return (math.pi + beta) / (math.pi - beta)

@@ -1,0 +1,123 @@
+"""The motion objectives (uniform_cutting_speed, min_peak_acceleration) and the fluctuation limit.
+
+Checked from outside: the best candidate's measure by the brute force of
+tests/support/motion_bruteforce.py (its own sampling and maximiser on
+tests/support/bruteforce.py's geometry), its targets by the brute-force simulation, and its
+optimality against an independent global search over the design space
+(tests/support/motion_referee.py) on a sample; `make stress` adds the crank-rocker, whose many
+local optima need a referee of more effort (about 2.5 minutes each).
+"""
+
+import os
+
+import numpy as np
+import pytest
+
+import synth
+from synth.analysis.kinematics import motion_terms
+
+from ..support import motion_referee
+from ..support.assertions import assert_meets
+from ..support.designs import random_designs
+from ..support.motion_bruteforce import brute_motion
+
+UNIFORM, PEAK = "uniform_cutting_speed", "min_peak_acceleration"
+TYPES = ["offset_slider_crank", "whitworth", "crank_shaper", "drag_link_slider"]
+STRESS = os.environ.get("HYPOTHESIS_PROFILE") == "stress"
+REFEREED = [*TYPES, "crank_rocker_slider"] if STRESS else TYPES
+EFFORT = {"crank_rocker_slider": {"seeds": (0, 1, 2), "popsize": 20, "maxiter": 120}}
+BEATEN = 1e-6  # relative: the referee may beat ours by this much, no more
+REACH = 1e-4  # relative: the referee must come this close to ours, or it is too weak to judge
+
+
+def best(mtype, objective, tr=1.6, bound=20.0, **kw):
+    r = synth.synthesize(tr, 1.0, bound, [{"type": mtype}], objective=objective,
+                         time_budget_ms=60_000, **kw)  # fmt: skip
+    assert r.complete
+    return r
+
+
+def brute(c, objective):
+    _, middle, working, ret = brute_motion(c.type, c.params)
+    return middle if objective == UNIFORM else max(working, ret)
+
+
+@pytest.mark.parametrize("objective", [UNIFORM, PEAK])
+@pytest.mark.parametrize("mtype", REFEREED)
+def test_motion_optimum_is_not_beaten_by_a_global_search(mtype, objective):
+    r = best(mtype, objective)
+    c = r.candidates[0]
+    assert_meets(c, 1.6, 1.0, 20.0)
+    assert c.objective_value == pytest.approx(brute(c, objective), rel=1e-9)
+    values = [x.objective_value for x in r.candidates]
+    assert values == sorted(values)
+    ref = motion_referee.search(mtype, objective, 1.6, 20.0, **EFFORT.get(mtype, {}))
+    assert ref.params is not None
+    beat = (c.objective_value - ref.value) / ref.value
+    assert beat <= BEATEN, f"ours {c.params} is beaten by {ref.params}"
+    assert beat >= -REACH, f"the referee reaches only {ref.value} ({ref.params}): too weak"
+
+
+def test_the_fluctuation_limit_holds_or_says_how_close_it_gets():
+    mtype = "offset_slider_crank"  # its least-peak design is not its most uniform one
+    free = best(mtype, PEAK).candidates[0]
+    f = free.motion.working_speed_fluctuation.middle
+    looser = best(mtype, PEAK, max_working_speed_fluctuation=f * 1.01)
+    assert looser.candidates[0].params == pytest.approx(free.params, rel=1e-9)
+    least = best(mtype, UNIFORM).candidates[0].objective_value
+    assert least < f * 0.99
+    limit = (least + f) / 2  # binds: the free optimum breaks it
+    held = best(mtype, PEAK, max_working_speed_fluctuation=limit)
+    assert held.candidates
+    for c in held.candidates:
+        assert brute(c, UNIFORM) <= limit * (1 + 1e-9)
+        assert_meets(c, 1.6, 1.0, 20.0)
+    top = held.candidates[0]
+    assert top.objective_value > free.objective_value  # the limit costs acceleration
+    assert brute(top, UNIFORM) == pytest.approx(limit, rel=1e-6)  # and binds
+    (why,) = best(mtype, PEAK, max_working_speed_fluctuation=least * 0.99).infeasible
+    assert why.code == "FLUCTUATION_UNREACHABLE" and f"least {least:.6g}" in why.reason
+
+
+LIMIT = "max_working_speed_fluctuation"
+
+
+@pytest.mark.parametrize(
+    ("kw", "named"),
+    [
+        ({LIMIT: 0.99, "objective": UNIFORM}, LIMIT),
+        ({LIMIT: 1.2, "objective": "pareto"}, LIMIT),
+        ({"objective": "smoothest"}, "objective"),
+    ],
+)
+def test_bad_motion_requests_name_the_field(kw, named):
+    with pytest.raises(synth.InvalidParameters) as e:
+        synth.synthesize(1.6, 1.0, 20.0, **kw)
+    assert e.value.loc == (named,)
+
+
+@pytest.mark.parametrize("mtype", [*TYPES, "crank_rocker_slider", "scotch_yoke"])
+def test_the_measures_derivatives_match_central_differences(mtype):
+    """The optimiser's exact derivatives of every motion term (quality.motion_terms)."""
+    m = synth.mechanisms.get(mtype)
+    checked = 0
+    for p in random_designs(mtype, 8, seed=11):
+        try:
+            t = motion_terms(mtype, p, gradient=True)
+        except synth.SynthError:
+            continue
+        p = m.complete(p)
+        for j, name in enumerate(m.names):
+            h = 1e-6 * abs(p[name])
+            if h == 0:
+                continue
+            up, down = (motion_terms(mtype, {**p, name: p[name] + s}) for s in (h, -h))
+            for key in ("middle", "working", "returning"):
+                if not getattr(up, key).shape == getattr(down, key).shape == getattr(t, key).shape:
+                    continue  # a peak enters or leaves within the step
+                central = (getattr(up, key) - getattr(down, key)) / (2 * h)
+                scale = np.abs(getattr(t, key)) / abs(p[name]) + np.abs(central)
+                exact = getattr(t, f"{key}_dp")[:, j]
+                assert exact == pytest.approx(central, abs=1e-6 * scale.max())
+                checked += 1
+    assert checked >= 8 * 3

@@ -1,0 +1,381 @@
+"""HTTP tests of every endpoint (TestClient, the shipped process-pool engine)."""
+
+import dataclasses
+import json
+import math
+
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+
+import synth
+from api.config import Settings
+from api.engine import Engine
+from api.main import app
+from api.routers.common import engine
+from synth.analysis.kinematics import ANALYSIS_INCLUDE
+from synth.mechanisms import all_types, get
+
+from ..support import bruteforce
+from ..support import reference_cases as ref
+
+
+@pytest.fixture(scope="module")
+def client():
+    with TestClient(app) as c:
+        yield c
+
+
+def design(mtype, **params):
+    return {"type": mtype, "params": params}
+
+
+def test_health(client):
+    r = client.get("/health")
+    assert r.status_code == 200
+    assert r.json() == {"status": "ok", "version": synth.__version__}
+
+
+def test_mechanisms_listing_comes_from_the_registry(client):
+    r = client.get("/v1/mechanisms")
+    assert r.status_code == 200
+    body = r.json()
+    assert [m["type"] for m in body] == list(all_types())
+    for m in body:
+        reg = get(m["type"])
+        assert [q["name"] for q in m["parameters"]] == list(reg.names)
+        assert m["validity"] == [c.text for c in reg.conditions]
+        assert m["quick_return"] == (m["type"] != "scotch_yoke")
+        assert m["sources"]
+        for q in m["parameters"]:
+            assert q["symbol"] and q["description"]
+
+
+def test_one_mechanism_and_defaults(client):
+    m = client.get("/v1/mechanisms/crank_shaper").json()
+    params = {q["name"]: q for q in m["parameters"]}
+    assert params["crank"]["required"] and params["crank"]["symbol"] == "r2"
+    assert params["ram_link"]["required"] is False and params["ram_link"]["default"] == 0.0
+    assert params["ram_height"]["default_rule"].startswith("lever·cos ψmax")
+
+
+def test_unknown_type_is_404_with_the_known_types(client):
+    r = client.get("/v1/mechanisms/slider_crank")
+    assert r.status_code == 404
+    (err,) = r.json()["detail"]
+    assert err["loc"] == ["path", "type"]
+    assert "known types: scotch_yoke" in err["msg"]
+
+
+def test_analyze_slotted_lever_lab_table(client):
+    body = {"mechanism": design("crank_shaper", **ref.SLOTTED_LEVER_LAB_PARAMS), "samples": 36}
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 200
+    out = r.json()
+    x = ref.SLOTTED_LEVER_LAB_SCALE_ZERO + np.array(out["curves"]["position"])
+    np.testing.assert_allclose(x, ref.SLOTTED_LEVER_LAB_THEORY[:-1], atol=0.005 + 1e-9)
+    assert out["time_ratio"] == pytest.approx(1.38340, abs=5e-6)
+    assert out["extremes"]["max"]["crank_angle_deg"] == pytest.approx(104.48, abs=0.005)
+    assert out["grashof"] is None and out["reversals"] == 2
+
+
+def test_analyze_slotted_link_lab_scotch_yoke(client):
+    body = {"mechanism": design("scotch_yoke", crank=35.0), "crank_angles_deg": [20.0]}
+    out = client.post("/v1/analyze", json=body).json()
+    assert 35.0 - out["curves"]["position"][0] == pytest.approx(2.11, abs=0.005)
+    assert -out["curves"]["velocity"][0] == pytest.approx(11.97, abs=0.005)
+    assert -out["curves"]["acceleration"][0] == pytest.approx(32.89, abs=0.005)
+    assert out["time_ratio"] == pytest.approx(1.0) and out["transmission"]["min_deg"] == 90.0
+
+
+def test_analyze_drag_link_project_at_60deg(client):
+    p = {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504}
+    body = {"mechanism": design("drag_link_slider", **p), "crank_speed": 10.0,
+            "crank_angles_deg": [60.0]}  # fmt: skip
+    out = client.post("/v1/analyze", json=body).json()
+    h = 1e-4
+    s = bruteforce.position("drag_link_slider", p, math.radians(60) + np.array([-h, 0.0, h]))
+    assert out["curves"]["velocity"][0] == pytest.approx((s[2] - s[0]) / (2 * h) * 10, rel=1e-7)
+    assert out["curves"]["crank_angle_deg"] == [60.0]
+    joints = {j["joint"]: j for j in out["transmission"]["joints"]}
+    assert joints["coupler-follower"]["min_deg"] == pytest.approx(27.01, abs=0.01)
+    assert out["grashof"] == "drag-link"
+
+
+def test_analyze_without_curves_has_no_curves(client):
+    body = {"mechanism": design("whitworth", crank=75, pivot_distance=50, lever=150,
+                                connecting_rod=200)}  # fmt: skip
+    out = client.post("/v1/analyze", json=body).json()
+    assert "curves" not in out and "motion" not in out and "sensitivities" not in out
+    assert out["time_ratio"] == pytest.approx(2.73524, abs=5e-6)
+    assert out["stroke"] == pytest.approx(300.0, rel=1e-12)
+
+
+def test_analyze_includes_motion_and_tolerances_when_asked(client):
+    body = {"mechanism": design("scotch_yoke", crank=35.0), "include": ["motion", "envelope"],
+            "tolerance": {"relative": 1e-3}}  # fmt: skip
+    out = client.post("/v1/analyze", json=body).json()
+    assert out["motion"]["working_speed_fluctuation"]["whole"] == pytest.approx(math.pi / 2)
+    assert out["motion"]["peak_acceleration"] == {
+        "working_stroke": pytest.approx(0.5), "return_stroke": pytest.approx(0.5)
+    }  # fmt: skip
+    sens = out["sensitivities"]  # the stroke is 2r: ± 2 × 1e-3 × 35
+    assert sens["stroke"] == {"crank": pytest.approx(2.0)}
+    assert sens["deviation"]["stroke"] == pytest.approx(0.07)
+    assert sens["tolerance"] == {"absolute": None, "relative": 1e-3}
+    # the crank pin's circle holds everything: the yoke's pin travels along its diameter
+    assert out["envelope"] == {"x": [-35.0, 35.0], "y": [-35.0, 35.0], "width": 70.0,
+                               "height": 70.0, "link_length_sum": 35.0}  # fmt: skip
+
+
+def test_analyze_gives_the_pins_at_the_curves_angles_when_asked(client):
+    p = {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504}
+    body = {"mechanism": design("drag_link_slider", **p), "crank_angles_deg": [0, 90, 180],
+            "include": ["pins"]}  # fmt: skip
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 200, r.text
+    pins = r.json()["curves"]["pins"]
+    j = synth.joints("drag_link_slider", p, [0.0, 90.0, 180.0])
+    assert list(pins) == list(j) == ["O2", "A", "O4", "B", "C", "D"]  # the drawing's order
+    for name, xy in j.items():
+        assert set(pins[name]) == {"x", "y"}
+        assert len(pins[name]["x"]) == len(pins[name]["y"]) == 3
+        assert pins[name] == {"x": xy[:, 0].tolist(), "y": xy[:, 1].tolist()}, name
+    assert pins["A"]["x"][0] == p["crank"] and pins["A"]["y"][1] == p["crank"]
+
+
+def test_analyze_pins_without_angles_is_422_at_include(client):
+    body = {"mechanism": design("scotch_yoke", crank=35.0), "include": ["pins"]}
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 422, r.text
+    (d,) = r.json()["detail"]
+    assert d["loc"][-1] == "include" and d["loc"] == ["body", "include"]
+    assert "needs crank_angles_deg or samples" in d["msg"]
+
+
+def test_analyze_has_no_pins_unless_asked(client):
+    body = {"mechanism": design("scotch_yoke", crank=35.0), "samples": 4,
+            "include": ["motion", "envelope"]}  # fmt: skip
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 200, r.text
+    assert "pins" not in r.json()["curves"] and '"pins"' not in r.text
+    asked = client.post("/v1/analyze", json={**body, "include": ["pins"]})
+    assert list(asked.json()["curves"]["pins"]) == ["O2", "B", "yoke"]  # the same, asked
+
+
+def test_the_openapi_shows_the_pins_for_an_analysis_only(client):
+    schemas = client.get("/openapi.json").json()["components"]["schemas"]
+    include = schemas["AnalyzeRequest"]["properties"]["include"]
+    assert include["items"]["enum"] == ["motion", "sensitivities", "envelope", "pins"]
+    assert "pins (with crank_angles_deg or samples" in include["description"]
+    pins = schemas["Curves"]["properties"]["pins"]
+    assert {"$ref": "#/components/schemas/PinPath"} in [
+        s.get("additionalProperties") for s in pins["anyOf"]
+    ]
+    assert set(schemas["PinPath"]["required"]) == {"x", "y"}
+    # a candidate has no curves: synthesis does not offer them
+    assert "pins" not in schemas["SynthesizeRequest"]["properties"]["include"]["items"]["enum"]
+
+
+def test_invalid_design_names_each_parameter(client):
+    body = {"mechanism": design("whitworth", crank=75, pivot_distance=50, lever=150,
+                                connecting_rod=135)}  # fmt: skip
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 422
+    detail = r.json()["detail"]
+    assert [d["loc"] for d in detail] == [  # in the type's order of its parameters
+        ["body", "mechanism", "params", "lever"],
+        ["body", "mechanism", "params", "connecting_rod"],
+    ]
+    assert detail[0]["msg"].startswith("connecting_rod 135 ≤ lever 150")
+    assert detail[0]["type"] == "invalid_design"
+
+
+def test_synthesize_drag_link_project(client):
+    spec = {"type": "drag_link_slider", "fixed": {**ref.DRAG_LINK_FIXED, "connecting_rod": 0.3}}
+    body = {"time_ratio": 1.5, "stroke": 0.3, "mechanisms": [spec]}
+    out = client.post("/v1/synthesize", json=body).json()
+    couplers = [c["params"]["coupler"] for c in out["candidates"]]
+    assert couplers == pytest.approx([0.2504, 0.1544], abs=1e-4)
+    assert out["complete"] and out["infeasible"] == []
+    assert all(c["verified"] and c["method"] == "closed_form" for c in out["candidates"])
+    body["min_transmission_angle_deg"] = 20.0
+    out = client.post("/v1/synthesize", json=body).json()
+    assert [c["params"]["coupler"] for c in out["candidates"]] == pytest.approx([0.2504], abs=1e-4)
+
+
+def test_the_default_answer_is_the_front_with_families(client):
+    body = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 40.0}
+    out = client.post("/v1/synthesize", json=body).json()
+    whitworth = [c for c in out["candidates"] if c["type"] == "whitworth"]
+    assert len(whitworth) >= 3
+    assert [c["front"]["index"] for c in whitworth] == list(range(len(whitworth)))[::-1]
+    assert whitworth[0]["front"]["ends"] == ["max_transmission_angle"]
+    assert whitworth[-1]["front"]["ends"] == ["min_size"]
+    assert {c["front"]["measure"] for c in out["candidates"]} == {"link_length_sum"}
+    (shaper,) = [c for c in out["candidates"] if c["type"] == "crank_shaper"]
+    assert shaper["family"]["free"] == ["crank"] and "pivot_distance" in shaper["family"]["tied"]
+    schema = client.get("/openapi.json").json()["components"]["schemas"]
+    request = schema["SynthesizeRequest"]["properties"]
+    assert request["objective"]["default"] == "pareto"
+    assert set(request["objective"]["enum"]) == {
+        "pareto",
+        "max_transmission_angle",
+        "min_size",
+        "uniform_cutting_speed",
+        "min_peak_acceleration",
+    }
+    assert request["max_working_speed_fluctuation"]["anyOf"][0]["minimum"] == 1
+    assert {"front", "family", "envelope", "motion", "sensitivities"} <= set(
+        schema["Candidate"]["properties"]
+    )
+
+
+def test_a_motion_objective_answers_with_each_candidates_motion(client):
+    body = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0,
+            "objective": "uniform_cutting_speed",
+            "mechanisms": [{"type": "whitworth"}]}  # fmt: skip
+    out = client.post("/v1/synthesize", json=body).json()
+    c = out["candidates"][0]
+    assert c["objective_value"] == c["motion"]["working_speed_fluctuation"]["middle"]
+    assert out["complete"] and c["verified"]
+
+
+def test_synthesize_infeasible_is_200_with_reasons(client):
+    body = {"time_ratio": 3.0, "stroke": 100.0, "min_transmission_angle_deg": 30.0,
+            "mechanisms": [{"type": "offset_slider_crank"}]}  # fmt: skip
+    r = client.post("/v1/synthesize", json=body)
+    assert r.status_code == 200
+    out = r.json()
+    assert out["candidates"] == []
+    assert out["infeasible"][0]["code"] == "TIME_RATIO_UNREACHABLE"
+
+
+def test_sweep_drag_link_project_fig5(client):
+    body = {"mechanism": design("drag_link_slider", **ref.DRAG_LINK_PROJECT, coupler=0.3),
+            "vary": "coupler", "start": 0.1, "stop": 0.5, "points": 41}  # fmt: skip
+    out = client.post("/v1/sweep", json=body).json()
+    assert out["valid_interval"] == [[pytest.approx(0.15), pytest.approx(0.40)]]
+    assert out["time_ratio_range"]["min"]["time_ratio"] == pytest.approx(1.4298, abs=5e-5)
+    assert out["time_ratio_range"]["max"]["time_ratio"] == pytest.approx(3.538, abs=5e-4)
+    assert out["time_ratio"][0] is None and out["valid"][0] is False
+
+
+SHAPER = {"crank": 40.0, "pivot_distance": 160.0, "lever": 240.0}
+ANALYZE = {"mechanism": design("crank_shaper", **SHAPER)}
+SYNTH = {"time_ratio": 1.5, "stroke": 1.0}
+SPEC = {"type": "whitworth"}
+SWEEP = {"mechanism": design("crank_shaper", **SHAPER), "vary": "crank", "start": 10.0,
+         "stop": 50.0}  # fmt: skip
+
+
+def with_(base, path, value):
+    """A copy of ``base`` with the value at ``path`` (a list of keys) replaced."""
+    import copy
+
+    out = copy.deepcopy(base)
+    node = out
+    for k in path[:-1]:
+        node = node[k]
+    node[path[-1]] = value
+    return out
+
+
+BAD = [
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], "NaN"), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], "Infinity"), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], "-inf"), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], -40.0), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], 0.0), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "crank"], 1e300), "crank"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params", "rod"], 1.0), "rod"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "params"], {"crank": 40.0}), "pivot_distance"),
+    ("/v1/analyze", with_(ANALYZE, ["mechanism", "type"], "cam"), "mechanism"),
+    ("/v1/analyze", with_(ANALYZE, ["colour"], "red"), "colour"),
+    ("/v1/analyze", with_(ANALYZE, ["samples"], 100_001), "samples"),
+    ("/v1/analyze", with_(ANALYZE, ["samples"], 0), "samples"),
+    ("/v1/analyze", with_(ANALYZE, ["crank_angles_deg"], [0.0] * 100_001), "crank_angles_deg"),
+    ("/v1/analyze", with_(ANALYZE, ["crank_angles_deg"], [0.0, "nan"]), "crank_angles_deg"),
+    ("/v1/analyze", {**ANALYZE, "samples": 4, "crank_angles_deg": [1.0]}, "not both"),
+    ("/v1/analyze", with_(ANALYZE, ["crank_speed"], "inf"), "crank_speed"),
+    ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"absolute": -0.1}), "tolerance"),
+    ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"absolute": 1.0, "relative": 0.1}),
+     "tolerance"),
+    ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"relative": "nan"}), "relative"),
+    ("/v1/analyze", with_(ANALYZE, ["include"], ["curvature"]), "include"),
+    ("/v1/analyze", with_(ANALYZE, ["include"], ["pins"]), "include"),
+    ("/v1/synthesize", {**SYNTH, "time_ratio": 0.5}, "time_ratio"),
+    ("/v1/synthesize", {**SYNTH, "time_ratio": "NaN"}, "time_ratio"),
+    ("/v1/synthesize", {**SYNTH, "stroke": -1.0}, "stroke"),
+    ("/v1/synthesize", {**SYNTH, "stroke": 0}, "stroke"),
+    ("/v1/synthesize", {**SYNTH, "min_transmission_angle_deg": 90.0}, "min_transmission_angle_deg"),
+    ("/v1/synthesize", {**SYNTH, "max_candidates": 51}, "max_candidates"),
+    ("/v1/synthesize", {**SYNTH, "time_budget_ms": 0}, "time_budget_ms"),
+    ("/v1/synthesize", {**SYNTH, "objective": "cheapest"}, "objective"),
+    ("/v1/synthesize", {**SYNTH, "objective": "uniform_cutting_speed",
+                        "max_working_speed_fluctuation": 0.9}, "max_working_speed_fluctuation"),
+    ("/v1/synthesize", {**SYNTH, "max_working_speed_fluctuation": 1.5},
+     "max_working_speed_fluctuation"),
+    ("/v1/synthesize", {**SYNTH, "max_working_speed_fluctuation": "NaN",
+                        "objective": "min_peak_acceleration"}, "max_working_speed_fluctuation"),
+    ("/v1/synthesize", {**SYNTH, "include": ["colour"]}, "include"),
+    ("/v1/synthesize", {**SYNTH, "include": ["pins"]}, "include"),
+    ("/v1/synthesize", {**SYNTH, "tolerance": {"relative": -1e-3}}, "tolerance"),
+    ("/v1/synthesize", {**SYNTH, "stroke_mm": 1.0}, "stroke_mm"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "fixed": {"rod": 1.0}}]}, "rod"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "fixed": {"lever": 0.0}}]}, "lever"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "bounds": {"lever": [2.0, 1.0]}}]},
+     "lower bound 2 > upper bound 1"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "bounds": {"lever": [1.0, "inf"]}}]},
+     "lever"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [
+        {**SPEC, "fixed": {"lever": 1.0}, "bounds": {"lever": [0.5, 2.0]}}]},
+     "lever: both fixed and bounded"),
+    ("/v1/synthesize", {**SYNTH, "mechanisms": [{"type": "cam"}]}, "mechanisms"),
+    ("/v1/sweep", {**SWEEP, "points": 10_001}, "points"),
+    ("/v1/sweep", {**SWEEP, "start": 60.0}, "start 60 > stop 50"),
+    ("/v1/sweep", {**SWEEP, "vary": "colour"}, "crank_shaper has no parameter 'colour'"),
+    ("/v1/sweep", {**SWEEP, "start": -10.0}, "start"),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("path", "body", "named"), BAD)
+def test_bad_bodies_are_422_naming_the_field(client, path, body, named):
+    r = client.post(path, json=body)
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"]
+    assert isinstance(detail, list) and detail
+    assert any(named in map(str, d["loc"]) or named in d["msg"] for d in detail), detail
+
+
+def test_an_analysis_answers_every_field_synth_gives(client):
+    """Everything synth.analyze returns for a request that asks for everything reaches the
+    client, value for value: a field added to synth.Analysis is served, not dropped."""
+    params = {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0}
+    everything = list(ANALYSIS_INCLUDE)
+    body = {"mechanism": {"type": "whitworth", "params": params}, "samples": 4,
+            "include": everything, "tolerance": {"relative": 1e-3}}  # fmt: skip
+    r = client.post("/v1/analyze", json=body)
+    assert r.status_code == 200, r.text
+    want = synth.analyze("whitworth", params, samples=4, include=everything,
+                         tolerance=synth.Tolerance(relative=1e-3)).to_dict()  # fmt: skip
+    assert set(want) == {f.name for f in dataclasses.fields(synth.Analysis)}
+    assert r.json() == json.loads(json.dumps(want))
+
+
+def test_the_budget_limit_is_the_servers_setting(client):
+    """The largest budget is read from the settings of the engine the routes depend on, at
+    request time: the session's (SYNTH_MAX_BUDGET_MS=1000, tests/conftest.py), then another."""
+    r = client.post("/v1/synthesize", json={**SYNTH, "time_budget_ms": 1500})
+    assert r.status_code == 422
+    (d,) = r.json()["detail"]
+    assert d["loc"] == ["body", "time_budget_ms"] and "≤ 1000" in d["msg"], d
+    small = Engine(Settings(max_budget_ms=5.0))
+    app.dependency_overrides[engine] = lambda: small
+    try:
+        r = client.post("/v1/synthesize", json={**SYNTH, "time_budget_ms": 10})
+        assert r.status_code == 422 and "≤ 5 " in r.json()["detail"][0]["msg"]
+    finally:
+        del app.dependency_overrides[engine]
+        small.close()
+    assert client.post("/v1/synthesize", json={**SYNTH, "time_budget_ms": 10}).status_code == 200

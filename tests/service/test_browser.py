@@ -1,0 +1,285 @@
+"""The playground (GET /app/) in a real Chromium, against a real server started here.
+
+Playwright drives Debian's Chromium (its own browser download is not used): ``CHROMIUM``, else
+``chromium`` on the PATH. Without one these tests skip and say how to install it, except in CI
+(``CI`` set: .ci/run installs it), where they fail. Screenshots of each view, at desktop and
+phone widths, go to build/screenshots/ (docs/playground.png is one of them).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+
+from ..support.server import ROOT, serving
+
+CHROMIUM = os.environ.get("CHROMIUM") or shutil.which("chromium")
+# as root, without a sandbox; no background connections (this machine's network is closed)
+ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update",
+        "--disable-sync"]  # fmt: skip
+SHOTS = ROOT / "build" / "screenshots"
+DESKTOP, PHONE = {"width": 1280, "height": 900}, {"width": 390, "height": 844}
+# Podhorodeski, Nokleby & Wittchen (2005): time ratio 1.5, stroke 0.3, its two couplers
+PROJECT = {"ground": 0.1, "crank": 0.225, "follower": 0.275, "connecting_rod": 0.3}
+COUPLERS = (0.250428, 0.154344)
+
+
+@pytest.fixture(scope="module")
+def site():
+    if not CHROMIUM:
+        message = "no Chromium: apt-get install chromium (Debian), or set CHROMIUM to its path"
+        if os.environ.get("CI"):
+            pytest.fail(message + " (CI must run the browser tests: .ci/run installs it)")
+        pytest.skip(message)
+    from playwright.sync_api import sync_playwright
+
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    with serving(SYNTH_WARM="0") as (port, _), sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        try:
+            yield browser, f"http://127.0.0.1:{port}"
+        finally:
+            browser.close()
+
+
+class Page:
+    """A page of the playground with every URL it requested."""
+
+    def __init__(self, site, viewport=DESKTOP, at="/app/"):
+        browser, self.base = site
+        self.context = browser.new_context(viewport=viewport)
+        self.page = self.context.new_page()
+        self.requests: list[str] = []
+        self.page.on("request", lambda r: self.requests.append(r.url))
+        self.page.goto(self.base + at)
+        self.page.wait_for_selector("body[data-ready=true]")
+
+    def close(self) -> None:
+        foreign = [u for u in self.requests if not u.startswith(self.base + "/")]
+        self.context.close()
+        assert not foreign, f"requests to another origin: {foreign}"
+
+
+@pytest.fixture
+def page(site):
+    p = Page(site)
+    yield p
+    p.close()
+
+
+def only(pg, mtype: str) -> None:
+    for box in pg.locator("input[name=type]").all():
+        box.set_checked(box.get_attribute("value") == mtype)
+
+
+def project(pg) -> None:
+    """The drag-link project's request, typed into the form."""
+    pg.fill("#time_ratio", "1.5")
+    pg.fill("#stroke", "0.3")
+    pg.fill("#bound", "0")
+    only(pg, "drag_link_slider")
+    pg.click("#adv-drag_link_slider summary")
+    for name, value in PROJECT.items():
+        pg.fill(f"#drag_link_slider-{name}-fixed", str(value))
+    pg.click("#run")
+    pg.wait_for_selector("#candidates tbody tr")
+
+
+def test_the_drag_link_project_shows_both_couplers(page):
+    pg = page.page
+    project(pg)
+    table = pg.inner_text("#candidates")
+    for coupler in COUPLERS:
+        assert f"coupler = {coupler}" in table, table
+
+
+def test_a_chosen_design_is_drawn_to_scale_and_moves(page):
+    pg = page.page
+    project(pg)
+    rows = pg.locator("#candidates tbody tr")
+    for i in range(rows.count()):
+        before = pg.evaluate("shown")
+        rows.nth(i).locator("button.choose").click()
+        pg.wait_for_function(f"+document.querySelector('#detail').dataset.shown > {before}")
+        assert pg.get_attribute("#candidates tbody tr.chosen", "data-index") == str(i)
+        text = rows.nth(i).inner_text()
+        params = dict(re.findall(r"(\w+) = ([-\d.e+]+)", text))
+        if pg.get_attribute("#play", "aria-pressed") == "true":
+            pg.click("#play")  # still, while measuring
+        members = pg.eval_on_selector_all(
+            "#linkage line.member",
+            "ls => ls.map(l => [l.dataset.name, +l.getAttribute('x1'), +l.getAttribute('y1'),"
+            " +l.getAttribute('x2'), +l.getAttribute('y2')])",
+        )
+        assert {m[0] for m in members} == {"ground", "crank", "coupler", "follower",
+                                           "follower_arm", "connecting_rod"}  # fmt: skip
+        for name, x1, y1, x2, y2 in members:
+            # the table shows 7 digits: the design's own numbers are in the page's state
+            want = pg.evaluate(f"current.params[{name!r}]")
+            assert math.hypot(x2 - x1, y2 - y1) == pytest.approx(want, rel=1e-6), name
+            assert float(params[name]) == pytest.approx(want, rel=1e-6)
+    # the animation advances
+    pg.click("#play")
+    assert pg.get_attribute("#play", "aria-pressed") == "true"
+    before = pg.input_value("#angle")
+    pg.wait_for_function(f"document.querySelector('#angle').value != '{before}'", timeout=5000)
+    pg.click("#play")
+    assert pg.get_attribute("#play", "aria-pressed") == "false"
+
+
+def test_a_422_appears_at_the_field_it_names(page):
+    pg = page.page
+    pg.fill("#time_ratio", "0.5")
+    pg.click("#run")
+    pg.wait_for_selector("#time_ratio-error:not(:empty)")
+    assert "greater than or equal to 1" in pg.inner_text("#time_ratio-error")
+    assert pg.get_attribute("#time_ratio", "aria-invalid") == "true"
+    assert pg.inner_text("#form-error") == ""
+
+
+def test_an_impossible_target_shows_each_types_reason(page):
+    pg = page.page
+    pg.fill("#time_ratio", "1.6")
+    pg.fill("#bound", "89.5")  # only a slot drive transmits that well
+    pg.click("#run")
+    pg.wait_for_selector("#refusals li")
+    asked = pg.eval_on_selector_all("input[name=type]:checked", "bs => bs.map(b => b.value)")
+    found = pg.eval_on_selector_all("#candidates tbody tr", "rs => rs.map(r => r.dataset.type)")
+    refused = pg.eval_on_selector_all(
+        "#refusals li", "ls => ls.map(l => [l.dataset.type, l.innerText])"
+    )
+    assert sorted({*found} | {t for t, _ in refused}) == sorted(asked)
+    assert len(refused) >= 4
+    for t, text in refused:  # the type, its code and its reason with numbers
+        assert re.match(rf"{t}: [A-Z_]+ — .*\d", text), text
+
+
+def test_the_form_works_from_the_keyboard_alone(page):
+    pg = page.page
+    pg.focus("body")
+    for _ in range(30):  # Tab to the first field
+        pg.keyboard.press("Tab")
+        if pg.evaluate("document.activeElement.id") == "time_ratio":
+            break
+    else:
+        raise AssertionError("Tab never reached the time ratio")
+    pg.keyboard.press("Control+A")
+    pg.keyboard.type("2")
+    pg.keyboard.press("Tab")
+    assert pg.evaluate("document.activeElement.id") == "stroke"
+    pg.keyboard.press("Control+A")
+    pg.keyboard.type("250")
+    pg.keyboard.press("Enter")  # submits the form
+    pg.wait_for_selector("#candidates tbody tr")
+    assert "#synthesize?" in pg.url and "tr=2" in pg.url and "stroke=250" in pg.url
+    pg.locator("#candidates tbody tr button.choose").first.focus()
+    pg.keyboard.press("Enter")
+    pg.wait_for_selector("#candidates tbody tr.chosen")
+
+
+def test_the_address_holds_the_state(site):
+    first = Page(site)
+    project(first.page)
+    first.page.locator("#candidates tbody tr").nth(1).locator("button.choose").click()
+    first.page.wait_for_function("location.hash.includes('choose=1')")
+    url = first.page.url
+    first.close()
+    again = Page(site, at=url[len(site[1]) :])  # a new page from the copied address
+    pg = again.page
+    pg.wait_for_selector("#candidates tbody tr.chosen")
+    assert pg.inner_text("#candidates tbody tr.chosen").startswith("drag_link_slider")
+    assert pg.get_attribute("#candidates tbody tr.chosen", "data-index") == "1"
+    again.close()
+
+
+def test_analysis_and_sweep_views(page):
+    pg = page.page
+    pg.click("#tab-analyze")
+    pg.wait_for_selector("#a-param-coupler")
+    pg.fill("#a-param-coupler", "0.01")  # shorter than the crank: no drag-link
+    pg.click("#a-run")
+    pg.wait_for_selector("#a-param-coupler-error:not(:empty)")
+    assert "coupler" in pg.inner_text("#a-param-coupler-error")
+    pg.click("#tab-analyze")
+    pg.wait_for_function("+document.querySelector('#a-param-coupler')?.value > 0.02")
+    pg.click("#a-run")
+    pg.wait_for_selector("#linkage line.member", state="attached")
+    assert "time ratio" in pg.inner_text("#detail-summary")
+    pg.click("#tab-sweep")
+    pg.wait_for_selector("#s-param-coupler")
+    pg.select_option("#s-vary", "coupler")
+    pg.click("#s-run")
+    pg.wait_for_selector("#sweep-plot polyline.series", state="attached")
+    assert pg.locator("#sweep-plot rect.valid").count() >= 1  # the valid interval, shaded
+
+
+def test_a_sweep_out_of_budget_says_where_it_ended(page):
+    """The page sends no budget; the request is given a 50 ms one on its way (the real server
+    answers it): the plot ends where the server stopped, and the page says so."""
+    pg = page.page
+
+    def short(route):
+        body = json.loads(route.request.post_data)
+        route.continue_(post_data=json.dumps({**body, "points": 10_000, "time_budget_ms": 50}))
+
+    pg.route("**/v1/sweep", short)
+    pg.click("#tab-sweep")
+    pg.wait_for_selector("#s-param-coupler")
+    pg.select_option("#s-vary", "coupler")
+    pg.click("#s-run")
+    pg.wait_for_selector("#s-status:not(:empty)")
+    assert "time budget ran out" in pg.inner_text("#s-status")
+    pg.unroute("**/v1/sweep")
+    pg.click("#s-run")  # its own request: whole, and no note
+    pg.wait_for_selector("#s-status:empty", state="attached")
+
+
+@pytest.mark.parametrize(("name", "viewport"), [("desktop", DESKTOP), ("phone", PHONE)])
+def test_screenshots_of_each_view(site, name, viewport):
+    p = Page(site, viewport)
+    pg = p.page
+    project(pg)
+    pg.wait_for_selector("#linkage line.member", state="attached")
+    pg.click("#play")  # still, for the picture
+    pg.screenshot(path=str(SHOTS / f"synthesis-{name}.png"), full_page=True)
+    pg.click("#tab-analyze")
+    pg.wait_for_selector("#a-param-coupler")
+    pg.click("#a-run")
+    pg.wait_for_selector("#linkage line.member", state="attached")
+    pg.screenshot(path=str(SHOTS / f"analysis-{name}.png"), full_page=True)
+    pg.click("#tab-sweep")
+    pg.wait_for_selector("#s-param-coupler")
+    pg.click("#s-run")
+    pg.wait_for_selector("#sweep-plot polyline.series", state="attached")
+    pg.screenshot(path=str(SHOTS / f"sweep-{name}.png"), full_page=True)
+    p.close()
+    for view in ("synthesis", "analysis", "sweep"):
+        assert (SHOTS / f"{view}-{name}.png").stat().st_size > 10_000
+
+
+def test_every_field_has_a_label_and_the_design_exports(page):
+    pg = page.page
+    project(pg)
+    unlabelled = pg.evaluate(
+        """() => [...document.querySelectorAll('input, select')].filter(f =>
+             !f.getAttribute('aria-label') && !document.querySelector(`label[for="${f.id}"]`)
+           ).map(f => f.id || f.name)"""
+    )
+    assert not unlabelled
+    pg.wait_for_selector("#linkage line.member", state="attached")
+    with pg.expect_download() as d:
+        pg.click("#export-json")
+    exported = json.loads(Path(d.value.path()).read_text())
+    assert exported["type"] == "drag_link_slider"
+    assert exported["params"] == pg.evaluate("current.params")
+    with pg.expect_download() as d:
+        pg.click("#export-svg")
+    svg = Path(d.value.path()).read_text()
+    assert svg.startswith("<svg") and svg.count('class="member"') == 6
