@@ -34,10 +34,11 @@ from scipy.optimize import Bounds, NonlinearConstraint, differential_evolution, 
 
 import synth
 from synth.mechanisms import get
-from synth.synthesis import search, synthesize
+from synth.synthesis import search
 from synth.synthesis.diagnose import forget_ranges
 from synth.synthesis.formulation import Formulation, relevant
 from synth.synthesis.solve import MAX_ITER, Built, multistart
+from synth.synthesis.synthesize import checked_spec
 
 SEED = 6
 DE = {"maxiter": 150, "popsize": 15, "tol": 1e-8}  # bounded: ~1 s per variant with its polish
@@ -168,7 +169,7 @@ def on_nlp(local: LocalSolve) -> Method:
     local solves by ``local``; no reduced solver, no verification."""
 
     def run(target: dict[str, Any]) -> Outcome:
-        spec = synthesize.checked_spec(target["mechanisms"][0], 0)
+        spec = checked_spec(target["mechanisms"][0], 0)
         m = get(spec.type)
         t = search.Targets(
             target["time_ratio"], target["stroke"], target["min_transmission_angle_deg"],

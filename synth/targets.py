@@ -11,6 +11,13 @@ so the time ratio is TR = (π + β)/(π − β) and β = π (TR − 1)/(TR + 1).
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, TypeVar
+
+if TYPE_CHECKING:
+    import casadi as ca
+
+# a number or a CasADi symbol (the IPOPT formulation's time ratio)
+T = TypeVar("T", float, "ca.DM", "ca.SX", "ca.MX")
 
 # the objectives: the reduced solvers' and IPOPT's two, the front between them, and the two on
 # how the slider moves (``synth.synthesis.motion``)
@@ -30,11 +37,11 @@ OBJECTIVES = {
 }
 
 
-def beta(time_ratio: float) -> float:
+def beta(time_ratio: T) -> T:
     """The crank angle by which the slow stroke exceeds π: π (TR − 1)/(TR + 1)."""
     return math.pi * (time_ratio - 1) / (time_ratio + 1)
 
 
-def time_ratio(beta: float) -> float:
+def time_ratio(beta: T) -> T:
     """The time ratio (π + β)/(π − β) of the crank angle β (``beta``'s inverse)."""
     return (math.pi + beta) / (math.pi - beta)

@@ -34,7 +34,7 @@ def stationary_points(f: Model, pv: np.ndarray, n: int = GRID) -> Points:
     """Every stationary point of every row that changes the sign of its derivative.
 
     Returns (row, θ, value) arrays. Roots are bracketed on an n-point grid, refined where the
-    motion is fast (see ``refine``), and polished by safeguarded Newton steps on g' with g''
+    motion is fast (see ``refine_grid``), and polished by safeguarded Newton steps on g' with g''
     (``_polish``: compiled, all roots in one call).
     """
     grid, widths = _grid(n)
@@ -45,7 +45,7 @@ def stationary_points(f: Model, pv: np.ndarray, n: int = GRID) -> Points:
         raise InvalidDesign(msg, (), "assembly")
     if f.kind == "kinematics":  # row 0 is the slider's position
         _refuse_dwell(grid, g1[0])
-    grid, widths, g1 = refine(f, pv, grid, widths, g1, g2)
+    grid, widths, g1 = refine_grid(f, pv, grid, widths, g1, g2)
     (rows, lo, hi, f_lo, f_hi, scale), (zr, zx) = _brackets(grid, widths, g1)
     nr = g1.shape[0]
 
@@ -85,7 +85,9 @@ def stationary_points_many(f: Model, pvs: np.ndarray) -> list[Points | None]:
     parts, zeros = [(plain[rows], *brackets)], [(plain[zr], zx)]
     for d in np.nonzero(refine)[0]:
         own = slice(d * nr, (d + 1) * nr)
-        (rows, *brackets), (zr, zx) = _brackets(*refine(f, pvs[d], grid, widths, g1[own], g2[own]))
+        (rows, *brackets), (zr, zx) = _brackets(
+            *refine_grid(f, pvs[d], grid, widths, g1[own], g2[own])
+        )
         parts.append((rows + d * nr, *brackets))
         zeros.append((zr + d * nr, zx))
     rows, lo, hi, f_lo, f_hi, scale = (np.concatenate(c) for c in zip(*parts, strict=True))
@@ -264,7 +266,7 @@ def _dead_centres(
     return x
 
 
-def refine(
+def refine_grid(
     f: Model,
     pv: np.ndarray,
     grid: np.ndarray,
@@ -296,7 +298,7 @@ def refine(
 
 
 def _hiding(g1: np.ndarray, g2: np.ndarray, widths: np.ndarray) -> np.ndarray:
-    """Per row and cell (``refine``): whether a pair of roots of the row's g' could hide in
+    """Per row and cell (``refine_grid``): whether a pair of roots of the row's g' could hide in
     the cell."""
     nxt1, nxt2 = _next(g1), _next(g2)
     with np.errstate(invalid="ignore"):

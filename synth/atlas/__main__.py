@@ -11,7 +11,8 @@ from pathlib import Path
 
 from . import compute
 from .charts import charts
-from .compute import CHUNK, DEFAULT_BOUNDS, atlas
+from .compute import DEFAULT_BOUNDS, atlas
+from .values import CHUNK
 
 
 class _Progress:

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..mechanisms import get
-from .compute import Atlas
+from .values import Atlas
 
 
 def charts(a: Atlas, folder: Path) -> list[Path]:

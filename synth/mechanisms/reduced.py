@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 from ..errors import Unreachable
 from ..numerics import ROUNDING
@@ -99,7 +100,9 @@ def unreachable(what: str) -> Unreachable:
     return Unreachable("FIXED_PARTS_CONTRADICT_TARGETS", what)
 
 
-def judge(p: Problem, facts: Callable[[dict], dict], design: dict[str, float]) -> None:
+def judge(
+    p: Problem, facts: Callable[[dict[str, Any]], dict[str, Any]], design: dict[str, float]
+) -> None:
     """Raise when fixed parts that over-determine a design (more fixed than the targets leave
     free) miss the targets: by the type's closed forms, to the verification's tolerance."""
     f = facts(design)

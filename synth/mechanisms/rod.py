@@ -103,7 +103,8 @@ def params(p: Problem, name: str, height: str | None) -> list[float]:
     fixed = height is not None and height in p.fixed
     h_box = p.bounds.get(height, (0.0, 0.0)) if height is not None else (0.0, 0.0)
     return [float(p.objective == MIN_SIZE), p.cos_bound, lo, hi, float(height is None),
-            float(fixed), p.fixed[height] if fixed else 0.0, *h_box]  # fmt: skip
+            float(fixed), p.fixed[height] if height is not None and fixed else 0.0,
+            *h_box]  # fmt: skip
 
 
 def rod(

@@ -23,7 +23,7 @@ def newton(
     x0: np.ndarray,
     n_eq: int,
     iters: int = 30,
-    keep: list | None = None,
+    keep: list[Taylor] | None = None,
     halvings: int | None = None,
 ) -> np.ndarray | None:
     """A stationary point of the first row on the set where the next ``n_eq`` rows are 0,
@@ -70,7 +70,9 @@ def newton(
     return None
 
 
-def differences(fn: Callable[[np.ndarray], np.ndarray], d: int, h: float = 1e-5):
+def differences(
+    fn: Callable[[np.ndarray], np.ndarray], d: int, h: float = 1e-5
+) -> Callable[[list[float]], Taylor | None]:
     """``newton``'s ``local`` by central differences of ``fn``, which maps points (m, d) to
     rows (r, m), NaN where a point is not a design: one batch of ≤ 9 points (``_stencil``) a
     call; a point is no design where any point of its stencil is not."""
@@ -96,7 +98,9 @@ def differences(fn: Callable[[np.ndarray], np.ndarray], d: int, h: float = 1e-5)
     return local
 
 
-def _step(t: Taylor, d: int, n_eq: int, nu, it: int):
+def _step(
+    t: Taylor, d: int, n_eq: int, nu: list[float] | None, it: int
+) -> tuple[list[float] | None, list[float] | None]:
     """A Newton step from a point's local model: (step, multipliers), or (None, _)."""
     vals, grads, hess = t
     if d == 2 and n_eq == 1:  # the common case (a size on a bound), written out
@@ -129,7 +133,12 @@ def _step(t: Taylor, d: int, n_eq: int, nu, it: int):
     return sol[:d], [a + b for a, b in zip(nu, sol[d:], strict=True)]
 
 
-def _step_2_1(vals, grads, hess, nu):
+def _step_2_1(
+    vals: list[float],
+    grads: list[list[float]],
+    hess: list[list[list[float]]],
+    nu: list[float] | None,
+) -> tuple[list[float] | None, list[float] | None]:
     """``_step`` in two variables with one equality: the same system, unrolled."""
     (g0, g1), (a0, a1) = grads[0], grads[1]
     if nu is None:  # the least-squares multiplier

@@ -19,7 +19,7 @@ import tempfile
 import threading
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
@@ -44,7 +44,9 @@ def native(fn: ca.Function) -> ca.Function:
     gen = ca.CodeGenerator(f"{fn.name()}.c", {"with_header": False})
     gen.add(fn)
     source = gen.dump()
-    key = hashlib.sha256("\0".join((ca.__version__, *FLAGS, source)).encode()).hexdigest()
+    key = hashlib.sha256(
+        "\0".join((cast(Any, ca).__version__, *FLAGS, source)).encode()
+    ).hexdigest()
     path = cache() / f"{fn.name()}_{key[:20]}.so"
     if not path.exists() and not _build(source, path):
         return fn
@@ -54,16 +56,16 @@ def native(fn: ca.Function) -> ca.Function:
         return fn
 
 
-def bind(fn: ca.Function, args: list, out) -> tuple:
+def bind(fn: ca.Function, args: list[np.ndarray], out: np.ndarray) -> tuple[Any, Any]:
     """``fn`` (mapped: each argument and result an array whose C order is the function's
     column-major layout) bound to preallocated arrays: calling the returned ``run`` reads
     ``args`` and writes ``out`` in place, with none of an ordinary call's conversions (~40 µs,
     more than a few points' evaluation). The returned buffer holds the bindings: keep it with
     ``run``."""
-    buf, run = fn.buffer()
+    buf, run = cast("tuple[Any, Any]", fn.buffer())
     for i, a in enumerate(args):
-        buf.set_arg(i, memoryview(a))
-    buf.set_res(0, memoryview(out))
+        buf.set_arg(i, memoryview(cast(Any, a)))
+    buf.set_res(0, memoryview(cast(Any, out)))
     return run, buf
 
 
@@ -112,7 +114,7 @@ class Points:
             ps[:] = params
             b[5] = params
         run()
-        return res
+        return cast(np.ndarray, res)
 
 
 def _build(source: str, path: Path) -> bool:
@@ -126,7 +128,7 @@ def _build(source: str, path: Path) -> bool:
             with tempfile.TemporaryDirectory(dir=path.parent) as tmp:
                 c, so = Path(tmp) / "f.c", Path(tmp) / "f.so"
                 c.write_text(source)
-                subprocess.run([_compiler(), *FLAGS, "-o", str(so), str(c)], check=True,
+                subprocess.run([cast(str, _compiler()), *FLAGS, "-o", str(so), str(c)], check=True,
                                capture_output=True, timeout=BUILD_SECONDS)  # fmt: skip
                 os.replace(so, path)  # whole or not at all, for other processes too
             return True

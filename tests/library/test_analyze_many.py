@@ -47,14 +47,14 @@ def same(a, b) -> bool:
 @pytest.mark.parametrize("mtype", all_types())
 def test_each_design_as_alone(mtype, monkeypatch):
     refined = []
-    original = roots.refine
+    original = roots.refine_grid
 
     def counted(f, pv, grid, *args):
         out = original(f, pv, grid, *args)
         refined.append(len(out[0]) > len(grid))
         return out
 
-    monkeypatch.setattr(roots, "refine", counted)
+    monkeypatch.setattr(roots, "refine_grid", counted)
     designs = random_designs(mtype, 120, seed=5)
     if mtype in REFUSED:
         designs[7:7] = [REFUSED[mtype]]

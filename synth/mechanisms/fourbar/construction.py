@@ -37,7 +37,9 @@ from __future__ import annotations
 
 import math
 import threading
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
@@ -79,7 +81,7 @@ class Roles:
     swings: bool  # the arm swings with the rocker (stroke 2 r5 sin(ψ/2)); else stroke 2 r5
 
 
-def rows(psi, lam, p) -> ca.SX:
+def rows(psi: Any, lam: Any, p: Any) -> ca.SX:
     """The rows (``ROWS``) at (ψ, λ) with the parameters p (``PARAMS``), symbolic."""
     q = {n: p[i] for i, n in enumerate(PARAMS)}
     er, ei = q["ep_r"], q["ep_i"]
@@ -153,7 +155,7 @@ class Compiled:
         self.points = Points(self.fn)
         self._taylor = Points(self.taylor_fn)
 
-    def taylor(self, psi: float, u: float, params) -> list[float]:
+    def taylor(self, psi: float, u: float, params: Sequence[float]) -> list[float]:
         """``TAYLOR`` at one point (ψ, u), a list (``params`` as for ``points``)."""
         return self._taylor.one((psi, u), params)
 
@@ -162,7 +164,7 @@ def construction() -> Compiled:
     """This thread's compiled construction (CasADi functions are never shared by threads)."""
     if not hasattr(_local, "compiled"):
         _local.compiled = Compiled()
-    return _local.compiled
+    return cast(Compiled, _local.compiled)
 
 
 class Construction:
@@ -190,7 +192,7 @@ class Construction:
         # the ratios the fixed links impose, log(ρ_i/ρ_j) = c: each after the first against it
         first = self.fixed_links[0] if self.fixed_links else None
         self.ratios = [
-            (roles.links.index(n), self.set_by, math.log(p.fixed[n] / p.fixed[first]))
+            (roles.links.index(n), self.set_by, math.log(p.fixed[n] / p.fixed[cast(str, first)]))
             for n in self.fixed_links[1:]
         ]
         lo, hi = p.box(roles.arm)
@@ -206,7 +208,7 @@ class Construction:
             self.empty = roles.arm not in p.fixed and not lo <= 0.5 <= hi
             self.psi = (1e-9, math.pi - 1e-9)
 
-    def evaluate(self, sigma: int, psi, lam):
+    def evaluate(self, sigma: int, psi: Any, lam: Any) -> dict[str, Any]:
         """The designs at (ψ, λ), arrays broadcast together: valid, feasible (within the
         bounds), f (the coupler's worst cos), size, k (the four-bar's scale), ρ (its links at
         scale 1, the crank-rocker's order), r5, l, h and the rod's worst cos; a point that is
@@ -215,7 +217,7 @@ class Construction:
         shape = np.broadcast_shapes(psi.shape, lam.shape)
         points = np.stack([np.broadcast_to(a, shape).ravel() for a in (psi, lam)], axis=1)
         out = construction().points(points, self._params(sigma))
-        e = dict(zip(ROWS, out.reshape(len(ROWS), *shape), strict=True))
+        e: dict[str, Any] = dict(zip(ROWS, out.reshape(len(ROWS), *shape), strict=True))
         e["valid"], e["feasible"] = e["valid"] > 0, e["feasible"] > 0
         e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
         return e
@@ -226,6 +228,7 @@ class Construction:
         shares the cache but may differ in its rod or its bounds' arrays (replaced, never
         changed in place)."""
         key = (sigma, id(self.lo), id(self.hi), self.rod)
+        cache: dict[tuple[int, int, int, bool], tuple[list[float], np.ndarray, np.ndarray]]
         cache = self.__dict__.setdefault("_param_cache", {})
         if key not in cache:
             cache[key] = (self._make_params(sigma), self.lo, self.hi)  # the arrays kept alive
@@ -239,10 +242,10 @@ class Construction:
                 float(self.set_by is None), *(float(self.set_by == i) for i in range(4)),
                 float(r.swings), p.fixed.get(r.arm, 0.5), float(self.rod), *the_rod]  # fmt: skip
 
-    def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict]:
+    def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict[str, Any]]:
         """The design at one point, and its evaluation (numbers; valid and feasible 1 or 0)."""
-        out = construction().points.one((psi, lam), self._params(sigma))
-        one = dict(zip(ROWS, out, strict=True))
+        out: Any = construction().points.one((psi, lam), self._params(sigma))
+        one: dict[str, Any] = dict(zip(ROWS, out, strict=True))
         one["rho"] = [1.0, one.pop("a2"), one.pop("a3"), one.pop("a4")]
         r = self.r
         out = {n: one["k"] * x for n, x in zip(r.links, one["rho"], strict=True)}
@@ -253,6 +256,6 @@ class Construction:
                 out[r.height] = one["h"]
         return {**out, **self.p.fixed}, one
 
-    def residuals(self, e) -> list[np.ndarray]:
+    def residuals(self, e: dict[str, Any]) -> list[np.ndarray]:
         """log(ρ_i/ρ_j) − c for each ratio held."""
         return [np.log(e["rho"][i] / e["rho"][j]) - c for i, j, c in self.ratios]

@@ -6,8 +6,8 @@ intersection of circle(A, coupler) and circle(O4, rocker) to the left of the dir
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import Any, cast
 
 import casadi as ca
 
@@ -106,12 +106,18 @@ def grashof_conditions(
                 name=f"grashof_{x}",
                 text=f"{shortest} + {x} ≤ {a} + {b} (Grashof with the {shortest} the shortest "
                 f"link: a {kind})",
-                margin=lambda p, i=i: (grashof_margins([p[n] for n in names], k)[i],),
-                explain=lambda p, x=x, a=a, b=b: (
-                    f"{shortest} {p[shortest]:g} + {x} {p[x]:g} = {p[shortest] + p[x]:g} > "
-                    f"{a} {p[a]:g} + {b} {p[b]:g} = {p[a] + p[b]:g}: not a {kind} (Grashof with "
-                    f"the {shortest} the shortest link), the crank cannot drive it through a "
-                    f"full revolution as one"
+                margin=cast(
+                    "Callable[..., tuple[Any, ...]]",
+                    lambda p, i=i: (grashof_margins([p[n] for n in names], k)[i],),
+                ),
+                explain=cast(
+                    "Callable[..., str]",
+                    lambda p, x=x, a=a, b=b: (
+                        f"{shortest} {p[shortest]:g} + {x} {p[x]:g} = {p[shortest] + p[x]:g} > "
+                        f"{a} {p[a]:g} + {b} {p[b]:g} = {p[a] + p[b]:g}: not a {kind} (Grashof "
+                        f"with the {shortest} the shortest link), the crank cannot drive it "
+                        f"through a full revolution as one"
+                    ),
                 ),
             )
         )

@@ -6,11 +6,13 @@ equalities where they bind."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any, cast
 
 import numpy as np
 
 from ...numerics import ROUNDING
-from ...numerics.dense import differences, newton
+from ...numerics.dense import Taylor, differences, newton
 from .construction import Construction, construction
 
 U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
@@ -25,15 +27,23 @@ SHORTCUT = 6
 SLACK = 1e-6  # a design closer to a link's bound than this (log of the scale's range) may be
 # held by that bound, which the Newton steps do not model: IPOPT polishes it
 
+# a design and its evaluation (``Construction.design``)
+Design = tuple[dict[str, float], dict[str, Any]]
+
 
 class Search(Construction):
     """The local optima of one variant of a four-bar type on its construction."""
 
-    missed: dict | None = None  # where Newton last ended beyond, or near, a link's bound
+    missed: dict[str, Any] | None = None  # where Newton last ended beyond, or near, a link's bound
 
     def optimum(
-        self, sigma: int, objective: str, cos_bound: float = 1.0, psi_fixed=None, limits=True
-    ):
+        self,
+        sigma: int,
+        objective: str,
+        cos_bound: float = 1.0,
+        psi_fixed: float | None = None,
+        limits: bool = True,
+    ) -> tuple[list[Design], bool]:
         """Local optima on sheet σ of the coupler's worst cos (``objective`` "f") or of the size
         with that cos ≤ ``cos_bound`` ("size"), where the fixed links' ratios hold and the
         swing is in range (or ``psi_fixed``): a grid, then Newton from its best points; with
@@ -51,6 +61,7 @@ class Search(Construction):
             return [hinted], True
         starts = self._starts(sigma, psi, u, objective, cos_bound, limits)
         ok = "feasible" if limits else "valid"
+        found: list[Design]
         found, exact = [], bool(starts)  # no start is no proof: a link's bound may cut it off
         key = "f" if objective == "f" else "size"
         points = len(self.ratios) >= (1 if psi_fixed is not None else 2)  # roots, not optima
@@ -90,7 +101,7 @@ class Search(Construction):
             exact = False  # crossings, but no intersection found: perhaps a tangency
         return (found if points else found[:1]), exact
 
-    def hinted(self, sigma: int, objective: str, psi_fixed) -> tuple[dict, dict] | None:
+    def hinted(self, sigma: int, objective: str, psi_fixed: float | None) -> Design | None:
         """The optimum from another variant's (a slot drive's, for the same crank-rocker with a
         rod): the variants differ by the rod's smooth share of the size, so Newton from there
         finds this one's in a few steps; None where it does not."""
@@ -110,7 +121,13 @@ class Search(Construction):
         return (d, e) if ok else None
 
     def _starts(
-        self, sigma, psi, u, objective, cos_bound, limits=True
+        self,
+        sigma: int,
+        psi: np.ndarray,
+        u: np.ndarray,
+        objective: str,
+        cos_bound: float,
+        limits: bool = True,
     ) -> list[tuple[np.ndarray, float, bool, float]]:
         """Grid points to start Newton from: (point, the objective there, whether it is only
         a possible root, the least the objective can be near it). The best point (no ratio
@@ -152,7 +169,16 @@ class Search(Construction):
             out += [(y, math.nan, True, -math.inf) for y in _meet(x, bound)]
         return out
 
-    def _newton(self, sigma, x0, objective, cos_bound, psi_fixed, root=False, shortcut=False):
+    def _newton(
+        self,
+        sigma: int,
+        x0: np.ndarray,
+        objective: str,
+        cos_bound: float,
+        psi_fixed: float | None,
+        root: bool = False,
+        shortcut: bool = False,
+    ) -> np.ndarray | None:
         """Newton from x0 = (ψ, u) with the ratios (and, for the size, the bound where it
         binds; only the bound from a ``root`` start) as equalities; a swing that leaves its
         range is held at the nearer edge."""
@@ -163,12 +189,22 @@ class Search(Construction):
             x = self._newton_at(sigma, x0, objective, cos_bound, edge, root, shortcut)
         return x
 
-    def _newton_at(self, sigma, x0, objective, cos_bound, psi, root=False, shortcut=False):
+    def _newton_at(
+        self,
+        sigma: int,
+        x0: np.ndarray,
+        objective: str,
+        cos_bound: float,
+        psi: float | None,
+        root: bool = False,
+        shortcut: bool = False,
+    ) -> np.ndarray | None:
         """Newton with ψ held (or not); for the size, with the bound binding and, where ratios
         are held (it may then not bind), without it: the smaller design that keeps it."""
         both = objective == "size" and bool(self.ratios) and not root
-        best = None
+        best: tuple[float, np.ndarray] | None = None
         y0 = x0 if psi is None else x0[1:]
+        actives: tuple[bool, ...]
         if root:  # the point where the ratios meet each other, or the bound
             actives = (objective == "size" and len(self.ratios) < y0.size,)
         else:
@@ -191,14 +227,21 @@ class Search(Construction):
                 best = e["size"], x
         return None if best is None else best[1]
 
-    def _rows(self, sigma, objective, cos_bound, bound_active, psi_fixed):
+    def _rows(
+        self,
+        sigma: int,
+        objective: str,
+        cos_bound: float,
+        bound_active: bool,
+        psi_fixed: float | None,
+    ) -> Callable[[list[float]], Taylor | None]:
         """Newton's ``local`` for x = (ψ, u), or (u,) with ψ held: the objective (f, or the
         size), the ratios' residuals and, with the bound active, f − cos_bound. Exact (the
         compiled ``taylor``) where no ratio is held; else central differences of ``evaluate``."""
         if not self.ratios:
             return self._taylor(sigma, objective, cos_bound, bound_active, psi_fixed)
 
-        def rows(x):
+        def rows(x: np.ndarray) -> np.ndarray:
             ps = x[:, 0] if psi_fixed is None else np.full(len(x), psi_fixed)
             e = self.evaluate(sigma, ps, 1 + np.exp(np.minimum(x[:, -1], 50.0)))
             out = [e["f"] if objective == "f" else e["size"], *self.residuals(e)]
@@ -209,13 +252,20 @@ class Search(Construction):
 
         return differences(rows, 1 if psi_fixed is not None else 2)
 
-    def _taylor(self, sigma, objective, cos_bound, bound_active, psi_fixed):
+    def _taylor(
+        self,
+        sigma: int,
+        objective: str,
+        cos_bound: float,
+        bound_active: bool,
+        psi_fixed: float | None,
+    ) -> Callable[[list[float]], Taylor | None]:
         params, taylor = self._params(sigma), construction().taylor
         one = psi_fixed is not None  # only u moves: its entries
 
-        def local(x):
+        def local(x: list[float]) -> Taylor | None:
             valid, f, size, f0, f1, s0, s1, f00, f01, f11, s00, s01, s11 = taylor(
-                psi_fixed if one else x[0], x[-1], params
+                cast(float, psi_fixed) if one else x[0], x[-1], params
             )
             if not (valid > 0 and math.isfinite(size)):
                 return None
@@ -236,8 +286,8 @@ def _crossings(r: np.ndarray, valid: np.ndarray, pts: np.ndarray) -> np.ndarray:
     for axis in (0, 1):
         if r.shape[axis] < 2:
             continue
-        a = [slice(None), slice(None)]
-        b = [slice(None), slice(None)]
+        a: Any = [slice(None), slice(None)]
+        b: Any = [slice(None), slice(None)]
         a[axis], b[axis] = slice(None, -1), slice(1, None)
         a, b = tuple(a), tuple(b)
         hit = (r[a] * r[b] < 0) & valid[a] & valid[b]
@@ -256,7 +306,9 @@ def _meet(a: np.ndarray, b: np.ndarray) -> list[np.ndarray]:
     return [a[n] for n in np.unique(nearest[gap[nearest, np.arange(len(b))] <= 2 * STEP])]
 
 
-def _least(x: np.ndarray, v: np.ndarray, good: np.ndarray, cell: np.ndarray):
+def _least(
+    x: np.ndarray, v: np.ndarray, good: np.ndarray, cell: np.ndarray
+) -> tuple[np.ndarray, list[float]]:
     """The good points no worse than every good point within two grid cells (the local
     minima of v along a curve sampled by its crossings), and for each its value less the
     largest difference to those neighbours."""

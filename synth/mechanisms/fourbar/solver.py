@@ -22,15 +22,17 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Sequence
+from typing import Any, cast
 
 import numpy as np
 
 from ...numerics import ROUNDING
-from ...numerics.dense import newton, solve
+from ...numerics.dense import Taylor, newton, solve
 from ...targets import MAX_TRANSMISSION, MIN_SIZE
 from ..reduced import Reduced, clip
 from .construction import Roles
-from .search import CONTINUE, GRID, NEAR, SHORTCUT, SLACK, U_HI, U_LO, Search
+from .search import CONTINUE, GRID, NEAR, SHORTCUT, SLACK, U_HI, U_LO, Design, Search
 
 __all__ = ["FourBar", "Roles"]
 
@@ -61,7 +63,7 @@ class FourBar(Search):
             return self.smallest(e["rod_cos"], d)
         return Reduced([d], exact=exact)
 
-    def coupler_optimum(self) -> tuple[tuple[dict, dict] | None, bool]:
+    def coupler_optimum(self) -> tuple[Design | None, bool]:
         """The design whose coupler transmits best, with its evaluation, and exactness."""
         beta = self.p.beta
         psi = clip(beta, *self.psi)
@@ -80,8 +82,8 @@ class FourBar(Search):
         return (d, e), exact
 
     def bounded(
-        self, e: dict, objective: str = "f", cos_bound: float = 1.0
-    ) -> tuple[tuple[dict, dict] | None, bool]:
+        self, e: dict[str, Any], objective: str = "f", cos_bound: float = 1.0
+    ) -> tuple[Design | None, bool]:
         """The optimum where the links' bounds cut it off (``e``: the design beyond them): the
         best of the curves where one pair of links beyond them is held at their bounds'
         ratio, ρ_i/ρ_j = hi_i/lo_j (i too long against j), else a corner of two pairs: the two
@@ -113,7 +115,7 @@ class FourBar(Search):
                 queue += [c for c in more if c not in queue]
         return best, exact
 
-    def _beyond(self, e: dict) -> list[tuple[int, int]]:
+    def _beyond(self, e: dict[str, Any]) -> list[tuple[int, int]]:
         """The pairs (i, j) of links of ``e``'s design, i too long against j by their bounds
         (or nearly), the worst first."""
         rho = np.array(e["rho"])
@@ -123,7 +125,7 @@ class FourBar(Search):
         order = [np.unravel_index(k, excess.shape) for k in np.argsort(excess, axis=None)[::-1]]
         return [(int(i), int(j)) for i, j in order if excess[i, j] > -NEAR and i != j]
 
-    def holding(self, pairs) -> FourBar:
+    def holding(self, pairs: list[tuple[int, int]]) -> FourBar:
         """This problem with each pair (i, j) held at ρ_i/ρ_j = hi_i/lo_j (the pair's own two
         bounds then hold by the ratio; a fixed link's box still sets the scale)."""
         held = FourBar.__new__(FourBar)
@@ -144,7 +146,7 @@ class FourBar(Search):
         ok = e["feasible"] & (e["f"] <= cos_bound)
         return float(np.min(np.where(ok, e[key], np.inf)))
 
-    def smallest(self, cos_bound: float, start: dict | None = None) -> Reduced:
+    def smallest(self, cos_bound: float, start: dict[str, float] | None = None) -> Reduced:
         """The smallest design with the coupler's worst cos ≤ ``cos_bound``, the better of
         the two sheets; with nothing fixed, no bound given and no rod that swings, σ = −1 only
         where σ = +1 has none (it was never smaller in a survey of 300 random targets, nor in
@@ -157,21 +159,21 @@ class FourBar(Search):
             answer = self.continued(cos_bound)
             if answer is not None:
                 return answer
-        best: list[dict] = []
+        best: list[dict[str, float]] = []
         if start is None:  # does any coupler transmit well enough? A rod only adds a joint
             # (and a bound no rod meets leaves no feasible design), so ask without it
             alone = copy.copy(self)
             alone.rod = False
-            found, exact = alone.coupler_optimum()
-            if exact and found and found[1]["f"] > cos_bound * (1 + ROUNDING):
+            coupler, exact = alone.coupler_optimum()
+            if exact and coupler and coupler[1]["f"] > cos_bound * (1 + ROUNDING):
                 return Reduced([])
             if self.rod:  # the start IPOPT gets has the rod
-                found, _ = self.coupler_optimum()
-            best = [found[0]] if found else []
+                coupler, _ = self.coupler_optimum()
+            best = [coupler[0]] if coupler else []
         # a rod from an arm that turns fully on the path's line (the drag-link's) is as long
         # for every design (arm / cos bound): only a swinging arm's rod can favour σ = −1
         both = (self.rod and self.r.swings) or bool(self.p.fixed) or bool(self.p.explicit)
-        sheets: list[tuple[int, list, bool]] = []
+        sheets: list[tuple[int, list[Design], bool]] = []
         for sigma in (1, -1):
             self.missed = None
             found, exact = self.optimum(sigma, "size", cos_bound)
@@ -186,7 +188,7 @@ class FourBar(Search):
         found = sorted((de for _, f, _ in sheets for de in f), key=lambda de: de[1]["size"])
         if found:
             exact = all(exact for _, f, exact in sheets if f)  # then the best alone is the answer
-            at = ()
+            at: tuple[Any, ...] = ()
             if exact and not self.ratios and self.p.objective == MIN_SIZE:
                 at = tuple(self._onward(s, f[0][1]["at"], cos_bound, floor=self._floor(s))
                            for s, f, _ in sheets if f)  # fmt: skip
@@ -205,12 +207,18 @@ class FourBar(Search):
         found = []
         for sigma, *at in self.p.near:
             sigma = int(sigma)  # Newton from the prediction, the bound active
+            kept: list[Taylor]
             rows, kept = self._rows(sigma, "size", cos_bound, True, None), []
             x = newton(rows, _predict(at, cos_bound), 1, CONTINUE, kept, SHORTCUT)
             inside = x is not None and lo < x[0] < hi
             floor = at[-1]  # the least coupler cos on the sheet's grid (NaN: not known)
-            onward = self._onward(sigma, x, cos_bound, kept[0], at, floor) if inside else None
+            onward = (
+                self._onward(sigma, cast(np.ndarray, x), cos_bound, kept[0], at, floor)
+                if inside
+                else None
+            )
             if onward is not None:
+                assert x is not None  # inside
                 d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
                 if e["feasible"] and abs(e["f"] - cos_bound) <= 1e-9 and e["slack"] > SLACK:
                     found.append((e["size"], onward, d))
@@ -239,9 +247,17 @@ class FourBar(Search):
     def _floor(self, sigma: int) -> float:
         """The least coupler cos f over the valid points of sheet σ's last grid (``_starts``,
         no ratios held), NaN where none was evaluated."""
-        return self.__dict__.get("floors", {}).get(sigma, math.nan)
+        return cast(float, self.__dict__.get("floors", {}).get(sigma, math.nan))
 
-    def _onward(self, sigma: int, x, cos_bound: float, t=None, before=None, floor=math.nan):
+    def _onward(
+        self,
+        sigma: int,
+        x: Sequence[float] | np.ndarray,
+        cos_bound: float,
+        t: Taylor | None = None,
+        before: Sequence[float] | None = None,
+        floor: float = math.nan,
+    ) -> tuple[float, ...] | None:
         """Where a front continues from x, a local minimum of the size on the bound
         (f = cos_bound): (σ, ψ, u, cos_bound, dψ/dc, du/dc, the point before: ψ, u,
         cos_bound, NaN for none, and the sheet's ``_floor``), with the optimum's tangent in
@@ -274,7 +290,7 @@ class FourBar(Search):
         return (float(sigma), x[0], x[1], cos_bound, dx[0], dx[1], *prev, floor)
 
 
-def _predict(at, c: float) -> np.ndarray:
+def _predict(at: Sequence[float], c: float) -> np.ndarray:
     """A front's next optimum (ψ, u) at the bound c, from the last one's (``_onward``): its
     tangent, and where there is a point before it, the quadratic through that point too."""
     psi, u, c1, dpsi, du, psi0, u0, c0, _ = at
