@@ -14,7 +14,7 @@ RUN pip install --no-cache-dir --require-hashes -r requirements.lock
 COPY synth synth
 COPY api api
 
-# the analysis compiled to machine code (synth/native.py), built here with a C compiler so that
+# the analysis compiled to machine code (synth/numerics/native.py), built here with a C compiler so that
 # the image carries the libraries and not the compiler
 FROM base AS native
 RUN apt-get update && apt-get install -y --no-install-recommends gcc libc6-dev \

@@ -4,7 +4,14 @@
 >>> a = synth.analyze("crank_shaper", {"crank": 120, "pivot_distance": 240, "lever": 450})
 >>> round(a.time_ratio, 12), round(a.stroke, 9)
 (2.0, 450.0)
+
+A mechanism type kept outside the package is a module that calls ``synth.register``: name it
+(or several, comma-separated) in ``SYNTH_TYPES`` and every process that imports synth (a
+service's solver processes too) imports it, after the package's own types.
 """
+
+import importlib
+import os
 
 from . import atlas, mechanisms
 from .analysis.kinematics import analyze, analyze_many, joints
@@ -14,6 +21,9 @@ from .mechanisms import register
 from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
 from .synthesis import Solver, Spec, synthesize
 from .version import __version__ as __version__
+
+for _name in filter(None, (n.strip() for n in os.environ.get("SYNTH_TYPES", "").split(","))):
+    importlib.import_module(_name)
 
 __all__ = [
     "Analysis",

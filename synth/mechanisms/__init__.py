@@ -10,12 +10,9 @@
   its solver), shared by the two four-bar types; ``slotted``: the slotted-lever types' scale.
 
 The types are found, not listed: a new type is one new module in ``types``. A type kept
-outside the package is a module that calls ``register`` too: name it (or several,
-comma-separated) in ``SYNTH_TYPES`` and every process that imports synth (a service's solver
-processes too) imports it after the package's own."""
+outside the package calls ``synth.register`` (see ``synth``: ``SYNTH_TYPES``)."""
 
 import importlib
-import os
 import pkgutil
 
 from . import types
@@ -28,7 +25,5 @@ FIRST = ("scotch_yoke", "offset_slider_crank", "crank_shaper", "whitworth",
 _modules = [m.name for m in pkgutil.iter_modules(types.__path__) if not m.name.startswith("_")]
 for _name in sorted(_modules, key=lambda n: (FIRST.index(n) if n in FIRST else len(FIRST), n)):
     importlib.import_module(f"{types.__name__}.{_name}")
-for _name in filter(None, (n.strip() for n in os.environ.get("SYNTH_TYPES", "").split(","))):
-    importlib.import_module(_name)
 
 __all__ = ["Condition", "Mechanism", "Parameter", "Scale", "all_types", "get", "register"]

@@ -29,9 +29,8 @@ from dataclasses import replace
 
 import casadi as ca
 
-# synth.register, from the package of the types: a module SYNTH_TYPES names is imported while
-# synth itself is still importing them, before the name synth.register is bound
-from synth.mechanisms import Condition, Mechanism, Parameter, get, register
+import synth
+from synth.mechanisms import Condition, Mechanism, Parameter, get
 from synth.mechanisms.registry import ROD
 
 TOY = "centred_slider_crank"
@@ -52,7 +51,7 @@ def joints(p, th):
     return {"O2": (0.0, 0.0), "A": (r * ca.cos(th), r * ca.sin(th)), "B": (position(p, th), 0.0)}
 
 
-register(
+synth.register(
     Mechanism(
         type=TOY,
         title="Centred slider-crank",
@@ -80,4 +79,4 @@ register(
         joints=joints,
     )
 )
-register(replace(get("offset_slider_crank"), type=GENERIC, facts=None, reduced=None))
+synth.register(replace(get("offset_slider_crank"), type=GENERIC, facts=None, reduced=None))
