@@ -157,6 +157,8 @@ def motion_terms(
         msg = "the slider does not run one working and one return stroke"
         raise InvalidDesign(msg, (), "stroke")
     st = quality.Strokes(*_ends(rows, theta, values))
+    if st.stroke == 0:  # a design at the edge of running: its extremes coincide
+        raise InvalidDesign("the slider does not move: its stroke is 0", (), "stroke")
     return quality.motion_terms(m, variant, f, pv, st, gradient)
 
 

@@ -176,3 +176,14 @@ def test_four_bar_follower_keeps_its_digits(links):
     for k in (1.0, 10.0, 100.0, 1e-3):
         a = synth.analyze("drag_link_slider", {n: v * k for n, v in p.items()})
         assert a.transmission.min_deg == pytest.approx(mu, abs=2e-10)  # a few ulp of cos μ
+
+
+def test_a_motion_search_past_a_design_without_stroke_still_answers():
+    """The API contract check sent time ratio 240 with the least peak acceleration: the search
+    passed a design whose slider does not move, and its motion measures divided by the stroke
+    0. Such a design is no design to the search: every answer is verified, none raises."""
+    r = synth.synthesize(240.0, 0.046875, 0.0, None, objective="min_peak_acceleration")
+    assert r.candidates or r.infeasible
+    for c in r.candidates:
+        assert c.time_ratio == pytest.approx(240.0, rel=1e-9)
+        assert c.stroke == pytest.approx(0.046875, rel=1e-9)
