@@ -231,6 +231,7 @@ def compile_all() -> None:
                             f"{fn.name()}: no C compiler or cache (synth.numerics.native)"
                         )
     # the reduced synthesis's: the four-bar construction, the connecting rod
-    for fn in (construction().fn, construction().taylor_fn, rod.function()):
+    c = construction()
+    for fn in (*c.points.compiled(), c.local.fn, *rod.compiled().compiled()):
         if fn.class_name() != "External":
             raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.numerics.native)")

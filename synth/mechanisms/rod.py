@@ -13,7 +13,7 @@ import casadi as ca
 import numpy as np
 
 from ..numerics import ROUNDING
-from ..numerics.native import Points, native
+from ..numerics.native import Points
 from ..targets import MIN_SIZE
 from .reduced import ONE_WAY, STRICT, Problem
 
@@ -113,19 +113,16 @@ def rod(
     """``rule`` at the points (arm, half, cos_other), arrays broadcast together: (l, h, the rod's
     worst cos); l is NaN where the bounds allow no rod."""
     x = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (arm, half, cos_other)))
-    out = _compiled()(np.stack([a.ravel() for a in x], axis=1), params(p, name, height))
+    out = compiled()(np.stack([a.ravel() for a in x], axis=1), params(p, name, height))
     return out[0].reshape(x[0].shape), out[1].reshape(x[0].shape), out[2].reshape(x[0].shape)
 
 
-def function() -> ca.Function:
-    """``rule`` at x = (arm, half, cos_other) with the parameters p (``PARAMS``)."""
-    x, q = ca.SX.sym("x", 3), ca.SX.sym("p", len(PARAMS))
-    l, h, c, _ = rule(x[0], x[1], x[2], {n: q[i] for i, n in enumerate(PARAMS)})
-    return native(ca.Function("connecting_rod", [x, q], [ca.vertcat(l, h, c)], {"cse": True}))
-
-
-def _compiled() -> Points:
-    """This thread's compiled ``rule``."""
+def compiled() -> Points:
+    """This thread's compiled ``rule``: at x = (arm, half, cos_other) with the parameters p
+    (``PARAMS``), the rows l, h and the rod's worst cos."""
     if not hasattr(_local, "points"):
-        _local.points = Points(function())
+        x, q = ca.SX.sym("x", 3), ca.SX.sym("p", len(PARAMS))
+        l, h, c, _ = rule(x[0], x[1], x[2], {n: q[i] for i, n in enumerate(PARAMS)})
+        fn = ca.Function("connecting_rod", [x, q], [ca.vertcat(l, h, c)], {"cse": True})
+        _local.points = Points(fn)
     return _local.points  # type: ignore[no-any-return]

@@ -45,7 +45,7 @@ import casadi as ca
 import numpy as np
 
 from ...errors import Unreachable
-from ...numerics.native import Points, native
+from ...numerics.native import Points
 from .. import rod
 from ..reduced import Problem, unreachable
 from .geometry import grashof_margins, worst_cos
@@ -111,16 +111,15 @@ def rows(psi: Any, lam: Any, p: Any) -> ca.SX:
     k = ca.if_else(q["free_scale"], kmin, k)
     feasible = ca.logic_and(valid, kmin <= kmax * (1 + BOUND_TOL))
     # how far the design is from a link's bound: the scale's room, log(kmax/kmin), when it is
-    # free; else the free links' distance from their boxes (in log)
+    # free; else the free links' distance from their boxes, in log (one log of the least
+    # ratio: log is monotonic)
     inf = ca.SX(math.inf)
     rest = [
-        ca.if_else(q[f"set{i}"], inf, ca.fmin(ca.log(k / a), ca.log(b / k)))
+        ca.if_else(q[f"set{i}"], inf, ca.fmin(k / a, b / k))
         for i, (a, b) in enumerate(zip(lo, hi, strict=True))
     ]
-    slack = ca.if_else(
-        q["free_scale"], ca.log(kmax / kmin), ca.fmin(ca.fmin(rest[0], rest[1]),
-                                                      ca.fmin(rest[2], rest[3]))
-    )  # fmt: skip
+    least = ca.fmin(ca.fmin(rest[0], rest[1]), ca.fmin(rest[2], rest[3]))
+    slack = ca.log(ca.if_else(q["free_scale"], kmax / kmin, least))
     r5 = ca.if_else(q["swings"], 0.5 / ca.sin(psi / 2), q["arm"])
     # the connecting rod (none in a slot drive)
     rod_l, rod_h, rod_cos, l_ok = rod.rule(r5, psi / 2, f, q)
@@ -141,7 +140,7 @@ class Compiled:
     def __init__(self) -> None:
         x, p = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAMS))
         out = rows(x[0], x[1], p)
-        self.fn = native(ca.Function("fourbar_construction", [x, p], [out], {"cse": True}))
+        self.points = Points(ca.Function("fourbar_construction", [x, p], [out], {"cse": True}))
         # at y = (ψ, u), λ = 1 + e^u (Newton's coordinates)
         y = ca.SX.sym("y", 2)
         at = rows(y[0], 1 + ca.exp(ca.fmin(y[1], 50.0)), p)
@@ -149,15 +148,13 @@ class Compiled:
         (hf, gf), (hs, gs) = ca.hessian(f, y), ca.hessian(size, y)
         local = ca.vertcat(at[ROWS.index("valid")], f, size, gf, gs,
                            hf[0, 0], hf[0, 1], hf[1, 1], hs[0, 0], hs[0, 1], hs[1, 1])  # fmt: skip
-        self.taylor_fn = native(
+        self.local = Points(
             ca.Function("fourbar_construction_taylor", [y, p], [local], {"cse": True})
         )
-        self.points = Points(self.fn)
-        self._taylor = Points(self.taylor_fn)
 
     def taylor(self, psi: float, u: float, params: Sequence[float]) -> list[float]:
         """``TAYLOR`` at one point (ψ, u), a list (``params`` as for ``points``)."""
-        return self._taylor.one((psi, u), params)
+        return self.local.one((psi, u), params)
 
 
 def construction() -> Compiled:
