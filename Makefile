@@ -71,11 +71,12 @@ bench: $(VENV)/.dev
 	$(BIN)/python -m benchmarks
 
 # the style and the types: ruff's lint and its format check over the repository, and mypy
-# --strict over synth/ (pyproject.toml, [tool.mypy])
+# --strict over synth/ and api/ (pyproject.toml, [tool.mypy])
 lint: $(VENV)/.dev
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy synth
+	$(BIN)/mypy api
 
 # Regenerate the lock files after changing pyproject.toml (needs uv: pip install uv): one lock
 # for every supported Python (markers where they differ), with the setuptools that builds the

@@ -106,7 +106,8 @@ class Connection(HttpToolsProtocol):
         self._disarm()
         super().on_message_complete()
 
-    def eof_received(self) -> bool:
+    # asyncio's protocol lets it answer whether to keep the transport open; uvicorn's says None
+    def eof_received(self) -> bool:  # type: ignore[override]
         """Keep the connection open to write the reply to a whole request (a half-close);
         close it where nothing is being answered, or the request can no longer be whole."""
         self.eof = True

@@ -80,11 +80,18 @@ class Engine:
         self.settings = settings
         self._workers: list[BaseProcess] = []  # the process pool's, as it starts them
         self.executor = self._new_executor()
-        self.slots = Slots(settings.workers)
+        self.slots = Slots(self.workers)
         self._replacing: asyncio.Lock | None = None
 
+    @property
+    def workers(self) -> int:
+        """Solves at once: ``settings.workers``, which ``Settings`` fills in where not given."""
+        workers = self.settings.workers
+        assert workers is not None
+        return workers
+
     def _new_executor(self) -> Executor:
-        n = self.settings.workers
+        n = self.workers
         if self.settings.executor == "process":
             # one BLAS/OpenMP thread per worker (the pool is the parallelism): read by numpy
             # when a worker imports it, so set before the workers start
@@ -142,7 +149,7 @@ class Engine:
 
     def warm(self) -> None:
         """Start the workers and build their solvers in the background."""
-        for _ in range(self.settings.workers):
+        for _ in range(self.workers):
             self.executor.submit(_warm)
 
     def close(self) -> None:

@@ -9,7 +9,7 @@ from typing import Any
 import synth
 from synth.analysis.kinematics import check as check_analysis
 from synth.analysis.sweep import check as check_sweep
-from synth.synthesis.synthesize import check as check_synthesis
+from synth.synthesis.driver import check as check_synthesis
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ import itertools
 from collections.abc import Callable
 from dataclasses import MISSING
 from dataclasses import fields as dataclass_fields
-from typing import Annotated, Any, Literal, Union, get_type_hints
+from typing import TYPE_CHECKING, Annotated, Any, Literal, TypedDict, Union, get_type_hints
 
 from pydantic import (
     BaseModel,
@@ -26,7 +26,7 @@ from synth.analysis.kinematics import ANALYSIS_INCLUDE, INCLUDE, MAX_CURVE_POINT
 from synth.analysis.quality import CUT
 from synth.analysis.sweep import MAX_POINTS
 from synth.mechanisms import Mechanism, Parameter, all_types, get
-from synth.synthesis.synthesize import MAX_CANDIDATES, PER_TYPE
+from synth.synthesis.driver import MAX_CANDIDATES, PER_TYPE
 from synth.targets import OBJECTIVES, PARETO
 
 from .body_limit import MAX_BODY_BYTES
@@ -78,7 +78,12 @@ def _camel(name: str) -> str:
     return "".join(w.capitalize() for w in name.split("_"))
 
 
-def _limits(q: Parameter) -> dict[str, float]:
+class _Limits(TypedDict):
+    ge: float
+    le: float
+
+
+def _limits(q: Parameter) -> _Limits:
     """A length's range: ±LENGTH_MAX where it is signed, from 0 where zero is a variant."""
     lo = -LENGTH_MAX if q.signed else 0.0 if q.zero_means else LENGTH_MIN
     return {"ge": lo, "le": LENGTH_MAX}
@@ -93,16 +98,18 @@ def _length(q: Parameter, optional: bool) -> tuple[Any, Any]:
 
 
 def _params(m: Mechanism, suffix: str, all_optional: bool) -> type[BaseModel]:
-    fields = {q.name: _length(q, all_optional or not q.required) for q in m.parameters}
+    fields: dict[str, Any] = {
+        q.name: _length(q, all_optional or not q.required) for q in m.parameters
+    }
     return create_model(f"{_camel(m.type)}{suffix}", __base__=Strict, **fields)
 
 
 def _bounds(m: Mechanism) -> type[BaseModel]:
     def pair(q: Parameter) -> Any:
         end = Annotated[float, Field(allow_inf_nan=False, **_limits(q))]
-        return Annotated[list[end], Field(min_length=2, max_length=2)]  # type: ignore[valid-type]
+        return Annotated[list[end], Field(min_length=2, max_length=2)]
 
-    fields = {
+    fields: dict[str, Any] = {
         q.name: (pair(q), Field(None, description=f"[lower, upper] for {q.name}; default "
                  f"[{q.bounds[0]:g}, {q.bounds[1]:g}] × the stroke"))
         for q in m.parameters
@@ -110,12 +117,17 @@ def _bounds(m: Mechanism) -> type[BaseModel]:
     return create_model(f"{_camel(m.type)}Bounds", __base__=Strict, **fields)
 
 
+def _tag(value: str) -> Any:
+    """``Literal[value]``: a union member's ``type``, built at run time."""
+    return Literal[value]
+
+
 def _design(m: Mechanism) -> type[BaseModel]:
     return create_model(
         _camel(m.type),
         __base__=Strict,
         __doc__=m.title,
-        type=(Literal[m.type], ...),  # type: ignore[valid-type]
+        type=(_tag(m.type), ...),
         params=(_params(m, "Params", all_optional=False), ...),
     )
 
@@ -125,7 +137,7 @@ def _spec(m: Mechanism) -> type[BaseModel]:
     return create_model(
         f"{_camel(m.type)}Spec",
         __base__=Strict,
-        type=(Literal[m.type], ...),  # type: ignore[valid-type]
+        type=(_tag(m.type), ...),
         fixed=(fixed, Field(default_factory=fixed, description="parameters kept as they are")),
         bounds=(
             _bounds(m),
@@ -146,8 +158,22 @@ def _union(make: Callable[[Mechanism], type[BaseModel]]) -> Any:
     return Annotated[Union[models], Field(discriminator="type")]  # noqa: UP007
 
 
-Design = _union(_design)
-TypeSpec = _union(_spec)
+if TYPE_CHECKING:
+    # static stand-ins for the unions built from the registry at run time (below): what the
+    # routers use of any member
+
+    class Design(Strict):
+        type: str
+        params: BaseModel
+
+    class TypeSpec(Strict):
+        type: str
+        fixed: BaseModel
+        bounds: BaseModel
+
+else:
+    Design = _union(_design)
+    TypeSpec = _union(_spec)
 
 
 # --- requests ----------------------------------------------------------------------------
@@ -401,7 +427,7 @@ def _analysis_response() -> type[BaseModel]:
     """synth.Analysis field for field (a field added there is served), its curves as lists;
     the nested values are synth's own dataclasses."""
     hints = get_type_hints(results.Analysis) | {"curves": Curves | None}
-    fields = {
+    fields: dict[str, Any] = {
         f.name: (hints[f.name], Field(... if f.default is MISSING else f.default,
                                       description=_ANALYSIS_NOTES.get(f.name)))
         for f in dataclass_fields(results.Analysis)
@@ -409,7 +435,13 @@ def _analysis_response() -> type[BaseModel]:
     return create_model("AnalyzeResponse", __doc__=results.Analysis.__doc__, **fields)
 
 
-AnalyzeResponse = _analysis_response()
+if TYPE_CHECKING:
+
+    class AnalyzeResponse(BaseModel):
+        """Static stand-in for the model built at run time (below): synth.Analysis's fields."""
+
+else:
+    AnalyzeResponse = _analysis_response()
 
 
 # synthesize and sweep answer with synth's result dataclasses as they are

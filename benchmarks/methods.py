@@ -36,9 +36,9 @@ import synth
 from synth.mechanisms import get
 from synth.synthesis import search
 from synth.synthesis.diagnose import forget_ranges
+from synth.synthesis.driver import checked_spec
 from synth.synthesis.formulation import Formulation, relevant
 from synth.synthesis.solve import MAX_ITER, Built, multistart
-from synth.synthesis.synthesize import checked_spec
 
 SEED = 6
 DE = {"maxiter": 150, "popsize": 15, "tol": 1e-8}  # bounded: ~1 s per variant with its polish

@@ -21,7 +21,7 @@ async def sweep(
     """What range must an adjustable part cover (Podhorodeski et al. (2005), Fig. 5). The
     budget counts from the request's arrival, as a synthesis's does: a sweep that runs out of
     it ends at the last value analysed (``complete`` false)."""
-    r = await run_design(
+    r: SweepResponse = await run_design(
         request,
         engine,
         "sweep",

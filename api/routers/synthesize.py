@@ -43,7 +43,7 @@ async def synthesize(
             at = (*at[:2], body.mechanisms[int(at[1])].type, *at[2:])
         return [at]
 
-    r = await run(
+    r: SynthesizeResponse = await run(
         request,
         engine,
         locate,

@@ -12,7 +12,6 @@ from __future__ import annotations
 import functools
 import itertools
 import threading
-from collections.abc import Callable
 from typing import Any, cast
 
 import casadi as ca
@@ -21,16 +20,13 @@ import numpy.typing as npt
 
 from ..mechanisms import Mechanism, all_types, get, rod
 from ..mechanisms.fourbar.construction import construction
-from ..numerics.native import bind, native
+from ..numerics.native import Mapped, Slot
 
 GRID = 128  # samples per revolution that bracket the stationary points
-EACH = 32 * GRID  # the most angles ``_Batched.each`` keeps a buffer for (a batch of designs)
+EACH = 32 * GRID  # the most angles ``_Batched.each`` keeps a slot for (a batch of designs)
 POLISH_STEPS = 8  # safeguarded Newton steps a compiled polish takes (``Polisher``)
 
 _local = threading.local()
-
-# the arrays a compiled function reads and writes in place: (θ, p, out, run, bindings)
-_Buffer = tuple[np.ndarray, np.ndarray, np.ndarray, Callable[[], None], Any]
 
 
 KINDS = ("kinematics", "motion", "pins", "envelope")
@@ -109,7 +105,7 @@ def _rows(
 class _Batched:
     """out(θ, p) compiled, evaluated at each θ of a vector.
 
-    Up to GRID angles go through a buffer preallocated for their number (made on first use,
+    Up to GRID angles go through a slot for their number (``Mapped``, made on first use,
     owned like the function by one thread's Model): an ordinary call's numpy <-> DM
     conversions cost ~40 µs, more than a few-angle Newton step's evaluation. Common
     subexpressions are merged (the derivatives repeat g's terms): the same operations on the
@@ -117,21 +113,17 @@ class _Batched:
 
     def __init__(self, name: str, th: ca.SX, pv: ca.SX, out: ca.SX) -> None:
         out = ca.densify(out)  # structural zeros (a fixed pivot, a constant row) as numbers
-        self.fn = native(ca.Function(name, [th, pv], [out], {"cse": True}))
-        self.buffers: dict[int, _Buffer] = {}
-        self.each_buffers: dict[int, _Buffer] = {}
+        fn = ca.Function(name, [th, pv], [out], {"cse": True})
+        self.shared = Mapped(fn, (False, True))  # one design's parameters
+        self.fn = self.shared.fn
+        self.own = Mapped(fn, (False, False), compiled=self.fn)  # each angle its design's
 
     def __call__(self, theta: npt.ArrayLike, pv: np.ndarray) -> np.ndarray:
         theta = np.atleast_1d(theta)
         n = theta.size
         if n > GRID:  # curves: the conversions are small against the work
             return cast(np.ndarray, self.fn(theta[None, :], pv).full())
-        if n not in self.buffers:
-            self.buffers[n] = self._buffer(n)
-        x, p, out, run, _ = self.buffers[n]
-        x[:], p[:] = theta, pv
-        run()
-        return out.T.copy()  # the buffer is reused by the next call
+        return _run(self.shared[n], theta, pv)
 
     def each(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
         """out at each θ with its own parameters (``pv``: shape (len(θ), p)), as ``__call__``
@@ -139,19 +131,14 @@ class _Batched:
         n = theta.size
         if n > EACH:
             return cast(np.ndarray, self.fn(theta[None, :], pv.T).full())
-        if n not in self.each_buffers:
-            self.each_buffers[n] = self._buffer(n, shared=False)
-        x, p, out, run, _ = self.each_buffers[n]
-        x[:], p[:] = theta, pv
-        run()
-        return out.T.copy()
+        return _run(self.own[n], theta, pv)
 
-    def _buffer(self, width: int, shared: bool = True) -> _Buffer:
-        x = np.zeros(width)
-        p = np.zeros(self.fn.nnz_in(1) if shared else (width, self.fn.nnz_in(1)))
-        out = np.zeros((width, self.fn.nnz_out(0)))  # column-major (rows, width)
-        run, buf = bind(self.fn.map(width, [False, shared], [False]), [x, p], out)
-        return x, p, out, run, buf
+
+def _run(slot: Slot, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
+    x, p = slot.args
+    x[:, 0], p[:] = theta, pv
+    slot.run()
+    return slot.out.T.copy()  # the slot is reused by the next call
 
 
 class Polisher:
@@ -176,9 +163,8 @@ class Polisher:
             x, step = nxt, nxt - x
         out = ca.vertcat(x, step, fx, b - a)
         fn = ca.Function(name, [x0, lo, hi, rising, w, pv], [out], {"cse": True})
-        self.fn, self.rows, self.np = native(fn), d.numel(), pv.numel()
-        # per number of roots: the arguments, the result, run and its bindings
-        self.buffers: dict[int, tuple[list[np.ndarray], np.ndarray, Callable[[], None], Any]] = {}
+        self.mapped = Mapped(fn, (False,) * 6)  # every argument per root
+        self.fn = self.mapped.fn
 
     def __call__(
         self,
@@ -192,17 +178,13 @@ class Polisher:
         """(x, the last step, d at the point before it, the bracket's width) per root: shape
         (4, n). ``rows``: each root's row; ``pv``: the parameters, (n, p) or shared (p,)."""
         n = len(x0)
-        if n not in self.buffers:
-            args = [np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
-                    np.zeros((n, self.rows)), np.zeros((n, self.np))]  # fmt: skip
-            out = np.zeros((n, 4))  # column-major (4, n)
-            self.buffers[n] = (args, out, *bind(self.fn.map(n), args, out))
-        (a0, a1, a2, a3, w, p), out, run, _ = self.buffers[n]
-        a0[:], a1[:], a2[:], a3[:], p[:] = x0, lo, hi, rising, pv
+        slot = self.mapped[n]
+        a0, a1, a2, a3, w, p = slot.args
+        a0[:, 0], a1[:, 0], a2[:, 0], a3[:, 0], p[:] = x0, lo, hi, rising, pv
         w[:] = 0.0
         w[np.arange(n), rows] = 1.0
-        run()
-        return out.T.copy()
+        slot.run()
+        return slot.out.T.copy()
 
 
 def model(m: Mechanism, variant: frozenset[str], kind: str = "kinematics") -> Model:
@@ -232,6 +214,6 @@ def compile_all() -> None:
                         )
     # the reduced synthesis's: the four-bar construction, the connecting rod
     c = construction()
-    for fn in (*c.points.compiled(), c.local.fn, *rod.compiled().compiled()):
+    for fn in (*c.points.mapped.compiled(), c.local.fn, *rod.compiled().mapped.compiled()):
         if fn.class_name() != "External":
             raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.numerics.native)")

@@ -113,7 +113,7 @@ def rod(
     """``rule`` at the points (arm, half, cos_other), arrays broadcast together: (l, h, the rod's
     worst cos); l is NaN where the bounds allow no rod."""
     x = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (arm, half, cos_other)))
-    out = compiled()(np.stack([a.ravel() for a in x], axis=1), params(p, name, height))
+    out = compiled()([a.ravel() for a in x], params(p, name, height))
     return out[0].reshape(x[0].shape), out[1].reshape(x[0].shape), out[2].reshape(x[0].shape)
 
 

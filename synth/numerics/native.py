@@ -69,69 +69,102 @@ def bind(fn: ca.Function, args: list[np.ndarray], out: np.ndarray) -> tuple[Any,
     return run, buf
 
 
-class Points:
-    """A function of (x, p), x a point of ``dim`` numbers and p shared parameters, compiled and
-    evaluated at many points through preallocated arrays (``bind``): up to ``small`` points in
-    a buffer for their number, more in chunks of ``chunk`` (the last one padded) by the
-    function mapped over a chunk and compiled as one loop (CasADi's own map of a compiled
-    function calls it point by point, at about 1.6 times the cost). Each thread keeps its own
-    (a CasADi function is never shared between threads)."""
+class Slot:
+    """One number of points' arrays, bound to the function mapped over them: fill ``args``,
+    ``run()``, read ``out`` (shape (points, rows), column-major (rows, points); the next run
+    overwrites it). ``last``: what a caller last copied into a shared argument (kept, so never
+    another object at its address)."""
 
-    def __init__(self, fn: ca.Function, small: int = 16, chunk: int = 256) -> None:
-        self.symbolic, self.fn = fn, native(fn)
-        self.small, self.chunk = small, chunk
-        self.dim, self.n_params, self.rows = fn.nnz_in(0), fn.nnz_in(1), fn.nnz_out(0)
-        self.buffers: dict[int, list[Any]] = {}
+    def __init__(self, mapped: ca.Function, fn: ca.Function, width: int, shared: Sequence[bool]):
+        self.fn = mapped
+        # a shared argument (n,), another (points, n)
+        self.args = [np.zeros(fn.nnz_in(i) if one else (width, fn.nnz_in(i)))
+                     for i, one in enumerate(shared)]  # fmt: skip
+        self.out = np.zeros((width, fn.nnz_out(0)))
+        self.run, self._bindings = bind(mapped, self.args, self.out)
+        self.last: Any = None
+
+
+class Mapped:
+    """``fn`` compiled and evaluated at many points in one call, through a ``Slot`` per number
+    of points (made on first use); the arguments ``shared`` by every point are given once. At
+    the ``looped`` numbers of points the map itself is compiled, as one loop (CasADi's map of
+    a compiled function calls it point by point, at about 1.6 times the cost; a library per
+    number, so only for a few). Each thread keeps its own (a CasADi function is never shared
+    between threads)."""
+
+    def __init__(
+        self,
+        fn: ca.Function,
+        shared: Sequence[bool],
+        looped: Sequence[int] = (),
+        compiled: ca.Function | None = None,
+    ) -> None:
+        self.symbolic, self.fn = fn, compiled or native(fn)  # ``compiled``: fn, already built
+        self.shared, self.looped = list(shared), tuple(looped)
+        self.slots: dict[int, Slot] = {}
+
+    def __getitem__(self, width: int) -> Slot:
+        slot = self.slots.get(width)
+        if slot is None:
+            source = self.symbolic if width in self.looped else self.fn
+            mapped = source.map(width, self.shared, [False])
+            if width in self.looped:
+                mapped = native(mapped)
+            slot = self.slots[width] = Slot(mapped, self.fn, width, self.shared)
+        return slot
 
     def compiled(self) -> list[ca.Function]:
-        """The compiled functions: one point's, and the chunk's (built here if need be)."""
-        self._buffer(self.chunk)
-        return [self.fn, self.buffers[self.chunk][6]]
+        """The compiled functions: one point's, and each looped map (built here if need be)."""
+        return [self.fn, *(self[w].fn for w in self.looped)]
 
-    def __call__(self, x: np.ndarray, params: Sequence[float]) -> np.ndarray:
-        """The rows at each point of x (n, dim): shape (rows, n). ``params`` is copied into a
-        buffer unless it is the sequence that buffer last took (kept, so never another at its
-        address)."""
-        n = len(x)
+
+class Points:
+    """A function of (x, p), x a point of a few numbers and p shared parameters, at many
+    points (``Mapped``): up to ``small`` points in a slot for their number, more in chunks of
+    ``chunk`` through the looped map."""
+
+    def __init__(self, fn: ca.Function, small: int = 16, chunk: int = 256) -> None:
+        self.mapped = Mapped(fn, (False, True), looped=(chunk,))
+        self.fn, self.small, self.chunk, self.rows = self.mapped.fn, small, chunk, fn.nnz_out(0)
+
+    def __call__(self, columns: Sequence[np.ndarray], params: Sequence[float]) -> np.ndarray:
+        """The rows at n points given by their coordinates (``columns``: ``dim`` arrays of n):
+        shape (rows, n)."""
+        n = len(columns[0])
         if n <= self.small:
-            return self._run(n, x, params).T.copy()  # the buffer is reused by the next call
+            slot = self._fill(n, params)
+            for j, c in enumerate(columns):
+                slot.args[0][:, j] = c
+            slot.run()
+            return slot.out.T.copy()  # the slot is reused by the next call
         out = np.empty((self.rows, n))
+        slot = self._fill(self.chunk, params)
+        xs = slot.args[0]
         for k in range(0, n, self.chunk):
-            part = x[k : k + self.chunk]
-            if len(part) < self.chunk:  # padded with its first point
-                part = np.concatenate([part, np.repeat(part[:1], self.chunk - len(part), 0)])
-            out[:, k : k + self.chunk] = self._run(self.chunk, part, params)[: n - k].T
+            m = min(self.chunk, n - k)
+            for j, c in enumerate(columns):
+                xs[:m, j] = c[k : k + m]
+            xs[m:] = xs[0]  # a short last chunk padded with its first point
+            slot.run()
+            out[:, k : k + m] = slot.out[:m].T
         return out
 
     def one(self, point: Sequence[float], params: Sequence[float]) -> list[float]:
         """The rows at one point, a list (the quickest way to a few numbers)."""
-        return self._run(1, point, params)[0].tolist()  # type: ignore[no-any-return]
+        slot = self._fill(1, params)
+        slot.args[0][0] = point
+        slot.run()
+        return slot.out[0].tolist()  # type: ignore[no-any-return]
 
-    def _run(
-        self, width: int, x: np.ndarray | Sequence[float], params: Sequence[float]
-    ) -> np.ndarray:
-        b = self.buffers.get(width) or self._buffer(width)
-        xs, ps, res, run = b[:4]
-        xs[:] = x
-        if params is not b[5]:
-            ps[:] = params
-            b[5] = params
-        run()
-        return cast(np.ndarray, res)
-
-    def _buffer(self, width: int) -> list[Any]:
-        """The arrays for ``width`` points, bound to the function mapped over them, and the
-        parameters they last took (none yet)."""
-        if width not in self.buffers:
-            xs, ps = np.zeros((width, self.dim)), np.zeros(self.n_params)  # x: (dim, width)
-            res = np.zeros((width, self.rows))
-            if width == self.chunk:
-                fn = native(self.symbolic.map(width, [False, True], [False]))
-            else:
-                fn = self.fn.map(width, [False, True], [False])
-            run, buf = bind(fn, [xs, ps], res)
-            self.buffers[width] = [xs, ps, res, run, buf, None, fn]
-        return self.buffers[width]
+    def _fill(self, width: int, params: Sequence[float]) -> Slot:
+        """The slot for ``width`` points, holding ``params`` (copied unless it is the sequence
+        the slot last took)."""
+        slot = self.mapped[width]
+        if params is not slot.last:
+            slot.args[1][:] = params
+            slot.last = params
+        return slot
 
 
 def _build(source: str, path: Path) -> bool:

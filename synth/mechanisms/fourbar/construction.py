@@ -62,10 +62,6 @@ PARAMS = (
 )  # fmt: skip
 ROWS = ("valid", "feasible", "f", "size", "k", "a2", "a3", "a4", "r5", "l", "h", "rod_cos",
         "slack")  # fmt: skip
-# the rows ``Compiled.taylor`` gives at a point (ψ, u), λ = 1 + e^u: valid, f, the size, their
-# gradients and their Hessians' entries
-TAYLOR = ("valid", "f", "size", "f_psi", "f_u", "size_psi", "size_u", "f_psi_psi", "f_psi_u",
-          "f_u_u", "size_psi_psi", "size_psi_u", "size_u_u")  # fmt: skip
 
 _local = threading.local()
 
@@ -153,7 +149,9 @@ class Compiled:
         )
 
     def taylor(self, psi: float, u: float, params: Sequence[float]) -> list[float]:
-        """``TAYLOR`` at one point (ψ, u), a list (``params`` as for ``points``)."""
+        """At one point (ψ, u), λ = 1 + e^u, a list: valid, f, the size, the gradients of f
+        and of the size in (ψ, u), then the Hessians' entries f_ψψ, f_ψu, f_uu, size_ψψ,
+        size_ψu, size_uu (``params`` as for ``points``)."""
         return self.local.one((psi, u), params)
 
 
@@ -211,17 +209,19 @@ class Construction:
         scale 1, the crank-rocker's order), r5, l, h and the rod's worst cos; a point that is
         no design is NaN or False."""
         psi, lam = np.asarray(psi, dtype=float), np.asarray(lam, dtype=float)
-        shape = np.broadcast_shapes(psi.shape, lam.shape)
-        points = np.stack([np.broadcast_to(a, shape).ravel() for a in (psi, lam)], axis=1)
-        out = construction().points(points, self._params(sigma))
+        shape = psi.shape
+        if psi.ndim != 1 or lam.shape != shape:  # a grid
+            shape = np.broadcast_shapes(psi.shape, lam.shape)
+            psi, lam = (np.broadcast_to(a, shape).ravel() for a in (psi, lam))
+        out = construction().points((psi, lam), self._params(sigma))
         e: dict[str, Any] = dict(zip(ROWS, out.reshape(len(ROWS), *shape), strict=True))
         e["valid"], e["feasible"] = e["valid"] > 0, e["feasible"] > 0
         e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
         return e
 
     def _params(self, sigma: int) -> list[float]:
-        """The compiled function's parameters (``PARAMS``) for sheet σ, kept
-        per sheet, bounds and rod: a copy of this construction (``copy.copy``, ``holding``)
+        """The compiled function's parameters (``PARAMS``) for sheet σ, kept per sheet, bounds
+        and rod: a copy of this construction (``copy.copy``, ``holding``)
         shares the cache but may differ in its rod or its bounds' arrays (replaced, never
         changed in place)."""
         key = (sigma, id(self.lo), id(self.hi), self.rod)
@@ -241,8 +241,8 @@ class Construction:
 
     def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict[str, Any]]:
         """The design at one point, and its evaluation (numbers; valid and feasible 1 or 0)."""
-        out: Any = construction().points.one((psi, lam), self._params(sigma))
-        one: dict[str, Any] = dict(zip(ROWS, out, strict=True))
+        values = construction().points.one((psi, lam), self._params(sigma))
+        one: dict[str, Any] = dict(zip(ROWS, values, strict=True))
         one["rho"] = [1.0, one.pop("a2"), one.pop("a3"), one.pop("a4")]
         r = self.r
         out = {n: one["k"] * x for n, x in zip(r.links, one["rho"], strict=True)}

@@ -6,14 +6,14 @@ intersection of circle(A, coupler) and circle(O4, rocker) to the left of the dir
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from typing import Any, cast
+from collections.abc import Sequence
+from typing import Any
 
 import casadi as ca
 
 from ...numerics import ROUNDING
 from ..geometry import cos_law, sqrt, where
-from ..registry import Condition, Scale
+from ..registry import Condition, Params, Scale
 
 
 def output_pin(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any, Any]:
@@ -76,18 +76,21 @@ def _triangle(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any]:
     return d2, sqrt(outer * inner) / (2 * d2)
 
 
-def grashof_margins(links: Sequence[Any], shortest: int) -> tuple[Any, ...]:
-    """Grashof with link ``shortest`` the shortest, as three margins ≥ 0: for each other link
-    x, the other two less the shortest and x (polymorphic).
+def grashof_margin(shortest: Any, x: Any, a: Any, b: Any) -> Any:
+    """shortest + x ≤ a + b, as a margin ≥ 0 (polymorphic). The three margins of a four-bar's
+    links other than the shortest (``grashof_margins``) are Grashof with it the shortest
+    link: together they say that it is the shortest and s + l ≤ p + q."""
+    return a + b - shortest - x
 
-    "shortest + x ≤ the other two" for each other link x is equivalent to: ``shortest`` is the
-    shortest link and s + l ≤ p + q.
-    """
-    others = [k for k in range(len(links)) if k != shortest]
+
+def grashof_margins(links: Sequence[Any], shortest: int) -> tuple[Any, ...]:
+    """Grashof with link ``shortest`` the shortest, as three margins ≥ 0 (``grashof_margin``
+    for each other link x, in order, a and b the remaining two)."""
     out = []
-    for x in others:
-        a, b = (k for k in others if k != x)
-        out.append(links[a] + links[b] - links[shortest] - links[x])
+    for x in range(len(links)):
+        if x != shortest:
+            a, b = (links[k] for k in range(len(links)) if k not in (shortest, x))
+            out.append(grashof_margin(links[shortest], links[x], a, b))
     return tuple(out)
 
 
@@ -96,32 +99,28 @@ def grashof_conditions(
 ) -> tuple[Condition, ...]:
     """Grashof with ``shortest`` the shortest link (``grashof_margins``), as three linear
     conditions; ``names`` are the parameter names of the four links."""
-    k = names.index(shortest)
-    others = [n for n in names if n != shortest]
-    conds = []
-    for i, x in enumerate(others):
-        a, b = (n for n in others if n != x)
-        conds.append(
-            Condition(
-                name=f"grashof_{x}",
-                text=f"{shortest} + {x} ≤ {a} + {b} (Grashof with the {shortest} the shortest "
-                f"link: a {kind})",
-                margin=cast(
-                    "Callable[..., tuple[Any, ...]]",
-                    lambda p, i=i: (grashof_margins([p[n] for n in names], k)[i],),
-                ),
-                explain=cast(
-                    "Callable[..., str]",
-                    lambda p, x=x, a=a, b=b: (
-                        f"{shortest} {p[shortest]:g} + {x} {p[x]:g} = {p[shortest] + p[x]:g} > "
-                        f"{a} {p[a]:g} + {b} {p[b]:g} = {p[a] + p[b]:g}: not a {kind} (Grashof "
-                        f"with the {shortest} the shortest link), the crank cannot drive it "
-                        f"through a full revolution as one"
-                    ),
-                ),
+    s = names.index(shortest)
+
+    def condition(x: int) -> Condition:
+        a, b = (names[k] for k in range(len(names)) if k not in (s, x))
+        n = names[x]
+
+        def margin(p: Params) -> tuple[Any, ...]:
+            return (grashof_margin(p[shortest], p[n], p[a], p[b]),)
+
+        def explain(p: Params) -> str:
+            return (
+                f"{shortest} {p[shortest]:g} + {n} {p[n]:g} = {p[shortest] + p[n]:g} > "
+                f"{a} {p[a]:g} + {b} {p[b]:g} = {p[a] + p[b]:g}: not a {kind} (Grashof with the "
+                f"{shortest} the shortest link), the crank cannot drive it through a full "
+                f"revolution as one"
             )
-        )
-    return tuple(conds)
+
+        text = f"{shortest} + {n} ≤ {a} + {b} (Grashof with the {shortest} the shortest link: a "
+        text += f"{kind})"
+        return Condition(name=f"grashof_{n}", text=text, margin=margin, explain=explain)
+
+    return tuple(condition(x) for x in range(len(names)) if x != s)
 
 
 def grashof_class(ground: float, crank: float, coupler: float, rocker: float) -> str:
