@@ -1,19 +1,17 @@
 """The rule for a connecting rod from a pin to a straight path, shared by the types with one:
-written once, in CasADi maths (``rule``), compiled for numbers (``rod``) and built into the
-four-bar construction's function."""
+written once (``rule``), evaluated on numbers by numpy (``rod``) and built into the four-bar
+construction's compiled function."""
 
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Mapping
 from typing import Any
 
-import casadi as ca
 import numpy as np
 
 from ..numerics import ROUNDING
-from ..numerics.native import Points
+from ..numerics.ops import CASADI, NUMPY, Ops
 from ..targets import MIN_SIZE
 from .reduced import ONE_WAY, STRICT, Problem
 
@@ -21,10 +19,10 @@ from .reduced import ONE_WAY, STRICT, Problem
 PARAMS = ("min_size", "cos_bound", "rod_lo", "rod_hi", "on_line", "height_fixed", "height",
           "height_lo", "height_hi")  # fmt: skip
 
-_local = threading.local()
 
-
-def rule(arm: Any, half: Any, cos_other: Any, q: Mapping[str, Any]) -> tuple[Any, Any, Any, Any]:
+def rule(
+    arm: Any, half: Any, cos_other: Any, q: Mapping[str, Any], ops: Ops = CASADI
+) -> tuple[Any, Any, Any, Any]:
     """The connecting rod from a pin at ``arm`` from its pivot to a straight path: its
     length l, its path's placement h and its worst cos μ.
 
@@ -42,57 +40,58 @@ def rule(arm: Any, half: Any, cos_other: Any, q: Mapping[str, Any]) -> tuple[Any
     A pin that turns fully about a centre on the path (``on_line`` 1) needs l > arm, and
     transmits worst at w = arm.
 
-    Symbolic: (l, h, the rod's worst cos, l_ok), with ``q`` the entries of ``PARAMS``; where
-    the bounds allow no rod, l_ok is 0 and l, and where no h is found h, are NaN (flags, not
-    NaN propagation: C's fmin and fmax drop a NaN).
+    Returns (l, h, the rod's worst cos, l_ok), with ``q`` the entries of ``PARAMS``, in
+    CasADi symbols or numpy arrays (``ops``); where the bounds allow no rod, l_ok is false and
+    l, and where no h is found h, are NaN (flags, not NaN propagation: fmin and fmax drop a
+    NaN).
     """
-    nan, inf = ca.SX(math.nan), ca.SX(math.inf)
+    nan, inf = math.nan, math.inf
     rlo, rhi = q["rod_lo"], q["rod_hi"]
-    c = ca.if_else(q["min_size"], q["cos_bound"], cos_other)
+    c = ops.if_else(q["min_size"], q["cos_bound"], cos_other)
     # on the line (the pin turns fully about a centre on the path)
     w_line = arm
-    short_line = ca.fmax(ca.fmax(rlo, w_line / c), w_line + STRICT)
-    len_line = ca.if_else(q["min_size"], short_line, ca.if_else(short_line <= rhi, short_line,
-                                                                rhi))  # fmt: skip
+    short_line = ops.fmax(ops.fmax(rlo, w_line / c), w_line + STRICT)
+    at_most = ops.if_else(short_line <= rhi, short_line, rhi)
+    len_line = ops.if_else(q["min_size"], short_line, at_most)
     # a swinging pin
-    xc = ca.cos(half)
+    xc = ops.cos(half)
     m_ok = xc > ONE_WAY  # no rod moves the slider one way past a swing of ±90° (less the margin)
-    m = ca.fmin(c, xc - ONE_WAY)
+    m = ops.fmin(c, xc - ONE_WAY)
     pos = c > 0
 
     def place(h: Any) -> Any:  # the caller's placement, or one within its bounds
-        return ca.if_else(q["height_fixed"], q["height"],
-                          ca.fmin(ca.fmax(h, q["height_lo"]), q["height_hi"]))  # fmt: skip
+        within = ops.fmin(ops.fmax(h, q["height_lo"]), q["height_hi"])
+        return ops.if_else(q["height_fixed"], q["height"], within)
 
     # the shortest rod with worst cos ≤ c; none to find where c = 0 (nothing else limits the
     # transmission: the rod sits at its upper bound)
-    h = place(ca.if_else(pos, arm * (m + c * xc) / ca.if_else(pos, m + c, 1.0), arm))
-    g1, g2 = ca.fabs(h - arm), ca.fabs(h - arm * xc)
-    short = ca.if_else(pos, ca.fmax(rlo, ca.fmax(g1 / c, g2 / m)), inf)
-    short_nan = ca.logic_and(pos, ca.logic_not(m_ok))
-    h_nan = ca.logic_and(short_nan, ca.logic_not(q["height_fixed"]))
+    h = place(ops.if_else(pos, arm * (m + c * xc) / ops.if_else(pos, m + c, 1.0), arm))
+    g1, g2 = ops.fabs(h - arm), ops.fabs(h - arm * xc)
+    short = ops.if_else(pos, ops.fmax(rlo, ops.fmax(g1 / c, g2 / m)), inf)
+    short_nan = ops.logic_and(pos, ops.logic_not(m_ok))
+    h_nan = ops.logic_and(short_nan, ops.logic_not(q["height_fixed"]))
     # at the upper bound: the midpoint, moved as little as the one way needs
     lean = (xc - ONE_WAY) * rhi  # the most the one way allows at the upper bound
-    mid = place(ca.fmin(ca.fmax(arm * (1 + xc) / 2, arm * xc - lean), arm * xc + lean))
-    limited_ok = ca.fabs(mid - arm * xc) <= lean * (1 + ROUNDING)
-    use_short = ca.logic_and(ca.logic_not(short_nan), short <= rhi)
-    len_swing = ca.if_else(q["min_size"], short, ca.if_else(use_short, short, rhi))
-    neither = ca.logic_and(ca.logic_not(use_short), ca.logic_not(limited_ok))
-    swing_nan = ca.if_else(q["min_size"], short_nan, neither)
-    h = ca.if_else(ca.logic_or(q["min_size"], use_short), h, mid)
-    h_nan = ca.logic_and(h_nan, ca.logic_or(q["min_size"], use_short))
-    w_swing = ca.fmax(ca.fabs(h - arm), ca.fabs(h - arm * xc))
+    mid = place(ops.fmin(ops.fmax(arm * (1 + xc) / 2, arm * xc - lean), arm * xc + lean))
+    limited_ok = ops.fabs(mid - arm * xc) <= lean * (1 + ROUNDING)
+    use_short = ops.logic_and(ops.logic_not(short_nan), short <= rhi)
+    len_swing = ops.if_else(q["min_size"], short, ops.if_else(use_short, short, rhi))
+    neither = ops.logic_and(ops.logic_not(use_short), ops.logic_not(limited_ok))
+    swing_nan = ops.if_else(q["min_size"], short_nan, neither)
+    h = ops.if_else(ops.logic_or(q["min_size"], use_short), h, mid)
+    h_nan = ops.logic_and(h_nan, ops.logic_or(q["min_size"], use_short))
+    w_swing = ops.fmax(ops.fabs(h - arm), ops.fabs(h - arm * xc))
     line = q["on_line"]
-    length = ca.if_else(line, len_line, len_swing)
-    length_nan = ca.logic_and(ca.logic_not(line), swing_nan)
-    w = ca.if_else(line, w_line, w_swing)
-    l_ok = ca.logic_and(ca.logic_not(length_nan),
-                        ca.logic_and(length <= rhi * (1 + ROUNDING), length < inf))  # fmt: skip
-    l_ok = ca.logic_and(l_ok, ca.fmin(length, rhi) < inf)
-    rod_l = ca.if_else(l_ok, ca.fmin(length, rhi), nan)
-    rod_h = ca.if_else(ca.logic_or(line, h_nan), nan, h)
-    rod_cos = ca.if_else(ca.logic_and(l_ok, ca.logic_not(ca.logic_and(ca.logic_not(line), h_nan))),
-                         w / ca.fmin(length, rhi), nan)  # fmt: skip
+    length = ops.if_else(line, len_line, len_swing)
+    length_nan = ops.logic_and(ops.logic_not(line), swing_nan)
+    w = ops.if_else(line, w_line, w_swing)
+    within_box = ops.logic_and(length <= rhi * (1 + ROUNDING), length < inf)
+    l_ok = ops.logic_and(ops.logic_not(length_nan), within_box)
+    l_ok = ops.logic_and(l_ok, ops.fmin(length, rhi) < inf)
+    rod_l = ops.if_else(l_ok, ops.fmin(length, rhi), nan)
+    rod_h = ops.if_else(ops.logic_or(line, h_nan), nan, h)
+    no_h = ops.logic_and(ops.logic_not(line), h_nan)  # a swinging pin's placement not found
+    rod_cos = ops.if_else(ops.logic_and(l_ok, ops.logic_not(no_h)), w / ops.fmin(length, rhi), nan)
     return rod_l, rod_h, rod_cos, l_ok
 
 
@@ -112,17 +111,8 @@ def rod(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``rule`` at the points (arm, half, cos_other), arrays broadcast together: (l, h, the rod's
     worst cos); l is NaN where the bounds allow no rod."""
+    q = dict(zip(PARAMS, params(p, name, height), strict=True))
     x = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (arm, half, cos_other)))
-    out = compiled()([a.ravel() for a in x], params(p, name, height))
-    return out[0].reshape(x[0].shape), out[1].reshape(x[0].shape), out[2].reshape(x[0].shape)
-
-
-def compiled() -> Points:
-    """This thread's compiled ``rule``: at x = (arm, half, cos_other) with the parameters p
-    (``PARAMS``), the rows l, h and the rod's worst cos."""
-    if not hasattr(_local, "points"):
-        x, q = ca.SX.sym("x", 3), ca.SX.sym("p", len(PARAMS))
-        l, h, c, _ = rule(x[0], x[1], x[2], {n: q[i] for i, n in enumerate(PARAMS)})
-        fn = ca.Function("connecting_rod", [x, q], [ca.vertcat(l, h, c)], {"cse": True})
-        _local.points = Points(fn)
-    return _local.points  # type: ignore[no-any-return]
+    with np.errstate(all="ignore"):
+        l, h, c, _ = rule(x[0], x[1], x[2], q, NUMPY)
+    return tuple(np.broadcast_to(a, x[0].shape) for a in (l, h, c))  # type: ignore[return-value]

@@ -25,12 +25,13 @@ ties), unless a fixed link sets it (further fixed links hold ratios of the const
 links); the crank-rocker's arm sets the stroke, 2 r5 sin(ψ/2) = 1, the drag-link's is half the
 stroke; a connecting rod follows ``rod.rule``.
 
-Everything above is one CasADi function of a point (ψ, λ) and the variant's numbers
-(``PARAMS``: every structural choice of a variant, the fixed link that sets the scale, a
-swinging arm, a rod, its path's placement, the objective, is a number there, so one function
-serves every variant), compiled (``synth.numerics.native``) and evaluated through
-preallocated buffers: a Newton step's few points, a design, and the grids of the search in
-chunks. Its derivatives (``Compiled.taylor``) are CasADi's automatic differentiation of it.
+Everything above is written once (``rows``), a function of a point (ψ, λ) and the variant's
+numbers (``PARAMS``: every structural choice of a variant, the fixed link that sets the
+scale, a swinging arm, a rod, its path's placement, the objective, is a number there, so one
+function serves every variant). Built in CasADi and compiled (``synth.numerics.native``) it
+evaluates a Newton step's few points and a design through preallocated buffers, and its
+derivatives (``Compiled.taylor``) are CasADi's automatic differentiation of it; on numpy
+arrays it evaluates a search's grid, all points at once.
 """
 
 from __future__ import annotations
@@ -46,11 +47,15 @@ import numpy as np
 
 from ...errors import Unreachable
 from ...numerics.native import Points
+from ...numerics.ops import CASADI, NUMPY, Ops
 from .. import rod
 from ..reduced import Problem, unreachable
 from .geometry import grashof_margins, worst_cos
 
 BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
+# from this many points on (a search's grid) ``rows`` runs on numpy's whole arrays: ~0.1 µs a
+# point and ~150 µs a call, against the compiled function's ~0.25 µs a point
+WHOLE = 1024
 
 # the parameter vector: the names of its entries, in order
 PARAMS = (
@@ -77,56 +82,57 @@ class Roles:
     swings: bool  # the arm swings with the rocker (stroke 2 r5 sin(ψ/2)); else stroke 2 r5
 
 
-def rows(psi: Any, lam: Any, p: Any) -> ca.SX:
-    """The rows (``ROWS``) at (ψ, λ) with the parameters p (``PARAMS``), symbolic."""
+def rows(psi: Any, lam: Any, p: Any, ops: Ops = CASADI) -> tuple[Any, ...]:
+    """The rows (``ROWS``) at (ψ, λ) with the parameters p (``PARAMS``): CasADi symbols, or
+    numpy arrays (``ops``)."""
     q = {n: p[i] for i, n in enumerate(PARAMS)}
     er, ei = q["ep_r"], q["ep_i"]
     # z1 = (1 − e^{iψ}) / ((1 − λ) e^{iφ} − (1 + λ) e^{iψ}), in real arithmetic
-    cp, sp = ca.cos(psi), ca.sin(psi)
+    cp, sp = ops.cos(psi), ops.sin(psi)
     nr, ni = 1 - cp, -sp
     dr, di = (1 - lam) * er - (1 + lam) * cp, (1 - lam) * ei - (1 + lam) * sp
     dd = dr * dr + di * di
     zr, zi = (nr * dr + ni * di) / dd, (ni * dr - nr * di) / dd
-    a2 = ca.sqrt(zr * zr + zi * zi)
+    a2 = ops.sqrt(zr * zr + zi * zi)
     a3 = lam * a2
     wr, wi = (1 + lam) * zr - 1, (1 + lam) * zi
-    a4 = ca.sqrt(wr * wr + wi * wi)
+    a4 = ops.sqrt(wr * wr + wi * wi)
     # one assembly circuit, sin θ sin(θ + φ) < 0, and Grashof with the crank the shortest link
     valid = zi * (zr * ei + zi * er) < 0
     for margin in grashof_margins((1.0, a2, a3, a4), 1):
-        valid = ca.logic_and(valid, margin >= 0)
-    f = worst_cos(1.0, a2, a3, a4)
+        valid = ops.logic_and(valid, margin >= 0)
+    f = worst_cos(1.0, a2, a3, a4, ops)
     # the scale
     rho = (1.0, a2, a3, a4)
     lo = [q[f"lo{i}"] / r for i, r in enumerate(rho)]
     hi = [q[f"hi{i}"] / r for i, r in enumerate(rho)]
-    kmin = ca.fmax(ca.fmax(lo[0], lo[1]), ca.fmax(lo[2], lo[3]))
-    kmax = ca.fmin(ca.fmin(hi[0], hi[1]), ca.fmin(hi[2], hi[3]))
-    k = ca.if_else(q["set0"], lo[0], ca.if_else(q["set1"], lo[1], ca.if_else(q["set2"], lo[2],
-                                                                              lo[3])))  # fmt: skip
-    k = ca.if_else(q["free_scale"], kmin, k)
-    feasible = ca.logic_and(valid, kmin <= kmax * (1 + BOUND_TOL))
+    kmin = ops.fmax(ops.fmax(lo[0], lo[1]), ops.fmax(lo[2], lo[3]))
+    kmax = ops.fmin(ops.fmin(hi[0], hi[1]), ops.fmin(hi[2], hi[3]))
+    k = ops.if_else(q["set2"], lo[2], lo[3])
+    k = ops.if_else(q["set0"], lo[0], ops.if_else(q["set1"], lo[1], k))
+    k = ops.if_else(q["free_scale"], kmin, k)
+    feasible = ops.logic_and(valid, kmin <= kmax * (1 + BOUND_TOL))
     # how far the design is from a link's bound: the scale's room, log(kmax/kmin), when it is
     # free; else the free links' distance from their boxes, in log (one log of the least
     # ratio: log is monotonic)
-    inf = ca.SX(math.inf)
+    inf = math.inf
     rest = [
-        ca.if_else(q[f"set{i}"], inf, ca.fmin(k / a, b / k))
+        ops.if_else(q[f"set{i}"], inf, ops.fmin(k / a, b / k))
         for i, (a, b) in enumerate(zip(lo, hi, strict=True))
     ]
-    least = ca.fmin(ca.fmin(rest[0], rest[1]), ca.fmin(rest[2], rest[3]))
-    slack = ca.log(ca.if_else(q["free_scale"], kmax / kmin, least))
-    r5 = ca.if_else(q["swings"], 0.5 / ca.sin(psi / 2), q["arm"])
+    least = ops.fmin(ops.fmin(rest[0], rest[1]), ops.fmin(rest[2], rest[3]))
+    slack = ops.log(ops.if_else(q["free_scale"], kmax / kmin, least))
+    r5 = ops.if_else(q["swings"], 0.5 / ops.sin(psi / 2), q["arm"])
     # the connecting rod (none in a slot drive)
-    rod_l, rod_h, rod_cos, l_ok = rod.rule(r5, psi / 2, f, q)
+    rod_l, rod_h, rod_cos, l_ok = rod.rule(r5, psi / 2, f, q, ops)
     with_rod = q["rod"]
-    l = ca.if_else(with_rod, rod_l, 0.0)
-    h = ca.if_else(with_rod, rod_h, ca.SX(math.nan))
-    rc = ca.if_else(with_rod, rod_cos, 0.0)
-    l_fin = ca.logic_or(ca.logic_not(with_rod), l_ok)
-    feasible = ca.logic_and(feasible, l_fin)
-    size = k * (1 + a2 + a3 + a4) + r5 + ca.if_else(l_fin, l, 0.0)
-    return ca.vertcat(valid, feasible, f, size, k, a2, a3, a4, r5, l, h, rc, slack)
+    l = ops.if_else(with_rod, rod_l, 0.0)
+    h = ops.if_else(with_rod, rod_h, math.nan)
+    rc = ops.if_else(with_rod, rod_cos, 0.0)
+    l_fin = ops.logic_or(ops.logic_not(with_rod), l_ok)
+    feasible = ops.logic_and(feasible, l_fin)
+    size = k * (1 + a2 + a3 + a4) + r5 + ops.if_else(l_fin, l, 0.0)
+    return valid, feasible, f, size, k, a2, a3, a4, r5, l, h, rc, slack
 
 
 class Compiled:
@@ -135,11 +141,11 @@ class Compiled:
 
     def __init__(self) -> None:
         x, p = ca.SX.sym("x", 2), ca.SX.sym("p", len(PARAMS))
-        out = rows(x[0], x[1], p)
+        out = ca.vertcat(*rows(x[0], x[1], p))
         self.points = Points(ca.Function("fourbar_construction", [x, p], [out], {"cse": True}))
         # at y = (ψ, u), λ = 1 + e^u (Newton's coordinates)
         y = ca.SX.sym("y", 2)
-        at = rows(y[0], 1 + ca.exp(ca.fmin(y[1], 50.0)), p)
+        at = ca.vertcat(*rows(y[0], 1 + ca.exp(ca.fmin(y[1], 50.0)), p))
         f, size = at[ROWS.index("f")], at[ROWS.index("size")]
         (hf, gf), (hs, gs) = ca.hessian(f, y), ca.hessian(size, y)
         local = ca.vertcat(at[ROWS.index("valid")], f, size, gf, gs,
@@ -209,12 +215,17 @@ class Construction:
         scale 1, the crank-rocker's order), r5, l, h and the rod's worst cos; a point that is
         no design is NaN or False."""
         psi, lam = np.asarray(psi, dtype=float), np.asarray(lam, dtype=float)
-        shape = psi.shape
-        if psi.ndim != 1 or lam.shape != shape:  # a grid
-            shape = np.broadcast_shapes(psi.shape, lam.shape)
-            psi, lam = (np.broadcast_to(a, shape).ravel() for a in (psi, lam))
-        out = construction().points((psi, lam), self._params(sigma))
-        e: dict[str, Any] = dict(zip(ROWS, out.reshape(len(ROWS), *shape), strict=True))
+        shape = np.broadcast_shapes(psi.shape, lam.shape)
+        e: dict[str, Any]
+        if math.prod(shape) >= WHOLE:
+            with np.errstate(all="ignore"):
+                grid = rows(psi, lam, self._params(sigma), NUMPY)
+            e = {n: np.broadcast_to(r, shape) for n, r in zip(ROWS, grid, strict=True)}
+        else:
+            if psi.shape != shape or lam.shape != shape or psi.ndim != 1:
+                psi, lam = (np.broadcast_to(a, shape).ravel() for a in (psi, lam))
+            values = construction().points((psi, lam), self._params(sigma))
+            e = dict(zip(ROWS, values.reshape(len(ROWS), *shape), strict=True))
         e["valid"], e["feasible"] = e["valid"] > 0, e["feasible"] > 0
         e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
         return e

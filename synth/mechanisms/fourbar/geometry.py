@@ -12,6 +12,7 @@ from typing import Any
 import casadi as ca
 
 from ...numerics import ROUNDING
+from ...numerics.ops import CASADI, Ops
 from ..geometry import cos_law, sqrt, where
 from ..registry import Condition, Params, Scale
 
@@ -134,14 +135,15 @@ def grashof_class(ground: float, crank: float, coupler: float, rocker: float) ->
     return {0: "drag-link", 1: "crank-rocker", 2: "double-rocker", 3: "rocker-crank"}[s]
 
 
-def worst_cos(ground: Any, crank: Any, coupler: Any, rocker: Any) -> Any:
+def worst_cos(ground: Any, crank: Any, coupler: Any, rocker: Any, ops: Ops = CASADI) -> Any:
     """The largest |cos μ| of the coupler–rocker transmission over a revolution of a Grashof
     crank-rocker: at the crank on the ground line, max(c1, −c2) with c1, c2 = (coupler² +
-    rocker² − (ground ∓ crank)²)/(2 coupler rocker) (polymorphic)."""
+    rocker² − (ground ∓ crank)²)/(2 coupler rocker) (numbers or CasADi symbols; numpy arrays
+    with ``ops``)."""
     base = coupler * coupler + rocker * rocker
     c1 = (base - (ground - crank) ** 2) / (2 * coupler * rocker)
     c2 = (base - (ground + crank) ** 2) / (2 * coupler * rocker)
-    return ca.fmax(c1, -c2)
+    return ops.fmax(c1, -c2)
 
 
 def fourbar_scale(output: str) -> Scale:
