@@ -1,6 +1,6 @@
-"""House rules the code keeps, read from the source: no module uses another package's private
-names, no module of synth is longer than a reader can hold, and every Markdown file the tree
-names is in it."""
+"""House rules the code keeps, read from the source: synth's packages import only downwards,
+no module uses another package's private names, no module of synth is longer than a reader
+can hold, and every Markdown file the tree names is in it."""
 
 from __future__ import annotations
 
@@ -131,6 +131,57 @@ def private_uses(path: Path) -> list[str]:
 def test_no_module_uses_another_packages_private_names():
     found = [line for p in python_files(*PACKAGES) for line in private_uses(p)]
     assert not found, "private names used across packages:\n" + "\n".join(found)
+
+
+# synth's packages from the ground up (docs/architecture.md): a module imports from its own
+# layer and those below it, never from one above
+LAYERS = (
+    ("synth.errors", "synth.targets", "synth.numerics", "synth.version"),
+    ("synth.results",),
+    ("synth.mechanisms",),
+    ("synth.analysis",),
+    ("synth.synthesis",),
+    ("synth.atlas",),
+    ("synth",),
+)
+
+
+def layer(dotted: str) -> int:
+    """The layer of a dotted name in synth: that of its longest prefix in ``LAYERS``."""
+    best, at = -1, -1
+    for i, names in enumerate(LAYERS):
+        for n in names:
+            if (dotted == n or dotted.startswith(n + ".")) and len(n) > best:
+                best, at = len(n), i
+    return at
+
+
+def synth_imports(path: Path) -> list[tuple[int, str]]:
+    """(line, dotted name) of each name of synth one file imports."""
+    _, package = module_of(path)
+    out = []
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                source = ".".join([*base, *([node.module] if node.module else [])])
+            else:
+                source = node.module or ""
+            out += [(node.lineno, f"{source}.{a.name}") for a in node.names]
+    return [(line, name) for line, name in out if name.split(".")[0] == "synth"]
+
+
+def test_synth_imports_only_downwards():
+    found = []
+    for p in python_files("synth"):
+        here = layer(module_of(p)[0])
+        for line, name in synth_imports(p):
+            if layer(name) > here:
+                found.append(f"{p.relative_to(ROOT)}:{line}: imports {name}, a layer above it")
+    assert not found, "imports that run back up:\n" + "\n".join(found)
 
 
 def test_no_module_of_synth_is_over_450_lines():
