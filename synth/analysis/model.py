@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from ..mechanisms import Mechanism, all_types, get
+from ..mechanisms import Mechanism, all_types, get, rod
 from ..mechanisms.fourbar.construction import construction
 from ..numerics.native import Mapped, Slot
 
@@ -212,8 +212,8 @@ def compile_all() -> None:
                         raise RuntimeError(
                             f"{fn.name()}: no C compiler or cache (synth.numerics.native)"
                         )
-    # the four-bar types' reduced synthesis: their construction
+    # the reduced synthesis's: the four-bar construction, the connecting rod
     c = construction()
-    for fn in (*c.points.mapped.compiled(), c.local.fn):
+    for fn in (*c.points.mapped.compiled(), c.local.fn, *rod.compiled().mapped.compiled()):
         if fn.class_name() != "External":
             raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.numerics.native)")

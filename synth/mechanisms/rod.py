@@ -1,19 +1,24 @@
 """The rule for a connecting rod from a pin to a straight path, shared by the types with one:
-written once (``rule``), evaluated on numbers by numpy (``rod``) and built into the four-bar
-construction's compiled function."""
+written once (``rule``), compiled on its own for the closed forms' few designs (``rod``) and
+built into the four-bar construction's function."""
 
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, cast
 
+import casadi as ca
 import numpy as np
 
 from ..numerics import ROUNDING
-from ..numerics.ops import CASADI, NUMPY, Ops
+from ..numerics.native import Points
+from ..numerics.ops import CASADI, Ops
 from ..targets import MIN_SIZE
 from .reduced import ONE_WAY, STRICT, Problem
+
+_local = threading.local()
 
 # the rule's parameters: the objective, the rod's box and its path's placement
 PARAMS = ("min_size", "cos_bound", "rod_lo", "rod_hi", "on_line", "height_fixed", "height",
@@ -111,8 +116,17 @@ def rod(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``rule`` at the points (arm, half, cos_other), arrays broadcast together: (l, h, the rod's
     worst cos); l is NaN where the bounds allow no rod."""
-    q = dict(zip(PARAMS, params(p, name, height), strict=True))
     x = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (arm, half, cos_other)))
-    with np.errstate(all="ignore"):
-        l, h, c, _ = rule(x[0], x[1], x[2], q, NUMPY)
-    return tuple(np.broadcast_to(a, x[0].shape) for a in (l, h, c))  # type: ignore[return-value]
+    out = compiled()([a.ravel() for a in x], params(p, name, height))
+    return out[0].reshape(x[0].shape), out[1].reshape(x[0].shape), out[2].reshape(x[0].shape)
+
+
+def compiled() -> Points:
+    """This thread's ``rule`` compiled: at x = (arm, half, cos_other) with the parameters p
+    (``PARAMS``), the rows l, h and the rod's worst cos (a closed form's few designs)."""
+    if not hasattr(_local, "points"):
+        x, q = ca.SX.sym("x", 3), ca.SX.sym("p", len(PARAMS))
+        l, h, c, _ = rule(x[0], x[1], x[2], {n: q[i] for i, n in enumerate(PARAMS)})
+        fn = ca.Function("connecting_rod", [x, q], [ca.vertcat(l, h, c)], {"cse": True})
+        _local.points = Points(fn)
+    return cast(Points, _local.points)

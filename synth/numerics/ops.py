@@ -29,5 +29,14 @@ class Ops:
 
 CASADI = Ops(ca.cos, ca.sin, ca.sqrt, ca.log, ca.fabs, ca.fmin, ca.fmax, ca.if_else,
              ca.logic_and, ca.logic_or, ca.logic_not)  # fmt: skip
-NUMPY = Ops(np.cos, np.sin, np.sqrt, np.log, np.abs, np.fmin, np.fmax, np.where,
+
+
+def _where(condition: Any, a: Any, b: Any) -> Any:
+    """a where ``condition`` else b; a plain number (a variant's switch) picks one whole."""
+    if isinstance(condition, int | float):
+        return a if condition else b
+    return np.where(condition, a, b)
+
+
+NUMPY = Ops(np.cos, np.sin, np.sqrt, np.log, np.abs, np.fmin, np.fmax, _where,
             np.logical_and, np.logical_or, np.logical_not)  # fmt: skip

@@ -220,7 +220,8 @@ class Construction:
         if math.prod(shape) >= WHOLE:
             with np.errstate(all="ignore"):
                 grid = rows(psi, lam, self._params(sigma), NUMPY)
-            e = {n: np.broadcast_to(r, shape) for n, r in zip(ROWS, grid, strict=True)}
+            e = {n: r if np.shape(r) == shape else np.broadcast_to(r, shape)
+                 for n, r in zip(ROWS, grid, strict=True)}  # fmt: skip
         else:
             if psi.shape != shape or lam.shape != shape or psi.ndim != 1:
                 psi, lam = (np.broadcast_to(a, shape).ravel() for a in (psi, lam))
