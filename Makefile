@@ -61,10 +61,10 @@ stress: $(VENV)/.dev
 		tests/referees/test_quality.py tests/referees/test_motion_search.py
 
 # the design atlas the service ships (GET /v1/atlas) and the README's charts: docs/atlas/,
-# resumed if interrupted; api/atlas.json is its summary
+# resumed if interrupted; its summary goes to api/atlas.json, the one copy the service serves
 atlas: $(VENV)/.dev
 	$(BIN)/python -m synth.atlas --out docs/atlas --charts
-	cp docs/atlas/atlas.json api/atlas.json
+	mv docs/atlas/atlas.json api/atlas.json
 
 # run time against error, analysis cost, service latency: tables, benchmarks/results/*.json, plots
 bench: $(VENV)/.dev

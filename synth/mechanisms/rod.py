@@ -116,9 +116,11 @@ def rod(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``rule`` at the points (arm, half, cos_other), arrays broadcast together: (l, h, the rod's
     worst cos); l is NaN where the bounds allow no rod."""
-    x = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in (arm, half, cos_other)))
-    out = compiled()([a.ravel() for a in x], params(p, name, height))
-    return out[0].reshape(x[0].shape), out[1].reshape(x[0].shape), out[2].reshape(x[0].shape)
+    x = [np.asarray(a, dtype=float) for a in (arm, half, cos_other)]
+    shape = np.broadcast_shapes(*(a.shape for a in x))
+    columns = [(a if a.shape == shape else np.broadcast_to(a, shape)).ravel() for a in x]
+    out = compiled()(columns, params(p, name, height))
+    return out[0].reshape(shape), out[1].reshape(shape), out[2].reshape(shape)
 
 
 def compiled() -> Points:

@@ -85,14 +85,15 @@ def grashof_margin(shortest: Any, x: Any, a: Any, b: Any) -> Any:
 
 
 def grashof_margins(links: Sequence[Any], shortest: int) -> tuple[Any, ...]:
-    """Grashof with link ``shortest`` the shortest, as three margins ≥ 0 (``grashof_margin``
-    for each other link x, in order, a and b the remaining two)."""
-    out = []
-    for x in range(len(links)):
-        if x != shortest:
-            a, b = (links[k] for k in range(len(links)) if k not in (shortest, x))
-            out.append(grashof_margin(links[shortest], links[x], a, b))
-    return tuple(out)
+    """Grashof with link ``shortest`` of the four the shortest, as three margins ≥ 0
+    (``grashof_margin`` for each other link x, in order, a and b the remaining two)."""
+    s = links[shortest]
+    return tuple(grashof_margin(s, links[x], links[a], links[b]) for x, a, b in _OTHERS[shortest])
+
+
+# for each shortest link: each other link x with the remaining two, in order
+_OTHERS = {s: tuple((x, *(k for k in range(4) if k not in (s, x))) for x in range(4) if x != s)
+           for s in range(4)}  # fmt: skip
 
 
 def grashof_conditions(
@@ -129,7 +130,7 @@ def grashof_class(ground: float, crank: float, coupler: float, rocker: float) ->
     rounding, counts as Grashof), named by the shortest link (ground, crank, rocker, coupler
     in that order among equals)."""
     links = (ground, crank, coupler, rocker)
-    s = min((0, 1, 3, 2), key=lambda k: links[k])
+    s = min((0, 1, 3, 2), key=links.__getitem__)
     if min(grashof_margins(links, s)) < -ROUNDING * max(links):
         return "triple-rocker"
     return {0: "drag-link", 1: "crank-rocker", 2: "double-rocker", 3: "rocker-crank"}[s]
