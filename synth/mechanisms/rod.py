@@ -53,49 +53,53 @@ def rule(
     nan, inf = math.nan, math.inf
     rlo, rhi = q["rod_lo"], q["rod_hi"]
     c = ops.if_else(q["min_size"], q["cos_bound"], cos_other)
-    # on the line (the pin turns fully about a centre on the path)
-    w_line = arm
-    short_line = ops.fmax(ops.fmax(rlo, w_line / c), w_line + STRICT)
-    at_most = ops.if_else(short_line <= rhi, short_line, rhi)
-    len_line = ops.if_else(q["min_size"], short_line, at_most)
-    # a swinging pin
-    xc = ops.cos(half)
-    m_ok = xc > ONE_WAY  # no rod moves the slider one way past a swing of ±90° (less the margin)
-    m = ops.fmin(c, xc - ONE_WAY)
-    pos = c > 0
 
-    def place(h: Any) -> Any:  # the caller's placement, or one within its bounds
-        within = ops.fmin(ops.fmax(h, q["height_lo"]), q["height_hi"])
-        return ops.if_else(q["height_fixed"], q["height"], within)
+    def along_line() -> tuple[Any, ...]:  # the pin turns fully about a centre on the path
+        short = ops.fmax(ops.fmax(rlo, arm / c), arm + STRICT)
+        at_most = ops.if_else(short <= rhi, short, rhi)
+        length = ops.if_else(q["min_size"], short, at_most)
+        return length, arm, nan, False, False  # length, w, h, no length, no h
 
-    # the shortest rod with worst cos ≤ c; none to find where c = 0 (nothing else limits the
-    # transmission: the rod sits at its upper bound)
-    h = place(ops.if_else(pos, arm * (m + c * xc) / ops.if_else(pos, m + c, 1.0), arm))
-    g1, g2 = ops.fabs(h - arm), ops.fabs(h - arm * xc)
-    short = ops.if_else(pos, ops.fmax(rlo, ops.fmax(g1 / c, g2 / m)), inf)
-    short_nan = ops.logic_and(pos, ops.logic_not(m_ok))
-    h_nan = ops.logic_and(short_nan, ops.logic_not(q["height_fixed"]))
-    # at the upper bound: the midpoint, moved as little as the one way needs
-    lean = (xc - ONE_WAY) * rhi  # the most the one way allows at the upper bound
-    mid = place(ops.fmin(ops.fmax(arm * (1 + xc) / 2, arm * xc - lean), arm * xc + lean))
-    limited_ok = ops.fabs(mid - arm * xc) <= lean * (1 + ROUNDING)
-    use_short = ops.logic_and(ops.logic_not(short_nan), short <= rhi)
-    len_swing = ops.if_else(q["min_size"], short, ops.if_else(use_short, short, rhi))
-    neither = ops.logic_and(ops.logic_not(use_short), ops.logic_not(limited_ok))
-    swing_nan = ops.if_else(q["min_size"], short_nan, neither)
-    h = ops.if_else(ops.logic_or(q["min_size"], use_short), h, mid)
-    h_nan = ops.logic_and(h_nan, ops.logic_or(q["min_size"], use_short))
-    w_swing = ops.fmax(ops.fabs(h - arm), ops.fabs(h - arm * xc))
-    line = q["on_line"]
-    length = ops.if_else(line, len_line, len_swing)
-    length_nan = ops.logic_and(ops.logic_not(line), swing_nan)
-    w = ops.if_else(line, w_line, w_swing)
+    def swinging() -> tuple[Any, ...]:
+        xc = ops.cos(half)
+        m_ok = xc > ONE_WAY  # no rod moves the slider one way past ±90° (less the margin)
+        m = ops.fmin(c, xc - ONE_WAY)
+        pos = c > 0
+
+        def place(h: Any) -> Any:  # the caller's placement, or one within its bounds
+            within = ops.fmin(ops.fmax(h, q["height_lo"]), q["height_hi"])
+            return ops.if_else(q["height_fixed"], q["height"], within)
+
+        # the shortest rod with worst cos ≤ c; none to find where c = 0 (nothing else limits
+        # the transmission: the rod sits at its upper bound)
+        h = place(ops.if_else(pos, arm * (m + c * xc) / ops.if_else(pos, m + c, 1.0), arm))
+        g1, g2 = ops.fabs(h - arm), ops.fabs(h - arm * xc)
+        short = ops.if_else(pos, ops.fmax(rlo, ops.fmax(g1 / c, g2 / m)), inf)
+        short_nan = ops.logic_and(pos, ops.logic_not(m_ok))
+        h_nan = ops.logic_and(short_nan, ops.logic_not(q["height_fixed"]))
+
+        def shortest() -> tuple[Any, ...]:  # the smallest design: the shortest rod
+            return short, short_nan, h, h_nan
+
+        def limited() -> tuple[Any, ...]:  # else the upper bound where the shortest is past it
+            # at the upper bound: the midpoint, moved as little as the one way needs
+            lean = (xc - ONE_WAY) * rhi  # the most the one way allows at the upper bound
+            mid = place(ops.fmin(ops.fmax(arm * (1 + xc) / 2, arm * xc - lean), arm * xc + lean))
+            limited_ok = ops.fabs(mid - arm * xc) <= lean * (1 + ROUNDING)
+            use_short = ops.logic_and(ops.logic_not(short_nan), short <= rhi)
+            neither = ops.logic_and(ops.logic_not(use_short), ops.logic_not(limited_ok))
+            return (ops.if_else(use_short, short, rhi), neither, ops.if_else(use_short, h, mid),
+                    ops.logic_and(h_nan, use_short))  # fmt: skip
+
+        length, no_length, h, no_h = ops.choose(q["min_size"], shortest, limited)
+        w = ops.fmax(ops.fabs(h - arm), ops.fabs(h - arm * xc))
+        return length, w, ops.if_else(no_h, nan, h), no_length, no_h
+
+    length, w, rod_h, no_length, no_h = ops.choose(q["on_line"], along_line, swinging)
     within_box = ops.logic_and(length <= rhi * (1 + ROUNDING), length < inf)
-    l_ok = ops.logic_and(ops.logic_not(length_nan), within_box)
+    l_ok = ops.logic_and(ops.logic_not(no_length), within_box)
     l_ok = ops.logic_and(l_ok, ops.fmin(length, rhi) < inf)
     rod_l = ops.if_else(l_ok, ops.fmin(length, rhi), nan)
-    rod_h = ops.if_else(ops.logic_or(line, h_nan), nan, h)
-    no_h = ops.logic_and(ops.logic_not(line), h_nan)  # a swinging pin's placement not found
     rod_cos = ops.if_else(ops.logic_and(l_ok, ops.logic_not(no_h)), w / ops.fmin(length, rhi), nan)
     return rod_l, rod_h, rod_cos, l_ok
 

@@ -112,24 +112,24 @@ def rows(psi: Any, lam: Any, p: Any, ops: Ops = CASADI) -> tuple[Any, ...]:
     k = ops.if_else(q["set0"], lo[0], ops.if_else(q["set1"], lo[1], k))
     k = ops.if_else(q["free_scale"], kmin, k)
     feasible = ops.logic_and(valid, kmin <= kmax * (1 + BOUND_TOL))
+
     # how far the design is from a link's bound: the scale's room, log(kmax/kmin), when it is
     # free; else the free links' distance from their boxes, in log (one log of the least
     # ratio: log is monotonic)
-    inf = math.inf
-    rest = [
-        ops.if_else(q[f"set{i}"], inf, ops.fmin(k / a, b / k))
-        for i, (a, b) in enumerate(zip(lo, hi, strict=True))
-    ]
-    least = ops.fmin(ops.fmin(rest[0], rest[1]), ops.fmin(rest[2], rest[3]))
-    slack = ops.log(ops.if_else(q["free_scale"], kmax / kmin, least))
-    r5 = ops.if_else(q["swings"], 0.5 / ops.sin(psi / 2), q["arm"])
+    def least() -> Any:
+        rest = [
+            ops.if_else(q[f"set{i}"], math.inf, ops.fmin(k / a, b / k))
+            for i, (a, b) in enumerate(zip(lo, hi, strict=True))
+        ]
+        return ops.fmin(ops.fmin(rest[0], rest[1]), ops.fmin(rest[2], rest[3]))
+
+    slack = ops.log(ops.choose(q["free_scale"], lambda: kmax / kmin, least))
+    r5 = ops.choose(q["swings"], lambda: 0.5 / ops.sin(psi / 2), lambda: q["arm"])
     # the connecting rod (none in a slot drive)
-    rod_l, rod_h, rod_cos, l_ok = rod.rule(r5, psi / 2, f, q, ops)
-    with_rod = q["rod"]
-    l = ops.if_else(with_rod, rod_l, 0.0)
-    h = ops.if_else(with_rod, rod_h, math.nan)
-    rc = ops.if_else(with_rod, rod_cos, 0.0)
-    l_fin = ops.logic_or(ops.logic_not(with_rod), l_ok)
+    l, h, rc, l_ok = ops.choose(
+        q["rod"], lambda: rod.rule(r5, psi / 2, f, q, ops), lambda: (0.0, math.nan, 0.0, True)
+    )
+    l_fin = ops.logic_or(ops.logic_not(q["rod"]), l_ok)
     feasible = ops.logic_and(feasible, l_fin)
     size = k * (1 + a2 + a3 + a4) + r5 + ops.if_else(l_fin, l, 0.0)
     return valid, feasible, f, size, k, a2, a3, a4, r5, l, h, rc, slack
