@@ -212,8 +212,9 @@ def compile_all() -> None:
                         raise RuntimeError(
                             f"{fn.name()}: no C compiler or cache (synth.numerics.native)"
                         )
-    # the reduced synthesis's: the four-bar construction, the connecting rod
+    # the reduced synthesis's: the four-bar construction (its points, and its chunks' loop),
+    # its local model and the connecting rod (a few points at a time: no loop of theirs)
     c = construction()
-    for fn in (*c.points.mapped.compiled(), c.local.fn, *rod.compiled().mapped.compiled()):
+    for fn in (*c.points.mapped.compiled(), c.local.fn, rod.compiled().fn):
         if fn.class_name() != "External":
             raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.numerics.native)")
