@@ -15,10 +15,11 @@ variant's free parameters (stroke units), solved by SLSQP:
   may peak), so the NLP takes it in epigraph form; the terms' derivatives are exact too
   (``quality.motion_terms``: the envelope theorem at a peak, the implicit function theorem
   at a dead centre or a window's end);
-- it starts from the designs the exact solvers found for the same request (every variant's
-  best-transmitting and smallest designs: each meets the targets), the most promising first,
-  until the request's deadline, at most ``STARTS`` per variant and ``MAX_ITER`` iterations
-  each. No other clock decides anything: the answer does not depend on the machine's load
+- its starts are the designs the exact solvers found for the same request (every variant's
+  best-transmitting and smallest designs: each meets the targets) and ``SAMPLES`` points of
+  the box projected onto the time-ratio and stroke equalities, all ranked by their measure
+  on a grid of crank angles (``screen``: batched, a few milliseconds); it runs from the
+  ``STARTS`` best, until the request's deadline, at most ``MAX_ITER`` iterations each. No other clock decides anything: the answer does not depend on the machine's load
   unless the deadline cuts it short (and then the answer says so).
 
 The answer is a local optimum, verified like every candidate;
@@ -44,19 +45,20 @@ from ..errors import SynthError
 from ..mechanisms import Mechanism, get
 from ..results import TOL, Candidate, Infeasible
 from ..targets import MAX_TRANSMISSION, MIN_SIZE, PEAK, UNIFORM
+from . import screen
 from .candidate import candidate
 from .diagnose import diagnose
 from .formulation import TIE, Formulation, formulate
 from .search import Proposal, Spec, Targets, Variant, proposal, same, search
 from .solve import starts as halton
 
-STARTS = 4  # SLSQP runs per variant, from the best measured starts
+STARTS = 2  # SLSQP runs per variant, from the best ranked starts
 MAX_ITER = 300
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
 # a measure's terms and their derivatives in the type's parameters (quality.MotionTerms)
 Pick = Callable[[MotionTerms], tuple[np.ndarray, np.ndarray]]
-SAMPLES = 64  # Halton points in the box, projected onto the equalities: starts beside the
-PROJECT = 12  # exact solvers' designs (Newton steps each)
+SAMPLES = 64  # Halton points in the box, projected onto the equalities (``screen``): starts
+# beside the exact solvers' designs
 FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
 _local = threading.local()
 
@@ -166,19 +168,6 @@ def local_optima(
         j = rows(y)[1]
         return np.vstack([j[below], -j[above]])
 
-    def project(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
-        """Minimum-norm Newton steps from x onto the time-ratio and stroke equalities."""
-        for _ in range(PROJECT):
-            r = rows(x)
-            res = r[0][eq] - lbg[eq]
-            if np.max(np.abs(res), initial=0.0) <= 1e-12:
-                return x
-            step, *_ = np.linalg.lstsq(r[1][eq][:, :n], res, rcond=None)
-            x = np.clip(x - step, lo, hi)
-            if not np.all(np.isfinite(x)):
-                return None
-        return None
-
     # ties (a free scale that leaves the motion as it is) to the smaller design, as the
     # formulation's max_transmission_angle does: the scale is then no flat direction
     links = np.array([float(m.parameter(k).link) for k in free] + [0.0])
@@ -195,20 +184,24 @@ def local_optima(
         return [bounds[k] if k in explicit else (min(bounds[k][0], s[k]), max(bounds[k][1], s[k]))
                 for k in free]  # fmt: skip
 
-    # the starts: the exact solvers' designs and projected Halton points, the best measured first
+    # the starts: the exact solvers' designs and projected Halton points, the best ranked first
     wide = box_of(starts[0]) if starts else [bounds[k] for k in free]
     lo, hi = (np.array([b[i] for b in wide]) for i in (0, 1))
-    points = [np.clip([s[k] for k in free], lo, hi) for s in starts]
-    for x in halton(lo, hi, lo > 0, SAMPLES):
-        x = project(x, lo, hi)
-        if x is not None and np.all(inequalities(x) >= -1e-9):
-            points.append(x)
-    measured = sorted(
-        ((float(pick(got)[0].max()), x) for x in points if (got := terms(x)) is not None),
-        key=lambda vx: vx[0],
-    )
+    own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
+    sampled = halton(lo, hi, lo > 0, SAMPLES)
+    key = (m.type, variant, free)
+    points = np.vstack([own, screen.project(form, key, sampled, pv, lo, hi)])
+    pvs = np.array([[m.complete(design(x))[k] for k in m.names] for x in points])
+    value = screen.rank(m, variant, pvs, objective) if len(points) else np.empty(0)
+    measured = []
+    for k in np.argsort(value, kind="stable"):
+        got = terms(points[k]) if np.isfinite(value[k]) else None
+        if got is not None:
+            measured.append((float(pick(got)[0].max()), points[k]))
+        if len(measured) == STARTS:
+            break
     out = []
-    for first, x0 in measured[:STARTS]:
+    for first, x0 in measured:
         if time.monotonic() >= deadline:
             break
 
@@ -223,8 +216,8 @@ def local_optima(
                            bounds=[*zip(lo, hi, strict=True), (0.0, None)],
                            constraints=constraints, callback=cap,
                            options={"maxiter": MAX_ITER, "ftol": 1e-12})  # fmt: skip
-        x = project(res.x[:n], lo, hi)  # SLSQP meets equalities to ~1e-8; verification: 1e-9
-        if x is not None:
+        # SLSQP meets the equalities to ~1e-8, the verification asks 1e-9
+        for x in screen.project(form, key, res.x[None, :n], pv, lo, hi, every=False):
             out.append(design(x))
     return out
 

@@ -1,0 +1,126 @@
+"""Where a motion objective's local search starts: many designs of one variant, built and
+ranked in a few batched calls.
+
+- ``project``: points of the box onto the time-ratio and stroke equalities, all at once
+  (minimum-norm Newton steps through the formulation's compiled constraints, mapped over the
+  points), kept where every other constraint holds too;
+- ``rank``: the motion measure of each, from the slider's s, s′ and s″ on a grid of crank
+  angles (one compiled call for every design): a ranking of starts to ~1e-3, never an answer
+  (the answers' measures are the analysis's, by root finding).
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import cast
+
+import casadi as ca
+import numpy as np
+
+from ..analysis.model import model
+from ..analysis.quality import CUT
+from ..mechanisms import Mechanism
+from ..numerics.native import Mapped
+from ..targets import UNIFORM
+from .formulation import Formulation
+
+STEPS = 12  # Newton steps a projection takes
+CLOSE = 1e-12  # the equalities' residual a projected point keeps
+ANGLES = 96  # crank angles a ranking samples
+_local = threading.local()
+
+
+def _constraints(form: Formulation, key: object) -> Mapped:
+    """g and ∂g/∂x in one row per point, mapped over points with the parameters shared."""
+    cache: dict[object, Mapped] = _local.__dict__.setdefault("constraints", {})
+    if key not in cache:
+        x, p, g = (form.nlp[k] for k in ("x", "p", "g"))
+        out = ca.densify(ca.vertcat(g, ca.vec(ca.jacobian(g, x))))
+        cache[key] = Mapped(ca.Function("screen_g", [x, p], [out]), (False, True))
+    return cache[key]
+
+
+def project(
+    form: Formulation,
+    key: object,
+    x: np.ndarray,
+    pv: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    every: bool = True,
+) -> np.ndarray:
+    """The points x (rows) moved onto the equalities by minimum-norm Newton steps within the
+    box: those that get there (to ``CLOSE``) and, with ``every``, meet every other constraint."""
+    if len(x) == 0:
+        return x
+    slot = _constraints(form, key)[len(x)]
+    lbg, ubg = form.lbg, form.ubg
+    eq = lbg == ubg
+    ng, n = lbg.size, x.shape[1]
+    for _ in range(STEPS):
+        slot.args[0][:], slot.args[1][:] = x, pv
+        slot.run()
+        g, jac = slot.out[:, :ng], slot.out[:, ng:].reshape(len(x), n, ng).transpose(0, 2, 1)
+        res = g[:, eq] - lbg[eq]
+        fine = np.all(np.isfinite(jac[:, eq]), axis=(1, 2)) & np.all(np.isfinite(res), axis=1)
+        x, res, je = x[fine], res[fine], jac[fine][:, eq]
+        if len(x) == 0:
+            return x
+        x = np.clip(x - (np.linalg.pinv(je) @ res[..., None])[..., 0], lo, hi)
+        slot = _constraints(form, key)[len(x)]
+    slot.args[0][:] = x
+    slot.run()
+    g = slot.out[:, :ng]
+    ok = np.all(np.abs(g[:, eq] - lbg[eq]) <= CLOSE, axis=1)
+    if every:
+        ok &= np.all(g[:, ~eq] >= lbg[~eq] - 1e-9, axis=1)
+        ok &= np.all(g[:, ~eq] <= ubg[~eq] + 1e-9, axis=1)
+    return cast(np.ndarray, x[ok & np.all(np.isfinite(x), axis=1)])
+
+
+def rank(m: Mechanism, variant: frozenset[str], pvs: np.ndarray, objective: str) -> np.ndarray:
+    """Each design's motion measure (``objective``), approximately, from a grid of crank
+    angles; inf for a design whose slider does not run one stroke each way on it."""
+    k = len(pvs)
+    grid = np.linspace(0.0, 2 * np.pi, ANGLES, endpoint=False)
+    out = model(m, variant).fn.each(np.tile(grid, k), np.repeat(pvs, ANGLES, axis=0))
+    nr = out.shape[0] // 3
+    s, v, a = (out[i * nr].reshape(k, ANGLES) for i in range(3))
+    lo, hi = np.argmin(s, axis=1), np.argmax(s, axis=1)
+    up = (hi - lo) % ANGLES  # samples while the slider goes from its least to its largest s
+    slow_up = 2 * up >= ANGLES
+    first = np.where(slow_up, lo, hi)  # the working stroke starts here
+    length = np.where(slow_up, up, ANGLES - up)
+    index = (first[:, None] + np.arange(ANGLES)[None, :]) % ANGLES
+    rows = np.arange(k)[:, None]
+    s, v, a = s[rows, index], v[rows, index], a[rows, index]  # from the working stroke's start
+    working = np.arange(ANGLES)[None, :] < length[:, None]
+    stroke = np.abs(s[:, 0] - s[rows[:, 0], length % ANGLES])
+    if objective != UNIFORM:
+        measure = np.maximum(_peak(a, working), _peak(a, ~working)) / stroke
+    else:  # the middle of the working stroke: its share of the travel, and of the crank's turn
+        travel = np.where(working, np.abs(s - s[:, :1]) / stroke[:, None], 2.0)
+        ends = []
+        for level in (CUT, 1 - CUT):  # where the travel reaches it, interpolated
+            i = np.clip(np.argmax(travel >= level, axis=1), 1, ANGLES - 1)
+            t0, t1 = travel[rows[:, 0], i - 1], travel[rows[:, 0], i]
+            ends.append(i - 1 + (level - t0) / (t1 - t0))
+        middle = working & (travel >= CUT) & (travel <= 1 - CUT)
+        turn = (ends[1] - ends[0]) * (2 * np.pi / ANGLES)
+        speed = _peak(v, middle)
+        measure = speed * turn / ((1 - 2 * CUT) * stroke)
+    fine = np.isfinite(measure) & (stroke > 0) & (length > 1) & (length < ANGLES - 1)
+    return np.where(fine, measure, np.inf)
+
+
+def _peak(y: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """The largest |y| of each row where ``where`` holds, by the parabola through its largest
+    sample and that sample's neighbours."""
+    y = np.abs(y)
+    i = np.argmax(np.where(where, y, -1.0), axis=1)
+    rows = np.arange(len(y))
+    y0, y1, y2 = (y[rows, (i + d) % y.shape[1]] for d in (-1, 0, 1))
+    curve = 2 * y1 - y0 - y2
+    with np.errstate(all="ignore"):
+        top = y1 + np.where(curve > 0, (y0 - y2) ** 2 / (8 * curve), 0.0)
+    return np.where(np.any(where, axis=1), top, 0.0)
