@@ -19,8 +19,9 @@ variant's free parameters (stroke units), solved by SLSQP:
   best-transmitting and smallest designs: each meets the targets) and ``SAMPLES`` points of
   the box projected onto the time-ratio and stroke equalities, all ranked by their measure
   on a grid of crank angles (``screen``: batched, a few milliseconds); it runs from the
-  ``STARTS`` best, until the request's deadline, at most ``MAX_ITER`` iterations each. No other clock decides anything: the answer does not depend on the machine's load
-  unless the deadline cuts it short (and then the answer says so).
+  ``STARTS`` best, until the request's deadline, at most ``MAX_ITER`` iterations each. No
+  other clock decides anything: the answer does not depend on the machine's load unless the
+  deadline cuts it short (and then the answer says so).
 
 The answer is a local optimum, verified like every candidate;
 ``tests/referees/test_motion_search.py`` checks it against an independent global search.
@@ -59,6 +60,10 @@ TERMS = 4  # the largest terms of a measure that its epigraph bounds
 Pick = Callable[[MotionTerms], tuple[np.ndarray, np.ndarray]]
 SAMPLES = 64  # Halton points in the box, projected onto the equalities (``screen``): starts
 # beside the exact solvers' designs
+# the least 1 − cos μ a search for motion keeps at every joint, whatever the bound: as a rod
+# comes to stand across its slider's path (μ → 0) the slider's speed there grows without
+# bound in a spike narrower than the analysis's grid, so a measure there is no design's
+ACROSS = 1e-3
 FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
 _local = threading.local()
 
@@ -272,9 +277,10 @@ def motion(
             ]
             if not starts or not v.free:
                 continue
+            targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
             optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
-                                  v.problem.explicit, (t.time_ratio, t.cos_bound), t.objective,
-                                  starts, limit, t.deadline)  # fmt: skip
+                                  v.problem.explicit, targets, t.objective, starts, limit,
+                                  t.deadline)  # fmt: skip
             for d in optima:
                 p = proposal(m, i, {k: x * t.stroke for k, x in d.items()}, "slsqp", t)
                 c = None if p is None else candidate(m, p, t, s.variants, extras)
