@@ -59,6 +59,32 @@ def test_motion_optimum_is_not_beaten_by_a_global_search(mtype, objective):
     assert beat >= -REACH, f"the referee reaches only {ref.value} ({ref.params}): too weak"
 
 
+# make stress: 20 targets per type and objective (time ratios × bounds), each against the referee
+SPREAD = [(tr, b) for tr in (1.3, 1.6, 2.0, 2.5) for b in (0.0, 10.0, 20.0, 30.0, 40.0)]
+# the searches for motion keep every transmission angle this far from 0° whatever the bound
+# (synth.synthesis.motion.ACROSS, 1 − cos μ ≥ 1e-3): the referee's bound where the request has less
+ACROSS_DEG = math.degrees(math.acos(1 - 1e-3))
+
+
+@pytest.mark.skipif(not STRESS, reason="make stress: 20 targets per type and objective")
+@pytest.mark.parametrize(("tr", "bound"), SPREAD)
+@pytest.mark.parametrize("objective", [UNIFORM, PEAK])
+@pytest.mark.parametrize("mtype", REFEREED)
+def test_motion_optima_over_the_benchmark_targets(mtype, objective, tr, bound):
+    r = synth.synthesize(tr, 1.0, bound, [{"type": mtype}], objective=objective,
+                         time_budget_ms=120_000)  # fmt: skip
+    ref = motion_referee.search(mtype, objective, tr, max(bound, ACROSS_DEG),
+                                **EFFORT.get(mtype, {}))  # fmt: skip
+    if not r.candidates:
+        assert ref.params is None, f"the referee finds {ref.params} where we find none"
+        return
+    c = r.candidates[0]
+    assert_meets(c, tr, 1.0, bound)
+    assert ref.params is not None
+    beat = (c.objective_value - ref.value) / ref.value
+    assert beat <= BEATEN, f"ours {c.params} is beaten by {ref.params}"
+
+
 def test_a_drag_link_optimum_that_starts_by_their_exact_measure_missed():
     """Time ratio 2, stroke 300, no bound: SLSQP from the four best exactly measured starts
     (the exact solvers' designs and projected Halton points) ended at a peak of 8.297, the
@@ -71,7 +97,7 @@ def test_a_drag_link_optimum_that_starts_by_their_exact_measure_missed():
     c = r.candidates[0]
     assert_meets(c, 2.0, 300.0, 0.0)
     assert c.objective_value == pytest.approx(brute(c, objective), rel=1e-9)
-    ref = motion_referee.search(mtype, objective, 2.0, math.degrees(math.acos(1 - 1e-3)))
+    ref = motion_referee.search(mtype, objective, 2.0, ACROSS_DEG)
     beat = (c.objective_value - ref.value) / ref.value
     assert -REACH <= beat <= BEATEN, f"ours {c.params}, the referee's {ref.params}"
 
