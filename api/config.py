@@ -40,6 +40,9 @@ class Settings(BaseSettings):
     # its first byte on a kept-alive one, else 408 and the connection is closed (api.connection)
     request_timeout_s: float = Field(5.0, gt=0)
     warm: bool = True  # build the common solvers in the workers at start, in the background
+    # a line per request on stdout (uvicorn's access log): ~40 µs of a server process's time a
+    # request, a tenth of a short analysis's (docs/benchmarks.md), so off unless asked for
+    access_log: bool = False
     max_budget_ms: float = 60_000.0  # the largest time_budget_ms a request may ask for
     # how long after its arrival a request may wait for a solver slot before a 503: this share
     # of its budget (a synthesis, a sweep), at most max_queue_ms (all that long curves get)

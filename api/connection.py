@@ -14,6 +14,10 @@ the parsing left to llhttp:
 - A client that sends its request and then shuts its side down (half-close) gets its reply,
   then the connection is closed; uvicorn's closes it at the end of file, reply unsent.
 
+A reply's status line and headers are written with its body's first part, in one send: uvicorn
+writes them apart, two sends a reply, and on loopback a send (which wakes the client) is the
+largest single cost of a short request (docs/benchmarks.md, "Where a request's time goes").
+
 Measured against hypercorn 0.18 and granian 2.8 (docs/benchmarks.md, "Clients that
 misbehave"): each lacks one of these or more, and neither refuses Transfer-Encoding with
 Content-Length.
@@ -24,7 +28,7 @@ from __future__ import annotations
 import asyncio
 from typing import Any
 
-from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol
+from uvicorn.protocols.http.httptools_impl import HttpToolsProtocol, RequestResponseCycle
 
 from .config import get_settings
 
@@ -98,6 +102,9 @@ class Connection(HttpToolsProtocol):
     def on_headers_complete(self) -> None:
         self.heads, self.head_bytes, self.in_body = self.heads + 1, 0, True
         super().on_headers_complete()
+        cycle = self.cycle
+        if cycle is not None and not isinstance(cycle.transport, _OneWrite):
+            cycle.transport = _OneWrite(self.transport, cycle)  # type: ignore[assignment]
         if self.pipeline:  # queued behind a reply, unread until it is written: not timed
             self._disarm()
 
@@ -114,6 +121,8 @@ class Connection(HttpToolsProtocol):
         return self.cycle is not None and not self.cycle.response_complete and not self.receiving
 
     def on_response_complete(self) -> None:
+        if self.cycle is not None and isinstance(self.cycle.transport, _OneWrite):
+            self.cycle.transport.flush()  # a reply without a body (HEAD): its head alone
         super().on_response_complete()
         if self.eof and not self.transport.is_closing():
             self.transport.close()  # after the reply is written: the client sends no more
@@ -143,3 +152,38 @@ class Connection(HttpToolsProtocol):
     def _refuse(self, status: bytes, msg: bytes) -> None:
         self.transport.write(_REFUSAL % (status, len(msg), msg))
         self.transport.close()
+
+
+class _OneWrite:
+    """The transport as a reply's cycle sees it: the reply's head (the first write once the
+    response has started) is held and written with the next write, the body's first part, or
+    alone when the reply ends without one. Writes before the response starts (``100
+    Continue``) and after the head go through as they come."""
+
+    def __init__(self, transport: asyncio.Transport, cycle: RequestResponseCycle) -> None:
+        self.transport, self.cycle = transport, cycle
+        self.head: bytes | None = None
+        self.held = False  # the head came and is held, or was written: later writes go through
+
+    def write(self, data: bytes) -> None:
+        if self.head is not None:
+            data, self.head = self.head + data, None
+        elif not self.held and self.cycle.response_started:
+            self.head, self.held = data, True
+            return
+        self.transport.write(data)
+
+    def flush(self) -> None:
+        if self.head is not None:
+            head, self.head = self.head, None
+            self.transport.write(head)
+
+    def close(self) -> None:
+        self.flush()
+        self.transport.close()
+
+    def is_closing(self) -> bool:
+        return self.transport.is_closing()
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.transport, name)

@@ -1,5 +1,9 @@
 """The ASGI app: ``uvicorn api.main:app``. Its handlers turn synth's domain errors, placed in
-the request by the routers, into 422s, and every other refusal into FastAPI's shape."""
+the request by the routers, into 422s, and every other refusal into FastAPI's shape.
+
+Every endpoint, dependency and error handler of the app is a coroutine: FastAPI and Starlette
+run a plain function in a worker thread, a hop that cost /health ~0.2 ms of its 0.45
+(docs/benchmarks.md, "Where a request's time goes")."""
 
 import gc
 from collections.abc import AsyncIterator
@@ -56,12 +60,12 @@ app.mount("/app", StaticFiles(directory=Path(__file__).parent / "static", html=T
 
 
 @app.get("/", include_in_schema=False)
-def root() -> RedirectResponse:
+async def root() -> RedirectResponse:
     return RedirectResponse("/app/")
 
 
 @app.get("/health", response_model=Health, tags=["service"])
-def health() -> Health:
+async def health() -> Health:
     return Health(version=synth.__version__)
 
 
@@ -92,7 +96,7 @@ async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse
 
 
 @app.exception_handler(Busy)
-def busy(request: Request, exc: Busy) -> JSONResponse:
+async def busy(request: Request, exc: Busy) -> JSONResponse:
     """Every solver slot stayed taken for as long as the request could wait: 503, with when to
     try again."""
     detail = [error_item([], str(exc), "busy")]
@@ -101,7 +105,7 @@ def busy(request: Request, exc: Busy) -> JSONResponse:
 
 
 @app.exception_handler(Located)
-def located(request: Request, exc: Located) -> JSONResponse:
+async def located(request: Request, exc: Located) -> JSONResponse:
     """Misuse and invalid designs: 422 in FastAPI's shape, one entry per place (an invalid
     design: each parameter of the failed condition)."""
     e = exc.error
@@ -110,6 +114,6 @@ def located(request: Request, exc: Located) -> JSONResponse:
 
 
 @app.exception_handler(UnknownMechanism)
-def unknown(request: Request, exc: UnknownMechanism) -> JSONResponse:
+async def unknown(request: Request, exc: UnknownMechanism) -> JSONResponse:
     """A type in a path that is not one: 404."""
     return JSONResponse({"detail": [error_item(["path", *exc.loc], exc.msg, exc.kind)]}, 404)

@@ -4,6 +4,8 @@ Runs ``WEB_CONCURRENCY`` uvicorn processes (default: one per core) on one listen
 ``HOST`` and ``PORT`` give the defaults of ``--host`` and ``--port`` (``api.config``).
 Each process answers short analyses in its own event loop and solves in its own solver threads
 (``api.config``); the processes share nothing, so analysis throughput scales with the cores.
+The event loop is uvloop's where it is installed (uvicorn's "auto" loop; the lock installs it):
+~5% less of a process's time per short request than asyncio's (docs/benchmarks.md).
 Their connections are ``api.connection``'s: a request that does not arrive whole in time is
 refused (408), a half-closed one answered, Transfer-Encoding with Content-Length refused (400).
 
@@ -11,6 +13,8 @@ The socket is made here rather than by ``uvicorn --workers``: uvicorn 0.54 binds
 ``proto`` 0, accepted connections inherit that, and asyncio then leaves Nagle's algorithm on
 (it sets TCP_NODELAY only when ``proto`` is IPPROTO_TCP). Every keep-alive request after the
 first then waits ~40 ms for a delayed ACK (uvicorn issue #3149, measured: 44 ms against 2 ms).
+uvloop sets TCP_NODELAY on every TCP connection itself; the socket made here serves asyncio's
+loop where uvloop is not installed.
 """
 
 from __future__ import annotations
@@ -48,7 +52,8 @@ def listener(host: str, port: int) -> socket.socket:
     return sock
 
 
-def main(argv: list[str] | None = None) -> None:
+def main(argv: list[str] | None = None, app: str = APP) -> None:
+    """Serve ``app`` (the service; ``benchmarks.bare`` serves a bare ASGI app the same way)."""
     sys.setswitchinterval(SWITCH_S)
     settings = Settings()
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -59,8 +64,9 @@ def main(argv: list[str] | None = None) -> None:
     a.host = a.host or settings.host
     workers = settings.web_concurrency or CORES
     os.environ["WEB_CONCURRENCY"] = str(workers)  # for the processes' own settings
-    config = uvicorn.Config(APP, host=a.host, port=a.port, workers=workers, http=Connection,
-                            timeout_graceful_shutdown=SHUTDOWN_S)  # fmt: skip
+    config = uvicorn.Config(app, host=a.host, port=a.port, workers=workers, http=Connection,
+                            timeout_graceful_shutdown=SHUTDOWN_S,
+                            access_log=settings.access_log)  # fmt: skip
     if workers == 1:
         uvicorn.Server(config).run()  # binds by host and port: proto is set
         return

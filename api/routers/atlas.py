@@ -18,7 +18,7 @@ def shipped() -> AtlasInfo:
 
 
 @router.get("", response_model=AtlasInfo)
-def get_atlas() -> AtlasInfo:
+async def get_atlas() -> AtlasInfo:
     """Per quick-return type, the best minimum transmission angle any design reaches at each
     time ratio of a grid (everything free within the default bounds; each a verified
     synthesis, certified where an exact solver found it), and the time-ratio range each type

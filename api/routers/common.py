@@ -17,8 +17,9 @@ from ..schemas import Extras
 Loc = tuple[str | int, ...]
 
 
-def engine(request: Request) -> Engine:
-    """The app's engine (and with it the settings): what the routes depend on."""
+async def engine(request: Request) -> Engine:
+    """The app's engine (and with it the settings): what the routes depend on. A coroutine:
+    FastAPI runs a plain function in a worker thread, a hop of ~0.1 ms per request."""
     return Engine.of(request.app)
 
 

@@ -10,7 +10,7 @@ router = APIRouter(prefix="/v1/mechanisms", tags=["mechanisms"])
 
 
 @router.get("", response_model=list[MechanismInfo])
-def list_mechanisms() -> list[MechanismInfo]:
+async def list_mechanisms() -> list[MechanismInfo]:
     """Every mechanism type with its parameters, validity conditions and sources."""
     return [MechanismInfo.of(mechanisms.get(t)) for t in mechanisms.all_types()]
 
@@ -20,6 +20,6 @@ def list_mechanisms() -> list[MechanismInfo]:
     response_model=MechanismInfo,
     responses={404: {"model": NotFound, "description": "unknown type; the known ones listed"}},
 )
-def get_mechanism(type: str) -> MechanismInfo:
+async def get_mechanism(type: str) -> MechanismInfo:
     """One mechanism type; an unknown type is a 404 listing the known ones."""
     return MechanismInfo.of(mechanisms.get(type))

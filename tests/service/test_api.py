@@ -1,18 +1,24 @@
 """HTTP tests of every endpoint (TestClient, the shipped process-pool engine)."""
 
 import dataclasses
+import inspect
 import json
 import math
 
 import numpy as np
 import pytest
+from fastapi.routing import APIRoute
 from fastapi.testclient import TestClient
+from pydantic import TypeAdapter
 
 import synth
 from api.config import Settings
 from api.engine import Engine
 from api.main import app
+from api.routers import analyze, atlas, mechanisms, sweep, synthesize
+from api.routers.analyze import encoded
 from api.routers.common import engine
+from api.schemas import AnalyzeResponse
 from synth.analysis.kinematics import ANALYSIS_INCLUDE
 from synth.mechanisms import all_types, get
 
@@ -28,6 +34,16 @@ def client():
 
 def design(mtype, **params):
     return {"type": mtype, "params": params}
+
+
+def test_every_endpoint_dependency_and_handler_is_a_coroutine():
+    """None runs in a worker thread (``api.main``): that hop is a tenth of a millisecond."""
+    calls = [r.dependant.call for r in app.routes if isinstance(r, APIRoute)]
+    calls += [r.dependant.call for m in (analyze, sweep, synthesize) for r in m.router.routes]
+    calls += [mechanisms.list_mechanisms, mechanisms.get_mechanism, atlas.get_atlas, engine]
+    calls += [h for k, h in app.exception_handlers.items() if k not in (500, Exception)]
+    plain = [getattr(c, "__name__", c) for c in calls if not inspect.iscoroutinefunction(c)]
+    assert not plain, plain
 
 
 def test_health(client):
@@ -379,3 +395,28 @@ def test_the_budget_limit_is_the_servers_setting(client):
         del app.dependency_overrides[engine]
         small.close()
     assert client.post("/v1/synthesize", json={**SYNTH, "time_budget_ms": 10}).status_code == 200
+
+
+# a valid design of each type
+DESIGNS = {
+    "scotch_yoke": {"crank": 1.0},
+    "offset_slider_crank": {"crank": 1.0, "coupler": 3.0, "offset": 0.5},
+    "crank_shaper": {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0},
+    "whitworth": {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0},
+    "crank_rocker_slider": {"ground": 5.0, "crank": 1.0, "coupler": 4.5, "rocker": 3.0,
+                            "rocker_arm": 4.0},
+    "drag_link_slider": {**ref.DRAG_LINK_PROJECT, "coupler": 0.250428},
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("kwargs", [
+    {}, {"samples": 7}, {"crank_angles_deg": [0.0, 33.3, 90.0], "include": ["pins"]},
+    {"samples": 4, "include": list(ANALYSIS_INCLUDE), "tolerance": synth.Tolerance(relative=1e-3)},
+])  # fmt: skip
+@pytest.mark.parametrize("mtype", DESIGNS)
+def test_an_analysis_is_encoded_as_its_model_encodes_it(mtype, kwargs):
+    """The analysis reply, encoded straight from synth's dataclasses, is the JSON the response
+    model gives for ``to_dict()``, byte for byte."""
+    a = synth.analyze(mtype, DESIGNS[mtype], **kwargs)
+    model = AnalyzeResponse(**a.to_dict())
+    assert encoded(a) == TypeAdapter(AnalyzeResponse).dump_json(model, exclude_unset=True)
