@@ -29,8 +29,9 @@ BODIES = {
                                               "connecting_rod": 0.3}}]},
 }  # fmt: skip
 JSON = {"Content-Type": "application/json"}
-# a request a client sends: the path it is POSTed to, its body, and what its answer counts under
-Request = tuple[str, bytes, Any]
+# a request a client sends: the path it is POSTed to, its body (None: a GET), and what its
+# answer counts under
+Request = tuple[str, bytes | None, Any]
 
 
 @dataclass(frozen=True)
@@ -73,18 +74,9 @@ def drive(
         for path, body, tag in requests:
             if not going():
                 break
-            t0 = time.perf_counter()
-            status: int | str
-            try:
-                conn.request("POST", path, body, JSON)
-                r = conn.getresponse()
-                r.read()
-                status = r.status
-            except OSError as e:
-                status = type(e).__name__
-                conn.close()
+            status, ms = ask(conn, path, body)
+            if isinstance(status, str):
                 conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-            ms = (time.perf_counter() - t0) * 1000
             with lock:
                 out.sent.append(Sent(tag, status, ms))
         conn.close()
@@ -109,6 +101,22 @@ def drive(
         t.join()
     out.seconds = time.perf_counter() - t0
     return out
+
+
+def ask(conn: http.client.HTTPConnection, path: str, body: bytes | None) -> tuple[int | str, float]:
+    """One request on ``conn``, POSTed (a GET where ``body`` is None): its status (the error's
+    name where the connection failed, and then ``conn`` is closed) and its milliseconds."""
+    t0 = time.perf_counter()
+    status: int | str
+    try:
+        conn.request("GET" if body is None else "POST", path, body, JSON)
+        r = conn.getresponse()
+        r.read()
+        status = r.status
+    except OSError as e:
+        status = type(e).__name__
+        conn.close()
+    return status, (time.perf_counter() - t0) * 1000
 
 
 def statuses(sent: Iterable[Sent]) -> dict[int | str, int]:

@@ -33,6 +33,8 @@ SERVERS: dict[str, tuple[list[str], dict[str, str]]] = {
     "one_process_pool": (_UVICORN, {"WEB_CONCURRENCY": "1"}),
     # the shipped split, but uvicorn's own --workers: Nagle stays on (api/serve.py)
     "uvicorn_workers": ([*_UVICORN[:-1], "--workers", "2", "--port"], {"WEB_CONCURRENCY": "2"}),
+    # not the service: a bare ASGI app served as `shipped` is (benchmarks/bare.py)
+    "bare": ([sys.executable, "-m", "benchmarks.bare", "--port"], {}),
 }
 
 
