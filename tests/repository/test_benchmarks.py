@@ -50,6 +50,14 @@ def test_service_benchmark_quick():
     assert {p["type"] for p in out["paired"]} == set(analysis.DESIGNS)
     for p in out["paired"]:
         assert p["statuses"] == {"synthesize": {200: 5}, "analyze": {200: 5}}, p
+    # against the bare app: every request answered, on both servers
+    bare = out["against_bare"]
+    assert [r["request"] for r in bare["one_client"]] == list(service.AGAINST_BARE)
+    for r in bare["one_client"]:
+        assert r["statuses"] == {200: r["rounds"]} and r["bare_p50_ms"] > 0, r
+    for r in bare["sixteen_clients"]:
+        want = {200: 32, 422: 8} if r["server"] == "service" else {200: 40}
+        assert r["statuses"] == want, r
 
 
 def test_overload_benchmark_quick():
