@@ -19,7 +19,8 @@ variant's free parameters (stroke units), solved by SLSQP:
   best-transmitting and smallest designs: each meets the targets) and ``SAMPLES`` points of
   the box projected onto the time-ratio and stroke equalities, all ranked by their measure
   on a grid of crank angles (``screen``: batched, a few milliseconds); it runs from the
-  ``STARTS`` best, until the request's deadline, at most ``MAX_ITER`` iterations each. No
+  ``STARTS`` best of each source (the exact solvers' basins and others), until the
+  request's deadline, at most ``MAX_ITER`` iterations each. No
   other clock decides anything: the answer does not depend on the machine's load unless the
   deadline cuts it short (and then the answer says so).
 
@@ -53,12 +54,12 @@ from .formulation import TIE, Formulation, formulate
 from .search import Proposal, Spec, Targets, Variant, proposal, same, search
 from .solve import starts as halton
 
-STARTS = 2  # SLSQP runs per variant, from the best ranked starts
+STARTS = 2  # SLSQP runs per variant and source of starts, from the best ranked
 MAX_ITER = 300
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
 # a measure's terms and their derivatives in the type's parameters (quality.MotionTerms)
 Pick = Callable[[MotionTerms], tuple[np.ndarray, np.ndarray]]
-SAMPLES = 64  # Halton points in the box, projected onto the equalities (``screen``): starts
+SAMPLES = 256  # Halton points in the box, projected onto the equalities (``screen``): starts
 # beside the exact solvers' designs
 # the least 1 − cos μ a search for motion keeps at every joint, whatever the bound: as a rod
 # comes to stand across its slider's path (μ → 0) the slider's speed there grows without
@@ -198,13 +199,14 @@ def local_optima(
     points = np.vstack([own, screen.project(form, key, sampled, pv, lo, hi)])
     pvs = np.array([[m.complete(design(x))[k] for k in m.names] for x in points])
     value = screen.rank(m, variant, pvs, objective) if len(points) else np.empty(0)
-    measured = []
-    for k in np.argsort(value, kind="stable"):
-        got = terms(points[k]) if np.isfinite(value[k]) else None
-        if got is not None:
-            measured.append((float(pick(got)[0].max()), points[k]))
-        if len(measured) == STARTS:
-            break
+    measured = []  # the best ranked of each source that the analysis takes
+    for source in (np.arange(len(own)), np.arange(len(own), len(points))):
+        taken = 0
+        for k in source[np.argsort(value[source], kind="stable")]:
+            got = terms(points[k]) if np.isfinite(value[k]) and taken < STARTS else None
+            if got is not None:
+                measured.append((float(pick(got)[0].max()), points[k]))
+                taken += 1
     out = []
     for first, x0 in measured:
         if time.monotonic() >= deadline:
