@@ -16,11 +16,11 @@ variant's free parameters (stroke units), solved by SLSQP:
   (``quality.motion_terms``: the envelope theorem at a peak, the implicit function theorem
   at a dead centre or a window's end);
 - its starts are the designs the exact solvers found for the same request (every variant's
-  best-transmitting and smallest designs: each meets the targets) and ``SAMPLES`` points of
-  the box projected onto the time-ratio and stroke equalities, all ranked by their measure
-  on a grid of crank angles (``screen``: batched, a few milliseconds); it runs from the
-  ``STARTS`` best of each source (the exact solvers' basins and others), until the
-  request's deadline, at most ``MAX_ITER`` iterations each. No
+  best-transmitting and smallest designs, at ``ACROSS_DEG`` without a bound: each meets the
+  targets) and ``SAMPLES`` points of the box projected onto the time-ratio and stroke
+  equalities, all ranked by their measure on a grid of crank angles (``screen``: batched, a
+  few milliseconds); it runs from the ``STARTS`` best of each source (the exact solvers'
+  basins and others), until the request's deadline, at most ``MAX_ITER`` iterations each. No
   other clock decides anything: the answer does not depend on the machine's load unless the
   deadline cuts it short (and then the answer says so).
 
@@ -30,6 +30,7 @@ The answer is a local optimum, verified like every candidate;
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 import warnings
@@ -65,6 +66,7 @@ SAMPLES = 256  # Halton points in the box, projected onto the equalities (``scre
 # comes to stand across its slider's path (μ → 0) the slider's speed there grows without
 # bound in a spike narrower than the analysis's grid, so a measure there is no design's
 ACROSS = 1e-3
+ACROSS_DEG = math.degrees(math.acos(1 - ACROSS))
 FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
 _local = threading.local()
 
@@ -263,8 +265,9 @@ def motion(
         best_t = replace(t, objective=MAX_TRANSMISSION)
         s = search(m, spec, i, best_t)
         pool = list(s.proposals)
-        if t.bound_deg > 0:
-            pool += search(m, spec, i, replace(t, objective=MIN_SIZE)).proposals
+        # the smallest designs, at the bound or at the least angle these searches keep
+        small = replace(t, objective=MIN_SIZE, bound_deg=max(t.bound_deg, ACROSS_DEG))
+        pool += search(m, spec, i, small).proposals
         mine = []
         p: Proposal | None  # a proposal of the pool, then of an optimum
         for p in pool:
