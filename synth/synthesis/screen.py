@@ -96,6 +96,22 @@ def rank(m: Mechanism, variant: frozenset[str], pvs: np.ndarray, objective: str)
     s, v, a = s[rows, index], v[rows, index], a[rows, index]  # from the working stroke's start
     working = np.arange(ANGLES)[None, :] < length[:, None]
     stroke = np.abs(s[:, 0] - s[rows[:, 0], length % ANGLES])
+    with np.errstate(all="ignore"):  # a design that does not run: inf below
+        measure = _measure(objective, s, v, a, working, stroke)
+    fine = np.isfinite(measure) & (stroke > 0) & (length > 1) & (length < ANGLES - 1)
+    return np.where(fine, measure, np.inf)
+
+
+def _measure(
+    objective: str,
+    s: np.ndarray,
+    v: np.ndarray,
+    a: np.ndarray,
+    working: np.ndarray,
+    stroke: np.ndarray,
+) -> np.ndarray:
+    """The measure from s, s′ and s″ sampled from the working stroke's start."""
+    rows = np.arange(len(s))
     if objective != UNIFORM:
         measure = np.maximum(_peak(a, working), _peak(a, ~working)) / stroke
     else:  # the middle of the working stroke: its share of the travel, and of the crank's turn
@@ -103,14 +119,13 @@ def rank(m: Mechanism, variant: frozenset[str], pvs: np.ndarray, objective: str)
         ends = []
         for level in (CUT, 1 - CUT):  # where the travel reaches it, interpolated
             i = np.clip(np.argmax(travel >= level, axis=1), 1, ANGLES - 1)
-            t0, t1 = travel[rows[:, 0], i - 1], travel[rows[:, 0], i]
+            t0, t1 = travel[rows, i - 1], travel[rows, i]
             ends.append(i - 1 + (level - t0) / (t1 - t0))
         middle = working & (travel >= CUT) & (travel <= 1 - CUT)
         turn = (ends[1] - ends[0]) * (2 * np.pi / ANGLES)
         speed = _peak(v, middle)
         measure = speed * turn / ((1 - 2 * CUT) * stroke)
-    fine = np.isfinite(measure) & (stroke > 0) & (length > 1) & (length < ANGLES - 1)
-    return np.where(fine, measure, np.inf)
+    return cast(np.ndarray, measure)
 
 
 def _peak(y: np.ndarray, where: np.ndarray) -> np.ndarray:
@@ -121,6 +136,5 @@ def _peak(y: np.ndarray, where: np.ndarray) -> np.ndarray:
     rows = np.arange(len(y))
     y0, y1, y2 = (y[rows, (i + d) % y.shape[1]] for d in (-1, 0, 1))
     curve = 2 * y1 - y0 - y2
-    with np.errstate(all="ignore"):
-        top = y1 + np.where(curve > 0, (y0 - y2) ** 2 / (8 * curve), 0.0)
+    top = y1 + np.where(curve > 0, (y0 - y2) ** 2 / (8 * curve), 0.0)
     return np.where(np.any(where, axis=1), top, 0.0)
