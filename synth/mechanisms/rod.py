@@ -104,6 +104,38 @@ def rule(
     return rod_l, rod_h, rod_cos, l_ok
 
 
+def switches(arm: np.ndarray, half: np.ndarray, q: Mapping[str, float]) -> list[np.ndarray]:
+    """Where ``rule``'s rod from a swinging pin changes formula or stops fitting: margins,
+    each smooth in the swing, that change sign exactly there. The smallest design's
+    (shortest) rod, c = cos(bound): the one-way limit taking over from c; the placement
+    reaching its bounds, or a fixed one crossing the pin's end positions or handing the
+    worst offset from one to the other; the lower bound taking over; the upper one passed.
+    With max transmission, where a rod fits at all: a rod at its upper bound, placed
+    within the one-way limit."""
+    xc = np.cos(half)
+    if not q["min_size"]:
+        lean = (xc - ONE_WAY) * q["rod_hi"]
+        mid = np.clip(arm * (1 + xc) / 2, arm * xc - lean, arm * xc + lean)
+        mid = np.full_like(arm, q["height"]) if q["height_fixed"] else np.clip(
+            mid, q["height_lo"], q["height_hi"])  # fmt: skip
+        return [lean * (1 + ROUNDING) - np.abs(mid - arm * xc)]
+    c = q["cos_bound"]
+    m = np.minimum(c, xc - ONE_WAY)
+    out = [c - (xc - ONE_WAY)]
+    if q["height_fixed"]:
+        h: np.ndarray = np.full_like(arm, q["height"])
+    else:
+        raw = arm * (m + c * xc) / (m + c)
+        out += [raw - q["height_lo"], q["height_hi"] - raw]
+        h = np.clip(raw, q["height_lo"], q["height_hi"])
+    g1, g2 = np.abs(h - arm), np.abs(h - arm * xc)
+    out += [h - arm, h - arm * xc]
+    if q["height_fixed"]:
+        out.append(g1 / c - g2 / m)
+    short = np.maximum(g1 / c, g2 / m)
+    return [*out, short - q["rod_lo"], q["rod_hi"] - short]
+
+
 def params(p: Problem, name: str, height: str | None) -> list[float]:
     """``PARAMS`` for the rod ``name`` of a problem (``height``: its path's placement, None for a
     path through the pivot)."""

@@ -1,5 +1,6 @@
 """Small dense numerics in Python floats: Newton's method on a Lagrangian (the KKT step of a
-handful of unknowns), its derivatives by central differences, and bisection of a bracket.
+handful of unknowns; a safeguarded form in one or two variables that only descends), its
+derivatives by central differences, and bisection of a bracket.
 
 The systems have at most four unknowns: numpy's per-call overhead on such small arrays costs
 several times the arithmetic, so the algebra is written out on lists of floats.
@@ -68,6 +69,135 @@ def newton(
             return np.array(x)
         last = size
     return None
+
+
+def descend(
+    local: Callable[[list[float]], Taylor | None],
+    x0: np.ndarray,
+    n_eq: int,
+    cell: np.ndarray,
+    iters: int = 40,
+    halvings: int = 4,
+) -> np.ndarray | None:
+    """A local minimum of the first row on the set where the next ``n_eq`` rows are 0 (d ≤ 2
+    variables, n_eq ≤ d), from x0: ``newton``'s step, safeguarded. Off the set a step first
+    returns to it (the least correction); along it, where the Lagrangian curves upward the
+    Newton step, else a step of one ``cell`` (the grid's spacing per variable) downhill;
+    no step is longer than ``CAP`` cells, and one that leaves the designs is halved. So it
+    ends at a minimum, never at a maximum or saddle. Converged as ``newton``: the equalities
+    to 1e-10 and a step below 1e-8, or below 1e-6 and shrinking quadratically, where the
+    Lagrangian curves upward. None where it does not converge."""
+    x = [float(a) for a in x0]
+    t = local(x)
+    if t is None:
+        return None
+    last = math.inf
+    along = 0 < n_eq < len(x)  # steps along a curve: kept near it
+    for _ in range(iters):
+        step, curved = _safe_step(t, len(x), n_eq, cell)
+        if step is None:
+            return None
+        for _ in range(halvings + 1):
+            y = [a + b for a, b in zip(x, step, strict=True)]
+            ty = local(y)
+            if ty is not None and along:  # back onto the curve: a step along it bends
+                y, ty = _project(local, y, ty, n_eq)
+            if ty is not None:
+                break
+            step = [a / 2 for a in step]  # a step that leaves the designs is halved
+        else:
+            return None
+        x, t = y, ty
+        size = max(abs(a) for a in step)
+        held = all(abs(r) <= 1e-10 for r in t[0][1 : 1 + n_eq])
+        if held and curved and (size <= 1e-8 or (size <= 1e-6 and size <= 1e-2 * last)):
+            return np.array(x)
+        last = size
+    return None
+
+
+CAP = 3.0  # the longest step of ``descend``, in cells
+
+
+def _project(
+    local: Callable[[list[float]], Taylor | None], y: list[float], t: Taylor, n_eq: int
+) -> tuple[list[float], Taylor | None]:
+    """y moved back onto the set where the equalities hold (Gauss–Newton's least
+    corrections, a few): the point and its model, None where it leaves the designs or does
+    not get within 1e-12 of the set."""
+    for _ in range(PROJECT):
+        eq = t[0][1 : 1 + n_eq]
+        if max(abs(r) for r in eq) <= 1e-12:
+            return y, t
+        jac = t[1][1 : 1 + n_eq]
+        jjt = [[_dot(a, b) for b in jac] for a in jac]
+        w = solve(jjt, [-r for r in eq])
+        if w is None:
+            return y, None
+        y = [yi + sum(wk * jk[i] for wk, jk in zip(w, jac, strict=True)) for i, yi in enumerate(y)]
+        t_next = local(y)
+        if t_next is None:
+            return y, None
+        t = t_next
+    return (y, t) if max(abs(r) for r in t[0][1 : 1 + n_eq]) <= 1e-9 else (y, None)
+
+
+PROJECT = 6  # Gauss–Newton corrections back onto a curve after a step along it
+
+
+def _safe_step(t: Taylor, d: int, n_eq: int, cell: np.ndarray) -> tuple[list[float] | None, bool]:
+    """``descend``'s step and whether the Lagrangian curves upward along the set there."""
+    vals, grads, hess = t
+    c = [float(a) for a in cell]
+    if n_eq == d:  # the equalities fix the point: Newton's step on them
+        step = solve(grads[1 : 1 + n_eq], [-e for e in vals[1 : 1 + n_eq]])
+        return (None if step is None else _capped(step, c)), True
+    g = grads[0]
+    if n_eq == 0:
+        h = hess[0]
+        if d == 1:
+            if h[0][0] > 0:
+                return _capped([-g[0] / h[0][0]], c), True
+            return [-math.copysign(c[0], g[0])], False
+        det = h[0][0] * h[1][1] - h[0][1] ** 2
+        if h[0][0] > 0 and det > 0:
+            step = solve(h, [-g[0], -g[1]])
+            if step is not None:
+                return _capped(step, c), True
+        return _downhill(g, c), False
+    # d = 2, one equality: back to its curve, then along it
+    (a0, a1), e = grads[1], vals[1]
+    aa = a0 * a0 + a1 * a1
+    if not aa:
+        return None, False
+    normal = [-e * a0 / aa, -e * a1 / aa]
+    nu = -(a0 * g[0] + a1 * g[1]) / aa
+    w = [[hess[0][i][j] + nu * hess[1][i][j] for j in range(2)] for i in range(2)]
+    z = [-a1 / math.sqrt(aa), a0 / math.sqrt(aa)]  # the curve's tangent
+    wz = [w[0][0] * z[0] + w[0][1] * z[1], w[1][0] * z[0] + w[1][1] * z[1]]
+    kappa = z[0] * wz[0] + z[1] * wz[1]
+    gamma = z[0] * (g[0] + w[0][0] * normal[0] + w[0][1] * normal[1])
+    gamma += z[1] * (g[1] + w[1][0] * normal[0] + w[1][1] * normal[1])
+    length = math.hypot(z[0] / c[0], z[1] / c[1])  # cells per unit along the tangent
+    if kappa > 0:
+        along = -gamma / kappa
+        along = max(-CAP / length, min(CAP / length, along))
+    else:
+        along = -math.copysign(1.0 / length, gamma)
+    return _capped([normal[0] + along * z[0], normal[1] + along * z[1]], c), kappa > 0
+
+
+def _capped(step: list[float], cell: list[float]) -> list[float]:
+    """The step shortened to at most ``CAP`` cells."""
+    n = math.sqrt(sum((s / c) ** 2 for s, c in zip(step, cell, strict=True)))
+    return step if n <= CAP else [s * CAP / n for s in step]
+
+
+def _downhill(g: list[float], cell: list[float]) -> list[float]:
+    """One cell down the gradient, in the grid's scaled coordinates."""
+    sg = [a * c * c for a, c in zip(g, cell, strict=True)]
+    n = math.sqrt(sum((s / c) ** 2 for s, c in zip(sg, cell, strict=True)))
+    return [-s / n for s in sg] if n else [0.0] * len(g)
 
 
 def differences(

@@ -187,3 +187,23 @@ def test_a_motion_search_past_a_design_without_stroke_still_answers():
     for c in r.candidates:
         assert c.time_ratio == pytest.approx(240.0, rel=1e-9)
         assert c.stroke == pytest.approx(0.046875, rel=1e-9)
+
+
+def test_drag_link_with_its_crank_fixed_takes_the_better_end_of_its_segment():
+    """min_size for a drag-link with its crank fixed returned 324.385345 through IPOPT: its
+    designs with the ground at its lower bound form one segment between the transmission
+    bound's two crossings, a local minimum at each end, and it took the worse. The other end
+    (the issue's design, to its ten digits: the 50-digit forms give its time ratio and
+    stroke) is 323.876125: the reduced solver finds it and certifies it."""
+    design = {"ground": 10.0, "crank": 100.0, "coupler": 98.2414934787,
+              "follower": 12.4257432278, "follower_arm": 50.0,
+              "connecting_rod": 53.2088886576}  # fmt: skip
+    tr, stroke = exact.time_ratio_and_stroke("drag_link_slider", design)
+    assert tr == pytest.approx(1.5, rel=1e-9) and stroke == pytest.approx(100.0, rel=1e-12)
+    spec = {"type": "drag_link_slider", "fixed": {"crank": 100.0}}
+    r = synth.synthesize(1.5, 100.0, 20.0, objective="min_size", mechanisms=[spec])
+    best = min(r.candidates, key=lambda c: c.size)
+    assert [c.method for c in r.candidates] == ["closed_form"] * len(r.candidates)
+    assert best.size == pytest.approx(sum(design.values()), rel=1e-9)
+    for k, v in design.items():  # the issue's digits, a few 1e-9 off the exact optimum
+        assert best.params[k] == pytest.approx(v, rel=1e-8), k

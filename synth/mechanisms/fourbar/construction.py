@@ -67,6 +67,10 @@ PARAMS = (
 )  # fmt: skip
 ROWS = ("valid", "feasible", "f", "size", "k", "a2", "a3", "a4", "r5", "l", "h", "rod_cos",
         "slack")  # fmt: skip
+# the rows of the local model (``Compiled.taylor``): the coupler's worst cos, the size and the
+# logs of the links at scale 1 (the ground's is 0)
+TAYLOR = ("f", "size", "log_a2", "log_a3", "log_a4")
+AT = 2  # where the first row's six numbers start in ``Compiled.taylor``'s list
 
 _local = threading.local()
 
@@ -146,18 +150,21 @@ class Compiled:
         # at y = (ψ, u), λ = 1 + e^u (Newton's coordinates)
         y = ca.SX.sym("y", 2)
         at = ca.vertcat(*rows(y[0], 1 + ca.exp(ca.fmin(y[1], 50.0)), p))
-        f, size = at[ROWS.index("f")], at[ROWS.index("size")]
-        (hf, gf), (hs, gs) = ca.hessian(f, y), ca.hessian(size, y)
-        local = ca.vertcat(at[ROWS.index("valid")], f, size, gf, gs,
-                           hf[0, 0], hf[0, 1], hf[1, 1], hs[0, 0], hs[0, 1], hs[1, 1])  # fmt: skip
+        named = [at[ROWS.index("f")], at[ROWS.index("size")]]
+        named += [ca.log(at[ROWS.index(n)]) for n in ("a2", "a3", "a4")]
+        local = [at[ROWS.index("valid")], at[ROWS.index("l")]]
+        for r in named:
+            h, g = ca.hessian(r, y)
+            local += [r, g[0], g[1], h[0, 0], h[0, 1], h[1, 1]]
         self.local = Points(
-            ca.Function("fourbar_construction_taylor", [y, p], [local], {"cse": True})
+            ca.Function("fourbar_construction_taylor", [y, p], [ca.vertcat(*local)], {"cse": True})
         )
 
     def taylor(self, psi: float, u: float, params: Sequence[float]) -> list[float]:
-        """At one point (ψ, u), λ = 1 + e^u, a list: valid, f, the size, the gradients of f
-        and of the size in (ψ, u), then the Hessians' entries f_ψψ, f_ψu, f_uu, size_ψψ,
-        size_ψu, size_uu (``params`` as for ``points``)."""
+        """At one point (ψ, u), λ = 1 + e^u, a list: valid, the rod's length (NaN where no rod
+        fits), then for each row of ``TAYLOR`` its value, its gradient in (ψ, u) and its
+        Hessian's entries ∂ψψ, ∂ψu, ∂uu (six numbers a row, from ``AT``; ``params`` as for
+        ``points``)."""
         return self.local.one((psi, u), params)
 
 

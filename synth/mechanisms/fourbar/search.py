@@ -13,7 +13,7 @@ import numpy as np
 
 from ...numerics import ROUNDING
 from ...numerics.dense import Taylor, differences, newton
-from .construction import Construction, construction
+from .construction import AT, Construction, construction
 
 U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
 GRID = 48
@@ -264,9 +264,10 @@ class Search(Construction):
         one = psi_fixed is not None  # only u moves: its entries
 
         def local(x: list[float]) -> Taylor | None:
-            valid, f, size, f0, f1, s0, s1, f00, f01, f11, s00, s01, s11 = taylor(
-                cast(float, psi_fixed) if one else x[0], x[-1], params
-            )
+            t = taylor(cast(float, psi_fixed) if one else x[0], x[-1], params)
+            f, f0, f1, f00, f01, f11 = t[AT : AT + 6]
+            size, s0, s1, s00, s01, s11 = t[AT + 6 : AT + 12]
+            valid = t[0]
             if not (valid > 0 and math.isfinite(size)):
                 return None
             fg, fh = ([f1], [[f11]]) if one else ([f0, f1], [[f00, f01], [f01, f11]])

@@ -13,9 +13,11 @@ for a unit crank: ground 1/s, coupler sqrt(1 + 1/s), rocker sqrt((1 + 1/s)/s). T
 σ = −1 transmits worse than σ = +1 at every swing. So the best design is this closed form when
 the swing ψ = β is allowed, else at the nearest allowed swing with λ found by Newton's method.
 
-Everything else (the smallest design, fixed links' ratios, links' bounds that cut an optimum
-off) is a problem in (ψ, u = log(λ − 1)): a grid, then Newton's method on the Lagrangian
-from its best points (``search``).
+Everything else (the smallest design, links' bounds that cut an optimum off) is a problem in
+(ψ, u = log(λ − 1)): a grid, then Newton's method on the Lagrangian from its best points
+(``search``). Where a fixed link sets the scale, and where that search is not exact, every
+stratum of the feasible set is searched (``strata``); where a rod from the swinging arm
+transmits worse than the best coupler, ``limited`` finds the best design.
 """
 
 from __future__ import annotations
@@ -31,8 +33,12 @@ from ...numerics import ROUNDING
 from ...numerics.dense import Taylor, newton, solve
 from ...targets import MAX_TRANSMISSION, MIN_SIZE
 from ..reduced import Reduced, clip
+from . import strata
 from .construction import Roles
+from .levels import levels
+from .limited import limited
 from .search import CONTINUE, GRID, NEAR, SHORTCUT, SLACK, U_HI, U_LO, Design, Search
+from .strata import Strata
 
 __all__ = ["FourBar", "Roles"]
 
@@ -40,9 +46,22 @@ __all__ = ["FourBar", "Roles"]
 class FourBar(Search):
     """The optima of one variant of a four-bar type."""
 
+    # search every stratum (``strata``): where a fixed link sets the scale, else where the
+    # free scale's search was not exact
+    every = False
+
     def solve(self) -> Reduced:
         if self.empty:
             return Reduced([])
+        answer = self.answer()
+        if not answer.exact and not self.every and self.set_by is None:
+            self.every = True
+            again = self.answer()
+            if again.exact or not answer.designs:
+                return again
+        return answer
+
+    def answer(self) -> Reduced:
         if self.p.objective == MAX_TRANSMISSION:
             return self.best_transmission()
         return self.smallest(self.p.cos_bound)
@@ -52,14 +71,16 @@ class FourBar(Search):
         two or more links fixed, the best point of the curve (or points) they leave. Where the
         links' bounds cut the optimum off (too long a link for the shortest), the best design
         holds that pair of links at their bounds' ratio. A rod that transmits worse than the
-        coupler decides the angle; then the smallest design that keeps it is best."""
+        coupler decides the angle: from an arm on the path's line it transmits alike for
+        every design, and the smallest design that keeps it is best; from a swinging arm,
+        ``limited``."""
         found, exact = self.coupler_optimum()
         if not found:
             return Reduced([], exact=exact)
         d, e = found
         if e["rod_cos"] > e["f"] * (1 + ROUNDING):
-            if self.r.swings:  # the rod's angle depends on the swing: not modelled here
-                return Reduced([d], exact=False)
+            if self.r.swings:  # the rod's angle depends on the swing
+                return limited(self, found, exact)
             return self.smallest(e["rod_cos"], d)
         return Reduced([d], exact=exact)
 
@@ -67,6 +88,15 @@ class FourBar(Search):
         """The design whose coupler transmits best, with its evaluation, and exactness."""
         beta = self.p.beta
         psi = clip(beta, *self.psi)
+        if self.set_by is not None or self.every:
+            if psi == beta and beta > 0 and not self.ratios:  # the best of all, if it is allowed
+                lam = math.sqrt(1 + 1 / math.sin(beta / 2))
+                d, e = self.design(1, psi, lam)
+                if e["feasible"]:
+                    e["at"], e["sigma"] = np.array([psi, math.log(lam - 1)]), 1
+                    return (d, e), True
+            found, exact = self.stratified("f")
+            return (found[0] if found else None), exact
         if self.ratios or psi != beta or beta == 0:
             ratios = bool(self.ratios)  # without them, the best coupler by its validity alone
             found, exact = self.optimum(1, "f", psi_fixed=None if ratios else psi, limits=ratios)
@@ -155,6 +185,8 @@ class FourBar(Search):
         bound. On a front (``Problem.near``: this variant's optima at the previous point's
         bound), each sheet's optimum is continued from there (``continued``), and the full
         search runs only where that fails."""
+        if self.set_by is not None or self.every:
+            return self.fixed_smallest(cos_bound, start)
         if start is None and self.p.near and not self.ratios and self.p.objective == MIN_SIZE:
             answer = self.continued(cos_bound)
             if answer is not None:
@@ -195,6 +227,50 @@ class FourBar(Search):
                 at = () if None in at else at
             return Reduced([d for d, _ in found[: 1 if exact else None]], exact, at)
         return Reduced([start] if start else best, exact=False)
+
+    def stratified(
+        self,
+        key: str,
+        cos_bound: float = 1.0,
+        psi: float | None = None,
+        seed: Design | None = None,
+    ) -> tuple[list[Design], bool]:
+        """The least ``key`` ("f", or "size" with the coupler's worst cos ≤ ``cos_bound``) on
+        both sheets, every stratum of each searched (``strata``), the swing held at ``psi``
+        if given, from ``seed``'s point too; the designs found, best first, and whether the
+        best is the optimum."""
+        bounds = levels(self, key, cos_bound)
+        lo, hi = self.psi
+        held = psi if psi is not None else lo if lo == hi else None
+        at = [] if seed is None else [seed[1]["at"]]
+        sheet = seed[1].get("sigma", 1) if seed is not None else 0
+        return strata.solve(
+            [Strata(self, s, key, bounds, held, at if s == sheet else []) for s in (1, -1)]
+        )
+
+    def fixed_smallest(self, cos_bound: float, start: dict[str, float] | None) -> Reduced:
+        """``smallest`` by strata (a fixed link sets the scale, or the free scale's search
+        was not exact): their best; where they find none, none at all, exactly, if no coupler
+        transmits well enough (a rod only adds a joint), else the search again from the best
+        coupler (the bound leaves about it a region the grid does not see)."""
+        found, exact = self.stratified("size", cos_bound)
+        if not found and start is None:
+            alone = copy.copy(self)
+            alone.rod = False
+            coupler, proof = alone.coupler_optimum()
+            if proof and (coupler is None or coupler[1]["f"] > cos_bound * (1 + ROUNDING)):
+                return Reduced([])
+            if coupler is None:
+                return Reduced([], exact=False)
+            # the bound leaves a region about the best coupler too small for the grid: the
+            # search again, from there
+            found, exact = self.stratified("size", cos_bound, seed=coupler)
+            exact = exact and proof
+            if not found:
+                return Reduced([coupler[0]], exact=False)
+        if found:
+            return Reduced([d for d, _ in found[: 1 if exact else None]], exact)
+        return Reduced([start] if start else [], exact=False)
 
     def continued(self, cos_bound: float) -> Reduced | None:
         """The smallest design at this bound from each sheet's optimum at a nearby one
