@@ -19,6 +19,7 @@ from api.routers import analyze, atlas, mechanisms, sweep, synthesize
 from api.routers.analyze import encoded
 from api.routers.common import engine
 from api.schemas import AnalyzeResponse
+from benchmarks.analysis import DESIGNS  # a valid design of each type
 from synth.analysis.kinematics import ANALYSIS_INCLUDE
 from synth.mechanisms import all_types, get
 
@@ -395,18 +396,6 @@ def test_the_budget_limit_is_the_servers_setting(client):
         del app.dependency_overrides[engine]
         small.close()
     assert client.post("/v1/synthesize", json={**SYNTH, "time_budget_ms": 10}).status_code == 200
-
-
-# a valid design of each type
-DESIGNS = {
-    "scotch_yoke": {"crank": 1.0},
-    "offset_slider_crank": {"crank": 1.0, "coupler": 3.0, "offset": 0.5},
-    "crank_shaper": {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0},
-    "whitworth": {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0},
-    "crank_rocker_slider": {"ground": 5.0, "crank": 1.0, "coupler": 4.5, "rocker": 3.0,
-                            "rocker_arm": 4.0},
-    "drag_link_slider": {**ref.DRAG_LINK_PROJECT, "coupler": 0.250428},
-}  # fmt: skip
 
 
 @pytest.mark.parametrize("kwargs", [
