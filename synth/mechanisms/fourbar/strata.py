@@ -324,8 +324,9 @@ def _pairs(cells: np.ndarray, fine: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     a, b = np.concatenate(i), np.concatenate(j)
     a, b = np.minimum(a, b), np.maximum(a, b)
     keep = (a != b) & fine[a] & fine[b]
-    pairs = np.unique(np.stack([a[keep], b[keep]], axis=1), axis=0)
-    return pairs[:, 0], pairs[:, 1]
+    n = len(cells)
+    pairs = np.unique(a[keep] * n + b[keep])
+    return pairs // n, pairs % n
 
 
 def _along(
