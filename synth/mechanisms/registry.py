@@ -166,17 +166,27 @@ class Mechanism:
         for q in self.parameters:
             if q.name in given and given[q.name] is not None:
                 p[q.name] = self.value(q.name, given[q.name])
-            elif q.default is not None:
-                p[q.name] = q.default
             elif q.required:
                 raise InvalidParameters(
                     f"{self.type} needs {q.name!r} ({q.description})", (q.name,)
                 )
+        p = self.filled(p)
+        self.check(p)
+        return p
+
+    def filled(self, given: Mapping[str, float]) -> dict[str, float]:
+        """``given`` with every default filled in (the constants, then those derived from the
+        others), in the parameters' order, unchecked: ``complete`` checks."""
+        p: dict[str, float] = {}
+        for q in self.parameters:
+            if q.name in given:
+                p[q.name] = given[q.name]
+            elif q.default is not None:
+                p[q.name] = q.default
         missing = [q.name for q in self.parameters if q.name not in p]
         if missing:
             derived = {k: float(v) for k, v in self.defaults(p).items() if k in missing}
             p.update(derived)
-        self.check(p)
         return {q.name: p[q.name] for q in self.parameters}
 
     def check(self, p: Params) -> None:

@@ -199,7 +199,7 @@ def local_optima(
     sampled = halton(lo, hi, lo > 0, SAMPLES)
     key = (m.type, variant, free)
     points = np.vstack([own, screen.project(form, key, sampled, pv, lo, hi)])
-    pvs = np.array([[m.complete(design(x))[k] for k in m.names] for x in points])
+    pvs = np.array([list(m.filled(design(x)).values()) for x in points])
     value = screen.rank(m, variant, pvs, objective) if len(points) else np.empty(0)
     measured = []  # the best ranked of each source that the analysis takes
     for source in (np.arange(len(own)), np.arange(len(own), len(points))):
