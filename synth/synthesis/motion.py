@@ -35,10 +35,9 @@ import threading
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any, cast
 
-import casadi as ca
 import numpy as np
 from scipy.optimize import minimize
 
@@ -71,23 +70,16 @@ FAIL = 1e3  # a design the analysis rejects, for the line search: far above ever
 _local = threading.local()
 
 
-@dataclass(frozen=True)
-class Functions:
-    form: Formulation
-    g: ca.Function  # (x, p) -> (g, ∂g/∂x)
-
-
-def functions(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Functions:
-    """The formulation's constraints with their derivatives, once per thread and structure
-    (CasADi functions are not shared between threads here, as the solvers are not)."""
-    cache: dict[tuple[str, frozenset[str], tuple[str, ...]], Functions] = (
-        _local.__dict__.setdefault("functions", {})
+def formulation(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Formulation:
+    """The type's formulation for a variant and its free parameters (its constraints; the
+    objective unused), once per thread and structure (CasADi functions are not shared
+    between threads here, as the solvers are not)."""
+    cache: dict[tuple[str, frozenset[str], tuple[str, ...]], Formulation] = (
+        _local.__dict__.setdefault("formulations", {})
     )
     key = (m.type, variant, free)
     if key not in cache:
-        form = formulate(m, variant, free, MIN_SIZE)  # its constraints; the objective unused
-        x, p, g = (form.nlp[k] for k in ("x", "p", "g"))
-        cache[key] = Functions(form, ca.Function("g", [x, p], [g, ca.jacobian(g, x)]))
+        cache[key] = formulate(m, variant, free, MIN_SIZE)
     return cache[key]
 
 
@@ -112,8 +104,8 @@ def local_optima(
     derivatives; the ``limit`` bounds the fluctuation's terms alike. Designs in stroke units.
     A default bound (not in ``explicit``) gives way to a start beyond it, as the exact
     solvers' does to a length the targets set on their own."""
-    fn = functions(m, variant, free)
-    form = fn.form
+    form = formulation(m, variant, free)
+    key = (m.type, variant, free)  # the formulation's, for ``screen``'s compiled constraints
     pv = np.concatenate([[fixed[k] for k in form.fixed], targets])
     n = len(free)
 
@@ -164,9 +156,8 @@ def local_optima(
     below, above = np.isfinite(lbg) & ~eq, np.isfinite(ubg) & ~eq
 
     def rows(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # y: x, or x and t
-        g, jac = fn.g(y[:n], pv)
-        jac = np.hstack([np.asarray(jac), np.zeros((jac.shape[0], 1))])  # t appears in none
-        return np.asarray(g).ravel(), jac
+        g, jac = screen.constraints(form, key, y[None, :n], pv)
+        return g[0], np.hstack([jac[0], np.zeros((jac.shape[1], 1))])  # t appears in none
 
     def inequalities(y: np.ndarray) -> np.ndarray:
         g = rows(y)[0]
@@ -197,7 +188,6 @@ def local_optima(
     lo, hi = (np.array([b[i] for b in wide]) for i in (0, 1))
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
     sampled = halton(lo, hi, lo > 0, SAMPLES)
-    key = (m.type, variant, free)
     points = np.vstack([own, screen.project(form, key, sampled, pv, lo, hi)])
     pvs = np.array([list(m.filled(design(x)).values()) for x in points])
     value = screen.rank(m, variant, pvs, objective) if len(points) else np.empty(0)

@@ -40,6 +40,19 @@ def _constraints(form: Formulation, key: object) -> Mapped:
     return cache[key]
 
 
+def constraints(
+    form: Formulation, key: object, x: np.ndarray, pv: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """g and ∂g/∂x at each point x (rows), the formulation's parameters ``pv`` shared: shapes
+    (points, g) and (points, g, x)."""
+    slot = _constraints(form, key)[len(x)]
+    slot.args[0][:], slot.args[1][:] = x, pv
+    slot.run()
+    ng = form.lbg.size
+    out = slot.out.copy()  # the slot is reused by the next call
+    return out[:, :ng], out[:, ng:].reshape(len(x), x.shape[1], ng).transpose(0, 2, 1)
+
+
 def project(
     form: Formulation,
     key: object,
@@ -53,24 +66,17 @@ def project(
     box: those that get there (to ``CLOSE``) and, with ``every``, meet every other constraint."""
     if len(x) == 0:
         return x
-    slot = _constraints(form, key)[len(x)]
     lbg, ubg = form.lbg, form.ubg
     eq = lbg == ubg
-    ng, n = lbg.size, x.shape[1]
     for _ in range(STEPS):
-        slot.args[0][:], slot.args[1][:] = x, pv
-        slot.run()
-        g, jac = slot.out[:, :ng], slot.out[:, ng:].reshape(len(x), n, ng).transpose(0, 2, 1)
+        g, jac = constraints(form, key, x, pv)
         res = g[:, eq] - lbg[eq]
         fine = np.all(np.isfinite(jac[:, eq]), axis=(1, 2)) & np.all(np.isfinite(res), axis=1)
         x, res, je = x[fine], res[fine], jac[fine][:, eq]
         if len(x) == 0:
             return x
         x = np.clip(x - (np.linalg.pinv(je) @ res[..., None])[..., 0], lo, hi)
-        slot = _constraints(form, key)[len(x)]
-    slot.args[0][:] = x
-    slot.run()
-    g = slot.out[:, :ng]
+    g = constraints(form, key, x, pv)[0]
     ok = np.all(np.abs(g[:, eq] - lbg[eq]) <= CLOSE, axis=1)
     if every:
         ok &= np.all(g[:, ~eq] >= lbg[~eq] - 1e-9, axis=1)
