@@ -31,7 +31,7 @@ from .. import rod
 from ..reduced import Reduced
 from .levels import levels, swings
 from .search import GRID, U_HI, U_LO, Design
-from .strata import Strata
+from .strata import Strata, minima
 
 if TYPE_CHECKING:
     from .solver import FourBar
@@ -67,7 +67,7 @@ def limited(fb: FourBar, coupler: Design, exact: bool) -> Reduced:
     r_rows = best_rod(rows)
     f_rows = _coupler_rows(fb, rows)
     t_rows = np.maximum(f_rows, r_rows)
-    for i in _local_minima(t_rows):
+    for i, _ in minima(t_rows[:, None], np.ones((len(t_rows), 1), dtype=bool)):
         a, b = rows[max(i - 1, 0)], rows[min(i + 1, len(rows) - 1)]
         # the rod's own best swing in the bracket, if the coupler keeps up there
         psi_r = _golden(best_rod, a, b)
@@ -114,13 +114,6 @@ def _coupler_rows(fb: FourBar, rows: np.ndarray) -> np.ndarray:
         ok = st.feasible_grid(e)
         out = np.minimum(out, np.min(np.where(ok, e["f"], np.inf), axis=1))
     return out
-
-
-def _local_minima(t: np.ndarray) -> list[int]:
-    """The finite entries no greater than their neighbours."""
-    pad = np.concatenate([[np.inf], t, [np.inf]])
-    keep = np.isfinite(t) & (t <= pad[:-2]) & (t <= pad[2:])
-    return np.flatnonzero(keep).tolist()
 
 
 def _row(rows: np.ndarray, psi: float) -> int:

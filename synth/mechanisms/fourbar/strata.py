@@ -110,7 +110,7 @@ class Strata(ActiveSet):
         if ok.any() and not self.eqs:  # with a ratio held, the samples on its curve only
             found.samples = float(np.min(value[ok]))
         if not self.eqs:
-            for i, j in _minima(np.where(valid, value, np.inf), ok):
+            for i, j in minima(np.where(valid, value, np.inf), ok):
                 v, sp = float(value[i, j]), _spread(value, valid, i, j)
                 starts.append(Start(v - sp, pts[i, j], (), v, sp))
         # each curve's crossings of the grid's edges (on it: ``_refine``), with every level
@@ -165,9 +165,8 @@ class Strata(ActiveSet):
         starts = []
         if not self.eqs:
             vv = np.where(valid, value, np.inf)
-            pad = np.concatenate([[np.inf], vv, [np.inf]])
-            for i in np.flatnonzero(ok & (vv <= pad[:-2]) & (vv <= pad[2:]) & np.isfinite(vv)):
-                sp = _spread(value[:, None], valid[:, None], int(i), 0)
+            for i, _ in minima(vv[:, None], ok[:, None]):
+                sp = _spread(value[:, None], valid[:, None], i, 0)
                 v = float(value[i])
                 starts.append(Start(v - sp, np.array([psi, u[i]]), (), v, sp, psi))
         for k in self.eqs or self.ineqs:
@@ -348,8 +347,9 @@ def _along(
     return least, floors
 
 
-def _minima(value: np.ndarray, ok: np.ndarray) -> list[tuple[int, int]]:
-    """The ``ok`` grid points no worse than any of their (up to eight) neighbours."""
+def minima(value: np.ndarray, ok: np.ndarray) -> list[tuple[int, int]]:
+    """The ``ok`` grid points no worse than any of their (up to eight) neighbours, and finite
+    (a column: its entries no worse than the two beside them)."""
     pad = np.pad(value, 1, constant_values=np.inf)
     n, m = value.shape
     least = np.full(value.shape, np.inf)
