@@ -73,9 +73,7 @@ def levels(s: Search, objective: str, cos_bound: float) -> list[Level]:
             for k in range(4):
                 lo, hi = p.box(names[k])[0], p.box(names[i])[1]
                 if i != k and lo > 0 and math.isfinite(hi):
-                    d = ((i, -1.0), (k, 1.0))
-                    terms = tuple((ROW["log_a2"] + m - 1, w) for m, w in d if m > 0)
-                    out.append(Level(terms, math.log(hi / lo)))
+                    out.append(Level(_logs((i, -1.0), (k, 1.0)), math.log(hi / lo)))
     else:
         out += _fixed_levels(s, j)
     if objective == "size":
@@ -92,7 +90,7 @@ def _fixed_levels(s: Search, j: int) -> list[Level]:
     for i, n in enumerate(names):
         if i == j:
             continue
-        d = tuple((ROW["log_a2"] + k - 1, w) for k, w in ((i, 1.0), (j, -1.0)) if k > 0)
+        d = _logs((i, 1.0), (j, -1.0))
         neg = tuple((r, -w) for r, w in d)
         if n in p.fixed:
             out.append(Level(d, -math.log(p.fixed[n] / fj), eq=True))
@@ -103,6 +101,12 @@ def _fixed_levels(s: Search, j: int) -> list[Level]:
         if math.isfinite(hi):
             out.append(Level(neg, math.log(hi / fj)))
     return out
+
+
+def _logs(*links: tuple[int, float]) -> tuple[tuple[int, float], ...]:
+    """Σ w·log ρ over (link, w), as ``Level`` terms over ``TAYLOR``'s rows (the ground's log,
+    link 0, is 0 at scale 1: no term)."""
+    return tuple((ROW["log_a2"] + m - 1, w) for m, w in links if m > 0)
 
 
 def rows_of(e: dict[str, Any]) -> list[Any]:
