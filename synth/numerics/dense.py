@@ -17,6 +17,8 @@ import numpy as np
 # A point's local model: the values of a problem's rows (the objective, then the equalities),
 # their gradients and their Hessians, in Python floats; None where the point is not a design
 Taylor = tuple[list[float], list[list[float]], list[list[list[float]]]]
+CAP = 3.0  # the longest step of ``descend``, in cells
+PROJECT = 6  # Gauss–Newton corrections back onto a curve after a step along it
 
 
 def newton(
@@ -116,9 +118,6 @@ def descend(
     return None
 
 
-CAP = 3.0  # the longest step of ``descend``, in cells
-
-
 def _project(
     local: Callable[[list[float]], Taylor | None], y: list[float], t: Taylor, n_eq: int
 ) -> tuple[list[float], Taylor | None]:
@@ -140,9 +139,6 @@ def _project(
             return y, None
         t = t_next
     return (y, t) if max(abs(r) for r in t[0][1 : 1 + n_eq]) <= 1e-9 else (y, None)
-
-
-PROJECT = 6  # Gauss–Newton corrections back onto a curve after a step along it
 
 
 def _safe_step(t: Taylor, d: int, n_eq: int, cell: np.ndarray) -> tuple[list[float] | None, bool]:
