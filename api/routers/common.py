@@ -54,9 +54,10 @@ async def run(
     inline: bool = False,
     **kwargs: Any,
 ) -> Any:
-    """Run ``op`` on the engine (see ``Engine.run`` for ``inline``; waits and budgets count
-    from the request's arrival) once its checks pass; a domain error goes where ``locate``
-    places it in the request body."""
+    """Run ``op`` on the engine (see ``Engine.run`` for ``inline``, which the operation's
+    ``short`` may set too; waits and budgets count from the request's arrival) once its checks
+    pass; a domain error goes where ``locate`` places it in the request body."""
+    inline = inline or OPERATIONS[op].short(**kwargs)
     try:
         if not inline:  # inline, the operation itself raises the same at once; else its checks
             OPERATIONS[op].check(**kwargs)  # before it waits for a solver: a 422 under any load

@@ -27,7 +27,7 @@ from .front import pareto
 from .motion import motion
 from .search import DEFAULT, Searched, Solver, Spec, Targets, search
 
-__all__ = ["MAX_CANDIDATES", "Solver", "Spec", "check", "checked_spec", "synthesize"]
+__all__ = ["MAX_CANDIDATES", "Solver", "Spec", "check", "checked_spec", "short", "synthesize"]
 
 MAX_CANDIDATES = 50
 # the solvers work in the stroke's unit: a stroke within STROKES and bounds within SCALE of it
@@ -158,10 +158,7 @@ def check(
     quick-return type when ``mechanisms`` is None. Takes (and ignores) ``synthesize``'s other
     arguments. Raises ``InvalidParameters`` located at the
     argument, e.g. ``("mechanisms", 0, "bounds", "crank")``."""
-    if mechanisms is None:
-        specs = [Spec(t) for t in all_types() if get(t).quick_return]
-    else:
-        specs = [checked_spec(s, i) for i, s in enumerate(mechanisms)]
+    specs = _specs(mechanisms)
     _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
     for i, s in enumerate(specs):
         _check_scale(s, i, stroke)
@@ -174,6 +171,39 @@ def check(
             f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
         )
     return specs
+
+
+def _specs(mechanisms: Sequence[Spec | Mapping[str, Any]] | None) -> list[Spec]:
+    """The request's specs, checked; every quick-return type's when ``mechanisms`` is None."""
+    if mechanisms is None:
+        return [Spec(t) for t in all_types() if get(t).quick_return]
+    return [checked_spec(s, i) for i, s in enumerate(mechanisms)]
+
+
+def short(
+    mechanisms: Sequence[Spec | Mapping[str, Any]] | None = None,
+    objective: str = PARETO,
+    *,
+    include: Collection[str] = (),
+    tolerance: Tolerance | None = None,
+    solver: Solver = DEFAULT,
+    **_: Any,
+) -> bool:
+    """Whether ``synthesize`` with these arguments takes only the types' exact reduced solvers
+    on the default bounds (nothing fixed or bounded, not a motion objective, nothing added to
+    the candidates): then it costs about what an analysis does, well under a millisecond for
+    one type and at most ~15 ms for the six over time ratios 1.005–4.5 and bounds 0–70°
+    (``docs/benchmarks.md``). Takes ``synthesize``'s arguments unchecked (and ignores the
+    others); False for any it would refuse."""
+    if objective in MOTION_OBJECTIVES or include or tolerance is not None:
+        return False
+    if not solver.accelerators:  # the generic path: IPOPT's multistart
+        return False
+    try:
+        specs = _specs(mechanisms)
+    except (ValueError, TypeError, KeyError, AttributeError):  # SynthError is a ValueError
+        return False
+    return all(not s.fixed and not s.bounds and get(s.type).reduced is not None for s in specs)
 
 
 def _check_targets(

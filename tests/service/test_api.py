@@ -398,6 +398,29 @@ def test_the_budget_limit_is_the_servers_setting(client):
     assert client.post("/v1/synthesize", json={**SYNTH, "time_budget_ms": 10}).status_code == 200
 
 
+def test_a_synthesis_on_the_exact_solvers_alone_runs_without_a_solver_slot(client):
+    """With every solver slot taken, what the library calls short (everything free, not a motion
+    objective, nothing added) is answered in the event loop; anything else waits and gets 503."""
+    busy = Engine(Settings(max_queue_ms=1.0))
+    busy.slots.free = 0
+    app.dependency_overrides[engine] = lambda: busy
+    one = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0}
+    try:
+        for body in ({**one, "mechanisms": [{"type": "crank_shaper"}]}, one,
+                     {**one, "objective": "min_size"}):  # fmt: skip
+            r = client.post("/v1/synthesize", json=body)
+            assert r.status_code == 200 and r.json()["candidates"], body
+        for body in (
+            {**one, "mechanisms": [{"type": "crank_shaper", "fixed": {"crank": 60.0}}]},
+            {**one, "objective": "min_peak_acceleration"},
+            {**one, "include": ["motion"]},
+        ):
+            assert client.post("/v1/synthesize", json=body).status_code == 503, body
+    finally:
+        del app.dependency_overrides[engine]
+        busy.close()
+
+
 @pytest.mark.parametrize("kwargs", [
     {}, {"samples": 7}, {"crank_angles_deg": [0.0, 33.3, 90.0], "include": ["pins"]},
     {"samples": 4, "include": list(ANALYSIS_INCLUDE), "tolerance": synth.Tolerance(relative=1e-3)},

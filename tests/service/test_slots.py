@@ -8,7 +8,8 @@ import time
 
 import pytest
 
-from api.engine import Busy, Slots
+from api.config import Settings
+from api.engine import Busy, Engine, Slots
 
 
 def run(coro):
@@ -115,6 +116,22 @@ def test_a_free_slot_is_taken_at_once_and_the_count_holds_under_churn():
     assert free == 2 and live == 0
     assert all(r == "in" or isinstance(r, Busy) for r in results)
     assert all(r == "in" for k, r in enumerate(results) if k % 3 == 0)  # the patient ones
+
+
+def test_a_request_run_in_the_event_loop_is_refused_once_it_waited_past_its_start_by():
+    """A synthesis the engine runs inline (no slot) that has waited behind others in the loop
+    for longer than a slot's waiter may (half its budget) gets ``Busy``, as that waiter would;
+    within it, it runs."""
+    engine = Engine(Settings(executor="thread", workers=1))
+    request = {"time_ratio": 1.5, "stroke": 1.0, "time_budget_ms": 1000.0}
+    try:
+        now = time.monotonic()
+        late = engine.run("synthesize", True, now - 0.6, **request)
+        with pytest.raises(Busy):
+            run(late)
+        assert run(engine.run("synthesize", True, now - 0.4, **request)).candidates
+    finally:
+        engine.close()
 
 
 async def _take(slots: Slots, arrival: float, start_by: float) -> asyncio.Event:
