@@ -39,6 +39,7 @@ from dataclasses import replace
 from typing import Any, cast
 
 import numpy as np
+from scipy.linalg import qr
 from scipy.optimize import minimize
 
 from ..analysis.kinematics import motion_terms
@@ -56,6 +57,8 @@ from .solve import starts as halton
 
 STARTS = 2  # SLSQP runs per variant and source of starts, from the best ranked
 MAX_ITER = 300
+STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
+NEAR = 1e-4  # how close (stroke units, each parameter) to an earlier run's end a run ends
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
 # a measure's terms and their derivatives in the type's parameters (quality.MotionTerms)
 Pick = Callable[[MotionTerms], tuple[np.ndarray, np.ndarray]]
@@ -171,13 +174,21 @@ def local_optima(
     # formulation's max_transmission_angle does: the scale is then no flat direction
     links = np.array([float(m.parameter(k).link) for k in free] + [0.0])
     pick = _PICK[objective]
-    constraints = [
-        {"type": "eq", "fun": lambda y: rows(y)[0][eq] - lbg[eq], "jac": lambda y: rows(y)[1][eq]},
-        {"type": "ineq", "fun": inequalities, "jac": inequalities_jac},
-        bounded(pick, None),
-    ]
+    measures = [{"type": "ineq", "fun": inequalities, "jac": inequalities_jac}, bounded(pick, None)]
     if limit is not None:
-        constraints.append(bounded(_PICK[UNIFORM], limit))
+        measures.append(bounded(_PICK[UNIFORM], limit))
+
+    def equalities(x: np.ndarray) -> np.ndarray:
+        """The equalities' rows independent at x: where the targets set one ratio twice (a
+        slotted lever's fixed lever: the time ratio and the stroke both set crank /
+        pivot_distance), the second is met with the first, and SLSQP's subproblems would be
+        singular with both."""
+        jac = rows(x)[1][eq][:, :n]
+        _, r, order = qr(jac.T, pivoting=True, mode="economic")
+        diag = np.abs(np.diag(r))
+        rank = int(np.sum(diag > 1e-9 * diag[0])) if diag.size and diag[0] > 0 else diag.size
+        kept: np.ndarray = np.flatnonzero(eq)[np.sort(order[:rank])]
+        return kept
 
     def box_of(s: dict[str, float]) -> list[tuple[float, float]]:
         return [bounds[k] if k in explicit else (min(bounds[k][0], s[k]), max(bounds[k][1], s[k]))
@@ -199,14 +210,35 @@ def local_optima(
             if got is not None:
                 measured.append((float(pick(got)[0].max()), points[k]))
                 taken += 1
+    # a start at the smallest member of its free scale (the same motion): SLSQP then has a
+    # bound in that direction, where it would crawl towards the tie to the smaller design
+    sc = m.scale
+    scaled = [] if sc is None else [free.index(k) for k in (sc.free, *sc.tied) if k in free]
+    if sc is not None and len(scaled) == 1 + len(sc.tied):
+        for _, x in measured:
+            x[scaled] *= max(lo[scaled] / x[scaled])
     out = []
+    ended: list[np.ndarray] = []  # where the runs so far ended
     for first, x0 in measured:
         if time.monotonic() >= deadline:
             break
+        kept = equalities(x0)
+        if kept.size == n:  # the equalities leave no freedom: the start is the optimum
+            out.append(design(x0))
+            continue
+        constraints = [{"type": "eq", "fun": lambda y, k=kept: rows(y)[0][k] - lbg[k],
+                        "jac": lambda y, k=kept: rows(y)[1][k]}, *measures]  # fmt: skip
 
-        def cap(_: object) -> None:
-            if time.monotonic() >= deadline:
-                raise StopIteration  # SLSQP ends with its last iterate (projected below)
+        def cap(y: np.ndarray, seen: list[np.ndarray] = []) -> None:  # noqa: B006 - this run's
+            """Ends SLSQP (with its last iterate, projected below) at the deadline; once its
+            iterates stand still (where its line search can no longer meet ``ftol`` it may
+            repeat one point for a hundred iterations); or once it comes within ``NEAR`` of an
+            optimum an earlier run ended at (the rest of the way is that run's)."""
+            seen.append(y.copy())
+            still = len(seen) > STILL and np.ptp(seen[-STILL:], axis=0).max() <= 1e-12
+            known = any(np.abs(y[:n] - x).max() <= NEAR for x in ended)
+            if still or known or time.monotonic() >= deadline:
+                raise StopIteration
 
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # SLSQP's notes on clipping to the bounds
@@ -218,6 +250,7 @@ def local_optima(
         # SLSQP meets the equalities to ~1e-8, the verification asks 1e-9
         for x in screen.project(form, key, res.x[None, :n], pv, lo, hi, every=False):
             out.append(design(x))
+            ended.append(x)
     return out
 
 
@@ -276,8 +309,9 @@ def motion(
             optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
                                   v.problem.explicit, targets, t.objective, starts, limit,
                                   t.deadline)  # fmt: skip
-            for d in optima:
-                p = proposal(m, i, {k: x * t.stroke for k, x in d.items()}, "slsqp", t)
+            for d in optima:  # the fixed parts the variant leaves out (placements) as given
+                design = {**{k: x * t.stroke for k, x in d.items()}, **spec.fixed}
+                p = proposal(m, i, design, "slsqp", t)
                 c = None if p is None else candidate(m, p, t, s.variants, extras)
                 if c is not None:
                     mine.append(_smallest_member(m, i, c, t, s.variants, extras))

@@ -26,6 +26,7 @@ from .formulation import Formulation
 
 STEPS = 12  # Newton steps a projection takes
 CLOSE = 1e-12  # the equalities' residual a projected point keeps
+INSIDE = 1e-12  # how far inside its limits a local optimum's inequalities are held (relative)
 ANGLES = 96  # crank angles a ranking samples
 _local = threading.local()
 
@@ -63,25 +64,47 @@ def project(
     every: bool = True,
 ) -> np.ndarray:
     """The points x (rows) moved onto the equalities by minimum-norm Newton steps within the
-    box: those that get there (to ``CLOSE``) and, with ``every``, meet every other constraint."""
+    box, those that get there (to ``CLOSE``): with ``every``, those that meet every other
+    constraint too; without, each inequality a point is beyond (or within ``INSIDE`` of) is
+    held that far inside its limit as it moves (a local optimiser's answer, which meets its
+    active inequalities only to its own tolerance: the verification then judges it)."""
     if len(x) == 0:
         return x
     lbg, ubg = form.lbg, form.ubg
     eq = lbg == ubg
     for _ in range(STEPS):
         g, jac = constraints(form, key, x, pv)
-        res = g[:, eq] - lbg[eq]
-        fine = np.all(np.isfinite(jac[:, eq]), axis=(1, 2)) & np.all(np.isfinite(res), axis=1)
-        x, res, je = x[fine], res[fine], jac[fine][:, eq]
+        if every:
+            res, jac = g[:, eq] - lbg[eq], jac[:, eq]
+        else:
+            res, jac = _held(g, jac, lbg, ubg, eq)
+        fine = np.all(np.isfinite(jac), axis=(1, 2)) & np.all(np.isfinite(res), axis=1)
+        x, res, jac = x[fine], res[fine], jac[fine]
         if len(x) == 0:
             return x
-        x = np.clip(x - (np.linalg.pinv(je) @ res[..., None])[..., 0], lo, hi)
+        x = np.clip(x - (np.linalg.pinv(jac) @ res[..., None])[..., 0], lo, hi)
     g = constraints(form, key, x, pv)[0]
     ok = np.all(np.abs(g[:, eq] - lbg[eq]) <= CLOSE, axis=1)
     if every:
         ok &= np.all(g[:, ~eq] >= lbg[~eq] - 1e-9, axis=1)
         ok &= np.all(g[:, ~eq] <= ubg[~eq] + 1e-9, axis=1)
     return cast(np.ndarray, x[ok & np.all(np.isfinite(x), axis=1)])
+
+
+def _held(
+    g: np.ndarray, jac: np.ndarray, lbg: np.ndarray, ubg: np.ndarray, eq: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's residuals and their rows of ∂g/∂x for a Newton step: the equalities', and
+    those of the inequalities beyond or within ``INSIDE`` of a limit, to ``INSIDE`` inside it
+    (the other rows 0)."""
+    with np.errstate(invalid="ignore"):  # an infinite limit: never held
+        low = lbg + INSIDE * np.maximum(1.0, np.abs(lbg))
+        high = ubg - INSIDE * np.maximum(1.0, np.abs(ubg))
+        below, above = ~eq & (g < low), ~eq & (g > high)
+        target = np.where(eq, lbg, np.where(below, low, np.where(above, high, g)))
+    held = eq | below | above
+    res = np.where(held, g - target, 0.0)
+    return res, np.where(held[..., None], jac, 0.0)
 
 
 def rank(m: Mechanism, variant: frozenset[str], pvs: np.ndarray, objective: str) -> np.ndarray:
