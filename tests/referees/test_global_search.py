@@ -277,27 +277,39 @@ def _drawn(mtype: str) -> list[tuple[float, float, dict[str, float]]]:
     return out
 
 
+def fixed_targets(mtype: str) -> list[tuple[float, float, dict[str, float]]]:
+    """(time ratio, bound°, fixed) of ``FIXED_TARGETS`` drawn designs of a type, each with one
+    part fixed (every part in turn) or two, the bound 1–5° below the design's angle, seeded:
+    the targets of the full form here and of the motion objectives' (test_motion_search)."""
+    rng = np.random.default_rng(2800 + gs.TYPES.index(mtype))
+    out = []
+    for n, (tr, mu, q) in enumerate(_drawn(mtype)):
+        names = sorted(q)
+        one = names[n % len(names)]
+        chosen = [one] if n < len(names) or rng.random() < 0.5 else [
+            one, rng.choice([k for k in names if k != one])]  # fmt: skip
+        # the design's own numbers: two fixed parts of a slider-crank leave it alone,
+        # so they must agree with the time ratio to rounding
+        fixed = {str(k): float(q[k]) for k in chosen}
+        bound = round(max(1.0, mu - rng.uniform(1.0, 5.0)), 4)
+        out.append((float(tr), bound, fixed))
+    return out
+
+
+def case_id(c: tuple) -> str:
+    """(type, objective, time ratio, bound°, fixed) as a test's id."""
+    return f"{c[0]}-{c[1]}-{c[2]:.9g}-{c[3]:g}-" + "+".join(sorted(c[4]))
+
+
 def fixed_cases():
     """(type, objective, time ratio, bound°, fixed): the quick cases, or in the full form per
-    type ``FIXED_TARGETS`` drawn designs, each with one part fixed (every part in turn) or
-    two, and every objective."""
+    type ``fixed_targets`` with every objective."""
     out = list(FIXED_QUICK)
     if FULL:
-        out = []
-        for mtype in gs.TYPES:
-            rng = np.random.default_rng(2800 + gs.TYPES.index(mtype))
-            for n, (tr, mu, q) in enumerate(_drawn(mtype)):
-                names = sorted(q)
-                one = names[n % len(names)]
-                chosen = [one] if n < len(names) or rng.random() < 0.5 else [
-                    one, rng.choice([k for k in names if k != one])]  # fmt: skip
-                # the design's own numbers: two fixed parts of a slider-crank leave it alone,
-                # so they must agree with the time ratio to rounding
-                fixed = {str(k): float(q[k]) for k in chosen}
-                bound = round(max(1.0, mu - rng.uniform(1.0, 5.0)), 4)
-                out += [(mtype, o, float(tr), bound, fixed) for o in FIXED_OBJECTIVES]
+        out = [(mtype, o, tr, bound, fixed) for mtype in gs.TYPES
+               for tr, bound, fixed in fixed_targets(mtype) for o in FIXED_OBJECTIVES]  # fmt: skip
     for c in out:
-        yield pytest.param(*c, id=f"{c[0]}-{c[1]}-{c[2]:.9g}-{c[3]:g}-" + "+".join(sorted(c[4])))
+        yield pytest.param(*c, id=case_id(c))
 
 
 def _beaten(what: str, mine: float, theirs: float, up: bool, g) -> float:

@@ -2,8 +2,9 @@
 ``uniform_cutting_speed`` and ``min_peak_acceleration``.
 
 It searches the design space through tests/support/globalsearch.py's own families (every design
-meets the time ratio and stroke by construction, sharing no formula with synth), by differential
-evolution from several seeds per family and branch, polished by Nelder–Mead. The measure of a
+meets the time ratio and stroke by construction, sharing no formula with synth; a fixed part is
+an equality that family solves for one of its variables), by differential evolution from several
+seeds per family and branch, polished by Nelder–Mead. The measure of a
 design is the analysis's (synth.analyze, include motion), which tests/referees/test_quality.py
 checks against a brute force to 1e-9 on 200 designs per type; the search is what is independent.
 
@@ -17,6 +18,7 @@ search.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,27 +47,31 @@ def measure(motion, objective: str) -> float:
 
 
 def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1),
-           popsize: int = 12, maxiter: int = 60) -> Best:  # fmt: skip
+           popsize: int = 12, maxiter: int = 60,
+           fixed: Mapping[str, float] | None = None) -> Best:  # fmt: skip
     """The least measure over every family and branch of ``mtype`` at time ratio ``tr``,
-    stroke 1, minimum transmission ≥ ``bound_deg``, within the default bounds."""
-    beta = np.array([gs.beta_of(tr)])
-    cos_bound = math.cos(math.radians(bound_deg))
+    stroke 1, minimum transmission ≥ ``bound_deg``, within the default bounds; ``fixed``:
+    parts kept at their values (stroke 1), the search space then a request's with them
+    (``globalsearch.Fix``; each fixed part solved for by a variable of the family)."""
+    fx = gs.Fix(mtype, tuple(sorted((k, float(v)) for k, v in (fixed or {}).items())))
+    m = synth.mechanisms.get(mtype)
     best = Best(math.inf, None)
     for fam in gs.FAMILIES[mtype]:
-        for branch in range(fam.branches):
+        # the family's designs at the time ratio with the fixed parts, the bound a margin
+        # (min_size's feasible set: the goal itself is not used)
+        problem = gs._Problem(fam, "min_size", tr, bound_deg, 1.0, fx)
+        for branch in range(problem.branches):
 
-            def value(z, fam=fam, branch=branch):
-                z = np.clip(z, 0.0, 1.0)
+            def design(z, problem=problem, branch=branch):
+                """The design at the free variables z, and its violation."""
                 with np.errstate(all="ignore"):
-                    d = fam.decode(z[None, :], beta, branch)
-                margins, cos = np.nan_to_num(d.margins[0], nan=-1.0), d.cosines[0]
-                worst = np.max(np.abs(cos), initial=0.0)
-                violation = np.sum(np.clip(-margins - FEASIBLE, 0, None))
-                violation += max(worst - cos_bound - FEASIBLE, 0.0)
+                    _, viol, d = problem.evaluate(np.clip(z, 0.0, 1.0)[None, :], branch)
+                return {k: float(v[0]) for k, v in d.params.items()}, float(viol[0])
+
+            def value(z, design=design):
+                params, violation = design(z)
                 if not np.isfinite(violation) or violation > 0:
                     return PENALTY + min(violation, 1e6) if np.isfinite(violation) else 2 * PENALTY
-                params = {k: float(v[0]) for k, v in d.params.items()}
-                m = synth.mechanisms.get(mtype)
                 one_way = m.facts(m.complete(params)).get("one_way", ())
                 short = sum(max(ONE_WAY - float(x), 0.0) for x in one_way)
                 if short > 0:
@@ -78,8 +84,13 @@ def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1)
                     return 2 * PENALTY
                 return measure(a.motion, objective)
 
+            if problem.dim == 0:  # the fixed parts leave the family no freedom
+                f, z = value(np.empty(0)), np.empty(0)
+                if f < min(best.value, PENALTY):
+                    best = Best(f, design(z)[0])
+                continue
             for seed in seeds:
-                res = differential_evolution(value, [(0.0, 1.0)] * fam.dim, seed=seed,
+                res = differential_evolution(value, [(0.0, 1.0)] * problem.dim, seed=seed,
                                              popsize=popsize, maxiter=maxiter, tol=1e-12,
                                              init="sobol", polish=False)  # fmt: skip
                 if res.fun >= PENALTY:
@@ -93,8 +104,7 @@ def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1)
                 z = polished.x if polished.fun < res.fun else res.x
                 f = min(polished.fun, res.fun)
                 if f < best.value:
-                    d = fam.decode(np.clip(z, 0, 1)[None, :], beta, branch)
-                    best = Best(f, {k: float(v[0]) for k, v in d.params.items()})
+                    best = Best(f, design(z)[0])
     return best
 
 
