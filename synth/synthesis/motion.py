@@ -18,9 +18,11 @@ variant's free parameters (stroke units), solved by SLSQP:
 - its starts are the designs the exact solvers found for the same request (every variant's
   best-transmitting and smallest designs, at ``ACROSS_DEG`` without a bound: each meets the
   targets) and ``SAMPLES`` points of the box projected onto the time-ratio and stroke
-  equalities, all ranked by their measure on a grid of crank angles (``screen``: batched, a
-  few milliseconds); it runs from the ``STARTS`` best of each source (the exact solvers'
-  basins and others), until the request's deadline, at most ``MAX_ITER`` iterations each. No
+  equalities (where fixed parts leave too few of them designs, ``SAMPLES`` more of the box
+  about the starts, within ``AROUND``), all ranked by their measure on a grid of crank
+  angles (``screen``: batched, a few milliseconds); it runs from the ``STARTS`` best of the
+  exact solvers' designs and the ``DRAWN`` best points (``DRAWN_FIXED`` with parts fixed),
+  until the request's deadline, at most ``MAX_ITER`` iterations each. No
   other clock decides anything: the answer does not depend on the machine's load unless the
   deadline cuts it short (and then the answer says so).
 
@@ -55,8 +57,12 @@ from .formulation import TIE, Formulation, formulate
 from .search import Proposal, Spec, Targets, Variant, proposal, same, search
 from .solve import starts as halton
 
-STARTS = 2  # SLSQP runs per variant and source of starts, from the best ranked
+# SLSQP runs per variant from the best ranked of each source of starts: the exact solvers'
+# designs, and projected points of the box (where the four-bars' other basins lie), more of
+# these with parts fixed, where the exact solvers' designs are fewer and the basins more apart
+STARTS, DRAWN, DRAWN_FIXED = 2, 2, 4
 MAX_ITER = 300
+AROUND = 3.0  # the box about the starts (each part within this factor of theirs) drawn again
 STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
 NEAR = 1e-4  # how close (stroke units, each parameter) to an earlier run's end a run ends
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
@@ -98,6 +104,7 @@ def local_optima(
     starts: list[dict[str, float]],
     limit: float | None,
     deadline: float,
+    fixed_parts: bool = False,
 ) -> list[dict[str, float]]:
     """Local optima of a motion ``objective`` over one variant, from ``starts`` (designs,
     stroke units); ``targets`` is (time ratio, cos of the transmission bound). The measure is
@@ -106,7 +113,8 @@ def local_optima(
     turn is then one constraint handing over to another, not a kink), with the terms' exact
     derivatives; the ``limit`` bounds the fluctuation's terms alike. Designs in stroke units.
     A default bound (not in ``explicit``) gives way to a start beyond it, as the exact
-    solvers' does to a length the targets set on their own."""
+    solvers' does to a length the targets set on their own. ``fixed_parts``: whether the
+    request fixes parts (more starts drawn, and about the starts where the box has few)."""
     form = formulation(m, variant, free)
     key = (m.type, variant, free)  # the formulation's, for ``screen``'s compiled constraints
     pv = np.concatenate([[fixed[k] for k in form.fixed], targets])
@@ -198,15 +206,25 @@ def local_optima(
     wide = box_of(starts[0]) if starts else [bounds[k] for k in free]
     lo, hi = (np.array([b[i] for b in wide]) for i in (0, 1))
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
-    sampled = halton(lo, hi, lo > 0, SAMPLES)
-    points = np.vstack([own, screen.project(form, key, sampled, pv, lo, hi)])
+    drawn_starts = DRAWN_FIXED if fixed_parts else DRAWN
+    drawn = screen.project(form, key, halton(lo, hi, lo > 0, SAMPLES), pv, lo, hi)
+    near = drawn[:0]
+    if fixed_parts and len(drawn) < drawn_starts and len(own):
+        # fixed parts can leave the box's points no design (a four-bar's other links drawn
+        # up to 5 × stroke beside a short fixed coupler): points about the starts besides
+        near_lo = np.maximum(lo, np.where(lo > 0, own.min(axis=0) / AROUND, lo))
+        near_hi = np.minimum(hi, np.where(lo > 0, own.max(axis=0) * AROUND, hi))
+        near = screen.project(form, key, halton(near_lo, near_hi, lo > 0, SAMPLES), pv, lo, hi)
+    points = np.vstack([own, drawn, near])
     pvs = np.array([list(m.filled(design(x)).values()) for x in points])
     value = screen.rank(m, variant, pvs, objective) if len(points) else np.empty(0)
     measured = []  # the best ranked of each source that the analysis takes
-    for source in (np.arange(len(own)), np.arange(len(own), len(points))):
+    ends = np.cumsum([0, len(own), len(drawn), len(near)])
+    for j, most in enumerate((STARTS, drawn_starts, drawn_starts)):
+        source = np.arange(ends[j], ends[j + 1])
         taken = 0
         for k in source[np.argsort(value[source], kind="stable")]:
-            got = terms(points[k]) if np.isfinite(value[k]) and taken < STARTS else None
+            got = terms(points[k]) if np.isfinite(value[k]) and taken < most else None
             if got is not None:
                 measured.append((float(pick(got)[0].max()), points[k]))
                 taken += 1
@@ -308,7 +326,7 @@ def motion(
             targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
             optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
                                   v.problem.explicit, targets, t.objective, starts, limit,
-                                  t.deadline)  # fmt: skip
+                                  t.deadline, bool(spec.fixed))  # fmt: skip
             for d in optima:  # the fixed parts the variant leaves out (placements) as given
                 design = {**{k: x * t.stroke for k, x in d.items()}, **spec.fixed}
                 p = proposal(m, i, design, "slsqp", t)
