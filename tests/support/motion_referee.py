@@ -29,7 +29,6 @@ import synth
 from . import globalsearch as gs
 
 PENALTY = 1e3
-FEASIBLE = 1e-12
 ONE_WAY = 1e-3  # the problem's margin from the dwell limit
 
 
