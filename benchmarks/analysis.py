@@ -27,6 +27,7 @@ import numpy as np
 
 import synth
 
+from . import targets
 from .common import RESULTS, report, table
 
 DESIGNS = {
@@ -40,6 +41,8 @@ DESIGNS = {
                          "follower_arm": 0.15, "connecting_rod": 0.3},
 }  # fmt: skip
 SAMPLES = (10, 100, 1_000, 10_000, 100_000)
+LIMIT = 1.5  # the fluctuation limit of motion_targets' "limit" requests
+FIXED_TARGETS = 30  # motion_targets' fixed-part targets per type
 
 
 def median_ms(fn: Callable[[], object], baseline: Callable[[], object], repeats: int):
@@ -139,6 +142,48 @@ def motion_costs(repeats: int) -> list[dict]:
                          "max_transmission_ms": ref, "ratio": ms / ref,
                          "measure": r.candidates[0].objective_value,
                          "complete": r.complete})  # fmt: skip
+    return rows
+
+
+def motion_targets(quick: bool) -> list[dict]:
+    """The motion objectives over targets, per quick-return type and objective, in process
+    (the goals, ``docs/benchmarks.md``: everything free, median ≤ 10 ms; parts fixed, p99 ≤ 50
+    ms):
+
+    - ``free``: everything free at ``DEFAULT_TIME_RATIOS`` × ``DEFAULT_BOUNDS``, stroke 300;
+    - ``limit``: the same with ``max_working_speed_fluctuation`` ``LIMIT``;
+    - ``fixed``: the benchmark's feasible targets that fix parts (``benchmarks.targets``, the
+      first ``FIXED_TARGETS`` of the type).
+
+    Warm: each request asked once before it is timed (a fixed set's first request compiles
+    its functions, ~150 ms). Median, p99 and max ms, and how many have a candidate."""
+    ratios, bounds = ((1.6,), (20.0,)) if quick else (DEFAULT_TIME_RATIOS, DEFAULT_BOUNDS)
+    per_type = 1 if quick else FIXED_TARGETS
+    fixed_cases = [c for c in targets.cases(n_infeasible=0)
+                   if c["target"]["mechanisms"][0]["fixed"]]  # fmt: skip
+    rows = []
+    for mtype in QUICK_RETURN:
+        mine = [c["target"] for c in fixed_cases if c["type"] == mtype][:per_type]
+        free = [{"time_ratio": tr, "stroke": 300.0, "min_transmission_angle_deg": b,
+                 "mechanisms": [{"type": mtype}]} for tr in ratios for b in bounds]  # fmt: skip
+        limited = [{**k, "max_working_speed_fluctuation": LIMIT} for k in free]
+        for objective in ("uniform_cutting_speed", "min_peak_acceleration"):
+            sets = {"free": free, "limit": limited, "fixed": mine}
+            for kind, kwargs in sets.items():
+                for k in kwargs:  # warm
+                    synth.synthesize(**{**k, "objective": objective, "time_budget_ms": 30_000})
+                ms, answered = [], 0
+                for k in kwargs:
+                    t0 = time.perf_counter()
+                    r = synth.synthesize(**{**k, "objective": objective, "time_budget_ms": 30_000})
+                    ms.append((time.perf_counter() - t0) * 1e3)
+                    answered += bool(r.candidates)
+                if ms:
+                    rows.append({"type": mtype, "objective": objective, "kind": kind,
+                                 "targets": len(ms), "answered": answered,
+                                 "median_ms": statistics.median(ms),
+                                 "p99_ms": float(np.percentile(ms, 99)),
+                                 "max_ms": max(ms)})  # fmt: skip
     return rows
 
 
@@ -277,6 +322,7 @@ def main(argv: list[str] | None = None) -> dict:
         "default_requests": default_summary(cases),
         "pareto": pareto_costs(3 if a.quick else 9, a.quick),
         "motion_objectives": motion_costs(1 if a.quick else 3),
+        "motion_targets": motion_targets(a.quick),
         "default_request_cases": cases,
     }
     print(table(results["analysis"], ("type", "case", "ms", "ratio")))
@@ -289,6 +335,8 @@ def main(argv: list[str] | None = None) -> dict:
                                      "ratio", "ratio_max", "points")))  # fmt: skip
     print(table(results["motion_objectives"], ("type", "objective", "ms", "max_transmission_ms",
                                                 "ratio", "measure", "complete")))  # fmt: skip
+    print(table(results["motion_targets"], ("type", "objective", "kind", "targets", "answered",
+                                             "median_ms", "p99_ms", "max_ms")))  # fmt: skip
     for r in results["default_requests"]:
         for key in ("worse_than_generic", "min_size_refused_but_feasible"):
             if r[key]:

@@ -33,6 +33,12 @@ def test_analysis_benchmark_quick():
     for c in cases:
         if c["kind"] == "default" and c["bound"] == 20.0 and c["type"] != "scotch_yoke":
             assert c["answered"], c
+    # the motion objectives over targets: each kind for every quick-return type, answered
+    motion = out["motion_targets"]
+    assert {(r["type"], r["kind"]) for r in motion} == {
+        (t, k) for t in analysis.QUICK_RETURN for k in ("free", "limit", "fixed")
+    }
+    assert all(r["answered"] == r["targets"] for r in motion if r["kind"] != "limit"), motion
 
 
 def test_service_benchmark_quick():
