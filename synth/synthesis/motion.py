@@ -265,7 +265,8 @@ def local_optima(
                            bounds=[*zip(lo, hi, strict=True), (0.0, None)],
                            constraints=constraints, callback=cap,
                            options={"maxiter": MAX_ITER, "ftol": 1e-12})  # fmt: skip
-        # SLSQP meets the equalities to ~1e-8, the verification asks 1e-9
+        # SLSQP meets its constraints to ~1e-8, the verification asks 1e-9: projected onto
+        # the equalities, the inequalities it is beyond held inside
         for x in screen.project(form, key, res.x[None, :n], pv, lo, hi, every=False):
             out.append(design(x))
             ended.append(x)
