@@ -22,7 +22,7 @@ from ..mechanisms.reduced import differ
 from ..numerics.dense import bisect
 from ..results import TOL, Infeasible
 from ..targets import MAX_TRANSMISSION, time_ratio
-from .search import Searched, Spec, Targets, Variant, ipopt, predict, scaled
+from .search import Searched, Spec, Targets, Variant, ipopt, predict, scaled, whole
 
 GRID = 17  # time ratios scanned for the reachable range
 TOP = math.pi * (1 - 1e-6)  # β of the largest time ratio tried, about 2e6
@@ -209,7 +209,7 @@ def _optima(
     """(TR, min transmission°) of each verified local optimum of ``objective`` (IPOPT)."""
     for x, _ in ipopt(m, v, spec, t, objective, cos_bound=cos_bound):
         try:
-            a = analyze(m.type, {**spec.fixed, **x, **dict.fromkeys(v.parts, 0.0)})
+            a = analyze(m.type, whole(spec, x, v.parts))
         except SynthError:
             continue
         if a.reversals == 2 and abs(a.stroke - t.stroke) <= TOL * t.stroke:

@@ -54,7 +54,7 @@ from . import screen
 from .candidate import candidate
 from .diagnose import diagnose
 from .formulation import TIE, Formulation, formulate
-from .search import Proposal, Spec, Targets, Variant, proposal, same, search
+from .search import Proposal, Spec, Targets, Variant, proposal, same, scaled, search, whole
 from .solve import starts as halton
 
 # SLSQP runs per variant from the best ranked of each source of starts: the exact solvers'
@@ -328,9 +328,8 @@ def motion(
             optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
                                   v.problem.explicit, targets, t.objective, starts, limit,
                                   t.deadline, bool(spec.fixed))  # fmt: skip
-            for d in optima:  # the fixed parts the variant leaves out (placements) as given
-                design = {**{k: x * t.stroke for k, x in d.items()}, **spec.fixed}
-                p = proposal(m, i, design, "slsqp", t)
+            for d in optima:
+                p = proposal(m, i, whole(spec, scaled(d, t.stroke), v.parts), "slsqp", t)
                 c = None if p is None else candidate(m, p, t, s.variants, extras)
                 if c is not None:
                     mine.append(_smallest_member(m, i, c, t, s.variants, extras))

@@ -157,7 +157,7 @@ def search(m: Mechanism, spec: Spec, index: int, t: Targets,
             designs = ipopt(m, variant, spec, t, t.objective, [d for d, _ in designs])
         proposals = []
         for d, method in designs:
-            params = {**d, **spec.fixed, **dict.fromkeys(parts, 0.0)}
+            params = whole(spec, d, parts)
             if any(same(params, o, t.stroke) for o in seen):
                 continue  # a local optimum found again
             seen.append(params)
@@ -195,6 +195,13 @@ def build_problem(
 
 def scaled(d: dict[str, float], s: float) -> dict[str, float]:
     return {k: v * s for k, v in d.items()}
+
+
+def whole(spec: Spec, d: Mapping[str, float], parts: Iterable[str]) -> dict[str, float]:
+    """A variant's design (``d``: its lengths, caller's units) as the request's: with every
+    fixed part as given (those the variant leaves out too, such as a placement) and the parts
+    it leaves out 0."""
+    return {**d, **spec.fixed, **dict.fromkeys(parts, 0.0)}
 
 
 def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float, float] | None:
