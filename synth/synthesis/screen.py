@@ -26,6 +26,7 @@ from .formulation import Formulation
 
 STEPS = 12  # Newton steps a projection takes
 CLOSE = 1e-12  # the equalities' residual a projected point keeps
+SETTLED = 1e-15  # a residual, or a step's change of it, that ends the Newton steps
 INSIDE = 1e-12  # how far inside its limits a local optimum's inequalities are held (relative)
 ANGLES = 96  # crank angles a ranking samples
 _local = threading.local()
@@ -72,18 +73,31 @@ def project(
         return x
     lbg, ubg = form.lbg, form.ubg
     eq = lbg == ubg
-    for _ in range(STEPS):
-        g, jac = constraints(form, key, x, pv)
+    x = np.array(x, dtype=float)
+    g = np.empty((len(x), lbg.size))
+    finite = np.ones(len(x), dtype=bool)
+    todo = np.arange(len(x))  # the points Newton still moves
+    last = None  # their residuals before the last step
+    for step in range(STEPS + 1):
+        g[todo], jac = constraints(form, key, x[todo], pv)
         if every:
-            res, jac = g[:, eq] - lbg[eq], jac[:, eq]
+            res, jac = g[todo][:, eq] - lbg[eq], jac[:, eq]
         else:
-            res, jac = _held(g, jac, lbg, ubg, eq)
+            res, jac = _held(g[todo], jac, lbg, ubg, eq)
         fine = np.all(np.isfinite(jac), axis=(1, 2)) & np.all(np.isfinite(res), axis=1)
-        x, res, jac = x[fine], res[fine], jac[fine]
-        if len(x) == 0:
-            return x
-        x = np.clip(x - (np.linalg.pinv(jac) @ res[..., None])[..., 0], lo, hi)
-    g = constraints(form, key, x, pv)[0]
+        finite[todo[~fine]] = False
+        todo, res, jac = todo[fine], res[fine], jac[fine]
+        # a point Newton has no more to do: met to rounding, or unchanged by the last step
+        # (held at the box's edge)
+        done = np.abs(res).max(axis=1, initial=0.0) <= SETTLED
+        if last is not None:
+            done |= np.abs(res - last[fine]).max(axis=1, initial=0.0) <= SETTLED
+        todo, res, jac = todo[~done], res[~done], jac[~done]
+        if step == STEPS or todo.size == 0:
+            break
+        last = res
+        x[todo] = np.clip(x[todo] - (np.linalg.pinv(jac) @ res[..., None])[..., 0], lo, hi)
+    x, g = x[finite], g[finite]
     ok = np.all(np.abs(g[:, eq] - lbg[eq]) <= CLOSE, axis=1)
     if every:
         ok &= np.all(g[:, ~eq] >= lbg[~eq] - 1e-9, axis=1)
