@@ -89,6 +89,28 @@ class Scale:
     reach: Callable[[Params], float] | None = None
 
 
+GROUND, RAM = "ground", "ram"  # the frame and the slider, in a ``Frame``'s joints
+
+
+@dataclass(frozen=True)
+class Frame:
+    """How a variant's parts carry forces, for its Newton–Euler equations (the loads).
+
+    ``bodies``: each rigid moving body as the drawn members it is made of (``drawing``'s
+    names), the crank's first; a body is named by its first member. ``pins``: each pin joint
+    as (pin, body, body), a body being one of those, ``GROUND`` or ``RAM``. ``slots``: each
+    block that slides in a slot, as (pin, the body carrying the block, the slotted body, the
+    slot's line as two pins of it, or None for a slot across the ram's path): the block, and
+    the slot's friction, are left out, so it pushes along the slot's normal only. ``path``:
+    the ram's direction of travel as s grows (a unit vector, from the complete parameters).
+    The ram is a body that only translates: a guide holds it to its path."""
+
+    bodies: tuple[tuple[str, ...], ...]
+    pins: tuple[tuple[str, str, str], ...]
+    path: Callable[[Params], tuple[Any, Any]]
+    slots: tuple[tuple[str, str, str, tuple[str, str] | None], ...] = ()
+
+
 @dataclass(frozen=True)
 class Mechanism:
     """One mechanism type: parameters, validity, and its kinematics as functions of (p, θ)."""
@@ -128,6 +150,8 @@ class Mechanism:
     drawing: tuple[tuple[str, str, str], ...] = ()
     # a family of equal designs the targets leave (synthesis reports it, synth.results.Family)
     scale: Scale | None = None
+    # each variant's bodies and joints (its set of left-out parts -> ``Frame``), for the loads
+    frame: Callable[[frozenset[str]], Frame] | None = None
 
     @property
     def names(self) -> tuple[str, ...]:

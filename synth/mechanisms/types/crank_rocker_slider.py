@@ -40,7 +40,10 @@ from ..fourbar.geometry import fourbar_scale, grashof_conditions, output_pin
 from ..fourbar.solver import FourBar, Roles
 from ..geometry import cos_law, leg, triangle_angle
 from ..registry import (
+    GROUND,
+    RAM,
     ROD,
+    Frame,
     Mechanism,
     Parameter,
     Params,
@@ -57,6 +60,12 @@ def _swing(p: Params) -> tuple[Any, Any]:
     """(γ at the extended toggle, γ at the folded one); ψ = π − γ, Δψ = γe − γf."""
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     return triangle_angle(r1, r4, r3 + r2), triangle_angle(r1, r4, r3 - r2)
+
+
+def _mid(p: Params) -> tuple[Any, Any]:
+    """The mid-swing line's direction from O4 (toward the slider)."""
+    ge, gf = _swing(p)
+    return -ca.cos((ge + gf) / 2), ca.sin((ge + gf) / 2)
 
 
 def _delta(p: Params, th: Any) -> tuple[Any, Any, Any]:
@@ -101,8 +110,7 @@ def defaults(p: Params) -> dict[str, Any]:
 def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r1, r2, r4, r5 = p["ground"], p["crank"], p["rocker"], p["rocker_arm"]
     vx, vy, _ = output_pin(r1, r2, p["coupler"], r4, th)
-    ge, gf = _swing(p)
-    mx, my = -ca.cos((ge + gf) / 2), ca.sin((ge + gf) / 2)  # the mid-swing line
+    mx, my = _mid(p)
     h, s = p["slider_height"], position(p, th)  # R = O4 + h m + s m⊥, m⊥ = (−my, mx)
     return {"O2": (0.0, 0.0), "A": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (r1, 0.0),
             "D": (r1 + vx, vy), "C": (r1 + r5 * vx / r4, r5 * vy / r4),
@@ -128,6 +136,25 @@ def facts(p: Params) -> dict[str, Any]:
 
 # the crank-rocker's ground, crank, coupler and rocker (a drag-link is its inversion)
 ROLES = Roles(LINKS, "rocker_arm", "connecting_rod", "slider_height", swings=True)
+
+
+def frame(variant: frozenset[str]) -> Frame:
+    """The rocker and its arm are one body; C drives the slider through the rod, or through
+    a block in the slider's slot across its path."""
+    bodies = (("crank",), ("coupler",), ("rocker", "rocker_arm"))
+    pins = (("O2", "crank", GROUND), ("A", "crank", "coupler"), ("D", "coupler", "rocker"),
+            ("O4", "rocker", GROUND))  # fmt: skip
+    if "connecting_rod" in variant:
+        return Frame(bodies, pins, _path, slots=(("C", "rocker", RAM, None),))
+    rod = (("C", "rocker", "connecting_rod"), ("R", "connecting_rod", RAM))
+    return Frame((*bodies, ("connecting_rod",)), (*pins, *rod), _path)
+
+
+def _path(p: Params) -> tuple[Any, Any]:
+    """The slider's path, m⊥ (``joints``)."""
+    mx, my = _mid(p)
+    return -my, mx
+
 
 register(
     Mechanism(
@@ -179,6 +206,7 @@ register(
         reduced=lambda p: FourBar(p, ROLES).solve(),
         scale=fourbar_scale("rocker"),
         joints=joints,
+        frame=frame,
         drawing=(
             ("ground", "O2", "O4"),
             ("crank", "O2", "A"),

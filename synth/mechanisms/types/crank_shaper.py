@@ -39,8 +39,11 @@ from ...errors import Unreachable
 from ..geometry import leg, lever
 from ..reduced import Problem, Reduced
 from ..registry import (
+    GROUND,
+    RAM,
     ROD,
     Condition,
+    Frame,
     Mechanism,
     Parameter,
     Params,
@@ -139,6 +142,23 @@ def reduced(p: Problem) -> Reduced:
     return Reduced([{**design, **p.fixed}])
 
 
+def frame(variant: frozenset[str]) -> Frame:
+    """The crank pin's block slides in the lever's slot (on O4P); the tip P drives the ram
+    through the ram link, or through a block in the ram's slot across its path."""
+    bodies = (("crank",), ("lever",))
+    pins = (("O2", "crank", GROUND), ("O4", "lever", GROUND))
+    slots = (("B", "crank", "lever", ("O4", "P")),)
+    if "ram_link" in variant:
+        return Frame(bodies, pins, _path, slots=(*slots, ("P", "lever", RAM, None)))
+    link = (("P", "lever", "ram_link"), ("R", "ram_link", RAM))
+    return Frame((*bodies, ("ram_link",)), (*pins, *link), _path, slots)
+
+
+def _path(p: Params) -> tuple[Any, Any]:
+    """The ram's path, x = −d + h, as s grows."""
+    return 0.0, 1.0
+
+
 register(
     Mechanism(
         type="crank_shaper",
@@ -217,6 +237,7 @@ register(
             reach=lambda p: p["lever"] / (1 + p["pivot_distance"] / p["crank"]),  # block on lever
         ),
         joints=joints,
+        frame=frame,
         drawing=(
             ("pivot_distance", "O2", "O4"),
             ("crank", "O2", "B"),

@@ -46,7 +46,7 @@ from ..fourbar.geometry import (
 from ..fourbar.solver import FourBar, Roles
 from ..geometry import ahead, cos_law, leg, triangle_angle
 from ..reduced import Problem, Reduced, agree, differ, unreachable
-from ..registry import ROD, Condition, Mechanism, Parameter, Params, register
+from ..registry import GROUND, RAM, ROD, Condition, Frame, Mechanism, Parameter, Params, register
 from ..rod import rod
 
 LINKS = ("ground", "crank", "coupler", "follower")
@@ -150,6 +150,16 @@ ROLES = Roles(
     ("crank", "ground", "follower", "coupler"), "follower_arm", "connecting_rod", None, swings=False
 )
 
+# the follower and its arm are one body
+FRAME = Frame(
+    bodies=(("crank",), ("coupler",), ("follower", "follower_arm"), ("connecting_rod",)),
+    pins=(("O2", "crank", GROUND), ("A", "crank", "coupler"), ("B", "coupler", "follower"),
+          ("O4", "follower", GROUND), ("C", "follower", "connecting_rod"),
+          ("D", "connecting_rod", RAM)),
+    path=lambda p: (1.0, 0.0),
+)  # fmt: skip
+
+
 register(
     Mechanism(
         type="drag_link_slider",
@@ -188,6 +198,7 @@ register(
         reduced=reduced,
         scale=fourbar_scale("follower"),
         joints=joints,
+        frame=lambda variant: FRAME,
         drawing=(
             ("ground", "O2", "O4"),
             ("crank", "O2", "A"),

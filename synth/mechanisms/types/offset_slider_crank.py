@@ -38,7 +38,7 @@ from ..reduced import (
     judge,
     unreachable,
 )
-from ..registry import ROD, Condition, Mechanism, Parameter, Params, register
+from ..registry import GROUND, RAM, ROD, Condition, Frame, Mechanism, Parameter, Params, register
 
 EPS = sys.float_info.epsilon
 
@@ -244,6 +244,13 @@ def _fixed_q(p: Problem, s: float, c: float) -> tuple[float, int] | None:
     return None
 
 
+FRAME = Frame(
+    bodies=(("crank",), ("coupler",)),
+    pins=(("O2", "crank", GROUND), ("B", "crank", "coupler"), ("C", "coupler", RAM)),
+    path=lambda p: (1.0, 0.0),
+)
+
+
 register(
     Mechanism(
         type="offset_slider_crank",
@@ -284,6 +291,7 @@ register(
         facts=facts,
         reduced=reduced,
         joints=joints,
+        frame=lambda variant: FRAME,
         drawing=(("crank", "O2", "B"), ("coupler", "B", "C")),
     )
 )

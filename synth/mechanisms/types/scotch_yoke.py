@@ -24,7 +24,7 @@ import casadi as ca
 from ...errors import Unreachable
 from ...results import TOL
 from ..reduced import Problem, Reduced, judge
-from ..registry import Mechanism, Parameter, Params, register
+from ..registry import GROUND, RAM, Frame, Mechanism, Parameter, Params, register
 
 
 def position(p: Params, th: Any) -> Any:
@@ -59,6 +59,15 @@ def reduced(p: Problem) -> Reduced:
     return Reduced([{"crank": p.fixed.get("crank", 0.5)}])
 
 
+# the crank pin's block slides in the yoke's slot, across the yoke's path
+FRAME = Frame(
+    bodies=(("crank",),),
+    pins=(("O2", "crank", GROUND),),
+    path=lambda p: (1.0, 0.0),
+    slots=(("B", "crank", RAM, None),),
+)
+
+
 register(
     Mechanism(
         type="scotch_yoke",
@@ -74,6 +83,7 @@ register(
         facts=facts,
         reduced=reduced,
         joints=joints,
+        frame=lambda variant: FRAME,
         drawing=(("crank", "O2", "B"),),
     )
 )

@@ -32,7 +32,18 @@ from ...errors import Unreachable
 from ...targets import MIN_SIZE
 from ..geometry import ahead, leg, lever, sqrt, where
 from ..reduced import STRICT, Problem, Reduced
-from ..registry import ROD, Condition, Mechanism, Parameter, Params, Scale, register
+from ..registry import (
+    GROUND,
+    RAM,
+    ROD,
+    Condition,
+    Frame,
+    Mechanism,
+    Parameter,
+    Params,
+    Scale,
+    register,
+)
 from ..slotted import check
 from ..slotted import scale as _scale
 
@@ -116,6 +127,17 @@ def reduced(p: Problem) -> Reduced:
     return Reduced([{**design, **p.fixed}])
 
 
+# the crank pin's block slides in the lever's slot, on the line from O4 through B; the lever's
+# arm O4P points the other way (the slot's own length is left out of the lever's mass)
+FRAME = Frame(
+    bodies=(("crank",), ("lever",), ("connecting_rod",)),
+    pins=(("O2", "crank", GROUND), ("O4", "lever", GROUND), ("P", "lever", "connecting_rod"),
+          ("R", "connecting_rod", RAM)),
+    path=lambda p: (0.0, 1.0),
+    slots=(("B", "crank", "lever", ("O4", "B")),),
+)  # fmt: skip
+
+
 register(
     Mechanism(
         type="whitworth",
@@ -162,6 +184,7 @@ register(
             "the time ratio sets pivot_distance/crank and the stroke sets the lever alone",
         ),
         joints=joints,
+        frame=lambda variant: FRAME,
         drawing=(
             ("pivot_distance", "O2", "O4"),
             ("crank", "O2", "B"),

@@ -1,0 +1,122 @@
+"""The forces in a design turning at constant crank speed: its Newton–Euler equations.
+
+A type's ``frame`` says which drawn members move as one body and how the bodies meet (pins,
+blocks in slots, the ram's guide). Each moving body's three equations (forces in x and y,
+moment about the crank pivot) and the ram's two (along its path and across it) are linear in
+the unknowns: the crank's driving torque, both components of each pin's force, each block's
+push along its slot's normal and the guide's normal force. The accelerations come from the
+type's pin positions (``joints``), differentiated twice in the crank angle and multiplied by
+ω². Everything is in SI: the lengths are multiplied by the unit's metres.
+
+Mass model: each drawn member of a body is a uniform slender rod of ``mass_per_length``
+(its mass at its middle, m L²/12 about it); the ram's mass is ``slider_mass``; blocks are
+massless; nothing rubs (the guide's friction is not modelled). ``force`` acts on the ram
+along its path (positive as s grows).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+
+from .registry import GROUND, RAM, Mechanism, Params
+
+# the load's numbers a compiled model takes after the type's parameters: metres per length
+# unit, crank speed (rad/s), ram mass (kg), link mass per metre (kg/m), force on the ram (N)
+LOAD = ("unit", "omega", "slider_mass", "mass_per_length", "force")
+
+
+def system(
+    m: Mechanism, variant: frozenset[str], p: Params, th: ca.SX, w: dict[str, ca.SX]
+) -> tuple[ca.SX, ca.SX, Layout]:
+    """The equations A z = b of a variant at crank angle θ, for the load ``w`` (``LOAD``), and
+    where each unknown of z lies (``Layout``)."""
+    assert m.frame is not None and m.joints is not None
+    fr = m.frame(variant)
+    u, om = w["unit"], w["omega"]
+    pins = {k: (u * x, u * y) for k, (x, y) in m.joints(p, th).items()}
+    members = {name: (a, b) for name, a, b in m.drawing}
+    tx, ty = fr.path(p)
+
+    def d2(v: Any) -> Any:  # the second derivative in time at constant ω
+        return om**2 * ca.jacobian(ca.jacobian(v, th), th)
+
+    names = [b[0] for b in fr.bodies]
+    layout = Layout(tuple(q[0] for q in fr.pins), tuple(q[0] for q in fr.slots))
+    n = layout.size
+    rows_of = {b: 3 * i for i, b in enumerate(names)}
+    ram = 3 * len(names)  # the ram's rows: along its path, across it
+    assert ram + 2 == n  # as many equations as unknowns
+    a = ca.SX.zeros(n, n)
+    b = ca.SX.zeros(n, 1)
+
+    def push(body: str, col: int, fx: Any, fy: Any, x: Any, y: Any) -> None:
+        """A force (fx, fy) per unit of unknown ``col`` on ``body``, at (x, y)."""
+        if body == GROUND:
+            return
+        if body == RAM:
+            a[ram, col] += fx * tx + fy * ty
+            a[ram + 1, col] += -fx * ty + fy * tx
+            return
+        r = rows_of[body]
+        a[r, col] += fx
+        a[r + 1, col] += fy
+        a[r + 2, col] += x * fy - y * fx
+
+    a[2, 0] = 1.0  # the torque, on the crank
+    for j, (pin, b1, b2) in enumerate(fr.pins):
+        x, y = pins[pin]
+        for k, (fx, fy) in enumerate(((1.0, 0.0), (0.0, 1.0))):
+            push(b1, layout.pin(j) + k, fx, fy, x, y)
+            push(b2, layout.pin(j) + k, -fx, -fy, x, y)
+    for j, (pin, carrier, slotted, line) in enumerate(fr.slots):
+        x, y = pins[pin]
+        if line is None:  # across the ram's path: the block pushes along it
+            nx, ny = tx, ty
+        else:
+            (ax, ay), (bx, by) = pins[line[0]], pins[line[1]]
+            length = ca.sqrt((bx - ax) ** 2 + (by - ay) ** 2)
+            nx, ny = -(by - ay) / length, (bx - ax) / length
+        push(slotted, layout.slot(j), nx, ny, x, y)
+        push(carrier, layout.slot(j), -nx, -ny, x, y)
+    a[ram + 1, n - 1] = 1.0  # the guide's normal force
+
+    # what the unknowns balance: each body's inertia (Σ m a, and the moment of m a and I α
+    # about the crank pivot), the ram's, less the force on the ram
+    lam = w["mass_per_length"]
+    for body in fr.bodies:
+        r = rows_of[body[0]]
+        (ax, ay), (bx, by) = (pins[q] for q in members[body[0]])
+        alpha = d2(ca.atan2(by - ay, bx - ax))
+        for member in body:
+            (ax, ay), (bx, by) = (pins[q] for q in members[member])
+            length = u * p[member]
+            mass = lam * length
+            gx, gy = (ax + bx) / 2, (ay + by) / 2
+            fx, fy = mass * d2(gx), mass * d2(gy)
+            b[r] += fx
+            b[r + 1] += fy
+            b[r + 2] += gx * fy - gy * fx + mass * length**2 / 12 * alpha
+    b[ram] += w["slider_mass"] * d2(u * m.position(p, th)) - w["force"]
+    return a, b, layout
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Where the unknowns lie in z: the torque first, then (Fx, Fy) of each pin joint (the
+    force on its first body), each block's push, and the guide's normal force last."""
+
+    pins: tuple[str, ...]
+    slots: tuple[str, ...]
+
+    @property
+    def size(self) -> int:
+        return 2 + 2 * len(self.pins) + len(self.slots)
+
+    def pin(self, j: int) -> int:
+        return 1 + 2 * j
+
+    def slot(self, j: int) -> int:
+        return 1 + 2 * len(self.pins) + j
