@@ -18,7 +18,15 @@ from .analysis.kinematics import analyze, analyze_many, joints
 from .analysis.sweep import sweep
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
 from .mechanisms import register
-from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
+from .results import (
+    Analysis,
+    Candidate,
+    Infeasible,
+    Load,
+    SweepResult,
+    SynthesisResult,
+    Tolerance,
+)
 from .synthesis import Solver, Spec, synthesize
 from .version import __version__ as __version__
 
@@ -31,6 +39,7 @@ __all__ = [
     "Infeasible",
     "InvalidDesign",
     "InvalidParameters",
+    "Load",
     "Solver",
     "Spec",
     "SweepResult",

@@ -77,6 +77,7 @@ class Curves:
     # only when asked (include "pins"): every pin of the drawing, named and ordered as
     # ``synth.joints`` gives them
     pins: dict[str, PinPath] | None = None
+    torque: np.ndarray | None = None  # N·m, only with a load
 
 
 @dataclass(frozen=True)
@@ -138,6 +139,127 @@ class Tolerance:
         return self.absolute if self.absolute is not None else (self.relative or 0.0) * abs(value)
 
 
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "in": 0.0254}  # metres per length unit
+
+
+@dataclass(frozen=True)
+class Load:
+    """What a design drives, at constant crank speed (an analysis's ``load``).
+
+    The lengths stay in the caller's unit, ``length_unit`` (one of ``LENGTH_UNITS``); forces
+    and masses are SI. ``cutting_force`` (N) resists the ram through ``cutting_zone``, the
+    fractions of the working stroke (by position) where the tool cuts; ``slider_mass`` (kg)
+    is the ram and its tool, ``link_mass_per_length`` (kg/m) the links' (uniform slender
+    rods; 0: massless). ``speed_fluctuation`` is the coefficient Cs = (ω_max − ω_min)/ω a
+    flywheel must hold the crank within, ``efficiency`` the drive's from motor to crank."""
+
+    length_unit: str
+    crank_rpm: float
+    cutting_force: float = 0.0
+    cutting_zone: tuple[float, float] = (0.1, 0.9)
+    slider_mass: float = 0.0
+    link_mass_per_length: float = 0.0
+    speed_fluctuation: float = 0.05
+    efficiency: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.length_unit not in LENGTH_UNITS:
+            raise InvalidParameters(
+                f"load.length_unit must be one of {', '.join(LENGTH_UNITS)} (the unit of the "
+                f"design's lengths: forces and masses are SI), got {self.length_unit!r}",
+                ("load", "length_unit"),
+            )
+        for name, low, strict in (("crank_rpm", 0.0, True), ("cutting_force", 0.0, False),
+                                  ("slider_mass", 0.0, False),
+                                  ("link_mass_per_length", 0.0, False),
+                                  ("speed_fluctuation", 0.0, True)):  # fmt: skip
+            v = getattr(self, name)
+            ok = _number(v) and (v > low if strict else v >= low)
+            if not ok:
+                sign = ">" if strict else "≥"
+                msg = f"load.{name} must be a finite number {sign} {low:g}, got {v!r}"
+                raise InvalidParameters(msg, ("load", name))
+        e = self.efficiency
+        if not (_number(e) and 0 < e <= 1):
+            msg = f"load.efficiency must be in (0, 1], got {e!r}"
+            raise InvalidParameters(msg, ("load", "efficiency"))
+        zone = tuple(self.cutting_zone)
+        if not (len(zone) == 2 and all(_number(z) for z in zone)
+                and 0 <= zone[0] < zone[1] <= 1):  # fmt: skip
+            msg = (f"load.cutting_zone must be [start, end] with 0 ≤ start < end ≤ 1 (fractions "
+                   f"of the working stroke), got {list(zone)!r}")  # fmt: skip
+            raise InvalidParameters(msg, ("load", "cutting_zone"))
+        object.__setattr__(self, "cutting_zone", (float(zone[0]), float(zone[1])))
+
+    @property
+    def metres(self) -> float:
+        """Metres per length unit."""
+        return LENGTH_UNITS[self.length_unit]
+
+    @property
+    def omega(self) -> float:
+        """The crank speed, rad/s."""
+        return 2 * math.pi * self.crank_rpm / 60
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+@dataclass(frozen=True)
+class Torque:
+    """The torque the crank must receive to turn at constant speed (N·m, positive when it
+    drives): its extremes, at crank angles (degrees), and its mean and root mean square."""
+
+    max: float
+    max_at_deg: float
+    min: float
+    min_at_deg: float
+    mean: float
+    rms: float
+
+
+@dataclass(frozen=True)
+class Power:
+    """The crank's mean and peak power (W), and the motor's rated power: the mean over the
+    drive's efficiency (a flywheel takes the peaks)."""
+
+    mean: float
+    peak: float
+    rated: float
+
+
+@dataclass(frozen=True)
+class Flywheel:
+    """The largest swing of the crank's energy over a turn (J: the turning-moment diagram's
+    largest area between the torque and its mean) and the flywheel inertia (kg·m²) on the
+    crank shaft that holds its speed within the load's ``speed_fluctuation``."""
+
+    energy: float
+    inertia: float
+
+
+@dataclass(frozen=True)
+class Force:
+    """A force's largest magnitude over a turn (N) and the crank angle (degrees) of it."""
+
+    max: float
+    at_deg: float
+
+
+@dataclass(frozen=True)
+class Loads:
+    """What a design's load asks of it (``synth.analysis.loads``): the crank torque, power and
+    flywheel; each joint's largest force (``joints``: the pins of the type's drawing, and the
+    blocks in slots by their pins) and the ram guide's largest normal force."""
+
+    torque: Torque
+    power: Power
+    flywheel: Flywheel
+    joints: dict[str, Force]
+    guide: Force
+
+
 @dataclass(frozen=True)
 class Sensitivities:
     """First-order derivatives of the time ratio, the stroke and the minimum transmission angle
@@ -176,10 +298,11 @@ class Analysis:
     motion: Motion | None = None  # only when asked
     sensitivities: Sensitivities | None = None  # only when asked
     envelope: Envelope | None = None  # only when asked
+    loads: Loads | None = None  # only with a load
 
     def to_dict(self) -> dict[str, Any]:
         out = asdict(self)
-        for k in ("curves", "motion", "sensitivities", "envelope"):  # only when asked
+        for k in ("curves", "motion", "sensitivities", "envelope", "loads"):  # only when asked
             if out[k] is None:
                 del out[k]
         if self.curves is not None:

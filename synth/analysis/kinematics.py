@@ -26,12 +26,13 @@ from ..results import (
     Curves,
     Extreme,
     Joint,
+    Load,
     PinPath,
     Stroke,
     Tolerance,
     Transmission,
 )
-from . import quality
+from . import loads, quality
 from .model import Model, model
 from .roots import TWO_PI, Points, stationary_points, stationary_points_many
 
@@ -48,12 +49,13 @@ def analyze(
     mechanism: str,
     params: Mapping[str, float],
     *,
-    crank_speed: float = 1.0,
+    crank_speed: float | None = None,
     crank_acceleration: float = 0.0,
     crank_angles_deg: Sequence[float] | None = None,
     samples: int | None = None,
     include: Collection[str] = (),
     tolerance: Tolerance | None = None,
+    load: Load | None = None,
 ) -> Analysis:
     """Analyse one design over a crank revolution (the semantics of POST /v1/analyze).
 
@@ -62,17 +64,32 @@ def analyze(
     fluctuation and peak accelerations), ``"sensitivities"`` (to every length; also with a
     ``tolerance``, which adds the worst-case deviations), ``"envelope"`` (the box the frame
     must hold) and ``"pins"`` (the curves' ``pins``: every pin of the type's drawing at the
-    curves' angles, as ``joints`` gives them; only with curves).
+    curves' angles, as ``joints`` gives them; only with curves). A ``load`` adds ``loads``
+    (the crank torque, power and flywheel, the joints' and the guide's forces) and, with
+    curves, the torque curve; its crank speed is the curves' too (``crank_speed``, rad/s,
+    1 by default).
 
     >>> a = analyze("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
     ...                           "connecting_rod": 200})
     >>> round(a.time_ratio, 5), round(a.stroke, 9)
     (2.73524, 300.0)
     """
-    deg = _asked(mechanism, include, crank_angles_deg, samples)
+    deg = _asked(mechanism, include, crank_angles_deg, samples, load is not None)
     m, p, variant, f, pv, found = _prepared(mechanism, params)  # checked there
+    if load is not None:
+        if m.frame is None:
+            raise InvalidParameters(f"load: {mechanism} has no force model yet", ("load",))
+        if crank_acceleration:
+            msg = "with a load the crank turns at constant speed: crank_acceleration must be 0"
+            raise InvalidParameters(msg, ("crank_acceleration",))
+        if crank_speed is not None and crank_speed != load.omega:
+            msg = (f"crank_speed {crank_speed:g} rad/s differs from the load's crank_rpm "
+                   f"{load.crank_rpm:g} ({load.omega:.9g} rad/s): give one of them")  # fmt: skip
+            raise InvalidParameters(msg, ("crank_speed",))
+        crank_speed = load.omega
+    crank_speed = 1.0 if crank_speed is None else crank_speed
     return _analysis(m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include,
-                     tolerance)  # fmt: skip
+                     tolerance, load)  # fmt: skip
 
 
 def analyze_many(
@@ -122,15 +139,22 @@ def _analysis(
     deg: np.ndarray | None,
     include: Collection[str],
     tolerance: Tolerance | None,
+    load: Load | None = None,
 ) -> Analysis:
     """``analyze``'s answer from the stationary points ``found`` of the design's rows."""
     rows, theta, values = found
     summary = _summary(m, p, f, rows, theta, values)
+    torque = None
+    if load is not None:
+        st = quality.Strokes(*_ends(rows, theta, values))
+        summary["loads"], torque = loads.loads(m, variant, f, pv, st, load)
     if deg is not None:
         curves = _curves(f, pv, crank_speed, crank_acceleration, deg)
         if "pins" in include:
             xy = _pins(model(m, variant, "pins"), pv, deg)
             curves = replace(curves, pins={k: PinPath(x, y) for k, (x, y) in xy.items()})
+        if torque is not None:
+            curves = replace(curves, torque=torque(np.radians(deg)))
         summary["curves"] = curves
     if "envelope" in include:
         summary["envelope"] = quality.envelope(m, variant, p, pv)
@@ -202,9 +226,10 @@ def _asked(
     include: Collection[str],
     crank_angles_deg: Sequence[float] | None,
     samples: int | None,
+    loaded: bool = False,
 ) -> np.ndarray | None:
     """The curves' angles (``curve_angles``), once ``include`` is checked against them: pins
-    need angles to be at, and a drawing."""
+    need angles to be at, and a drawing; ``loaded``: a load adds the torque curve."""
     check_include(include, ANALYSIS_INCLUDE)
     deg = curve_angles(crank_angles_deg, samples)
     if "pins" in include and deg is None:
@@ -212,12 +237,15 @@ def _asked(
         raise InvalidParameters(msg, ("include",))
     check_drawn(mechanism, include)
     if deg is not None:
-        _check_values(mechanism, include, deg.size, "samples" if samples else "crank_angles_deg")
+        loc = "samples" if samples else "crank_angles_deg"
+        _check_values(mechanism, include, deg.size, loc, loaded)
     return deg
 
 
-def _check_values(mechanism: str, include: Collection[str], points: int, loc: str) -> None:
-    curves = len(fields(Curves)) - 1  # the pins aside
+def _check_values(
+    mechanism: str, include: Collection[str], points: int, loc: str, loaded: bool
+) -> None:
+    curves = len(fields(Curves)) - 2 + loaded  # the pins aside, the torque with a load
     pins = len({pin for d in get(mechanism).drawing for pin in d[1:]}) if "pins" in include else 0
     per = curves + 2 * pins
     if points * per > MAX_CURVE_VALUES:
@@ -372,13 +400,14 @@ def check(
     crank_angles_deg: Sequence[float] | None = None,
     samples: int | None = None,
     include: Collection[str] = (),
+    load: Load | None = None,
     **_: Any,
 ) -> None:
     """What ``analyze`` checks before it analyses: the design's validity, and the arguments'
     meaning (``curve_angles``, and ``include`` with them). Takes (and ignores) ``analyze``'s
     other arguments."""
     get(mechanism).complete(params)
-    _asked(mechanism, include, crank_angles_deg, samples)
+    _asked(mechanism, include, crank_angles_deg, samples, load is not None)
 
 
 def curve_angles(

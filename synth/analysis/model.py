@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 import numpy.typing as npt
 
-from ..mechanisms import Mechanism, all_types, get, rod
+from ..mechanisms import Mechanism, all_types, get, kinetics, rod
 from ..mechanisms.fourbar.construction import construction
 from ..numerics.native import Mapped, Slot
 
@@ -187,6 +187,51 @@ class Polisher:
         return slot.out.T.copy()
 
 
+class Forces:
+    """A variant's Newton–Euler equations A z = b (``kinetics.system``) at a vector of crank
+    angles, for a load given after the type's parameters (``kinetics.LOAD``), solved with
+    their first two θ-derivatives: A z′ = b′ − A′ z, A z″ = b″ − 2 A′ z′ − A″ z."""
+
+    def __init__(self, m: Mechanism, variant: frozenset[str]) -> None:
+        th = ca.SX.sym("theta")
+        pv = ca.SX.sym("p", len(m.parameters) + len(kinetics.LOAD))
+        p = {q.name: (0.0 if q.name in variant else pv[i]) for i, q in enumerate(m.parameters)}
+        w = {k: pv[len(m.parameters) + i] for i, k in enumerate(kinetics.LOAD)}
+        a, b, self.layout = kinetics.system(m, variant, p, th, w)
+        g = ca.vertcat(ca.vec(a), b)
+        g1 = ca.jacobian(g, th)
+        name = "_".join((m.type, *sorted(variant), "loads"))
+        self.fn = _Batched(name, th, pv, ca.vertcat(g, g1, ca.jacobian(g1, th)))
+        self.n = self.layout.size
+
+    def __call__(self, theta: np.ndarray, pv: np.ndarray, order: int = 2) -> np.ndarray:
+        """z and its derivatives up to ``order`` (at most 2) at each θ: shape
+        (order + 1, len(θ), unknowns)."""
+        n, k = self.n, len(theta)
+        if k == 0:
+            return np.empty((order + 1, 0, n))
+        # GRID angles a call: through the compiled slots, not CasADi's conversions
+        out = np.hstack([self.fn(theta[i : i + GRID], pv) for i in range(0, k, GRID)])
+        out = out.reshape(3, n * n + n, k)[: order + 1]
+        a = out[:, : n * n].reshape(order + 1, n, n, k).transpose(0, 3, 2, 1)  # vec: by columns
+        b = out[:, n * n :].transpose(0, 2, 1)[..., None]
+        z = [np.linalg.solve(a[0], b[0])]
+        if order > 0:
+            z.append(np.linalg.solve(a[0], b[1] - a[1] @ z[0]))
+        if order > 1:
+            z.append(np.linalg.solve(a[0], b[2] - 2 * a[1] @ z[1] - a[2] @ z[0]))
+        return np.stack(z)[..., 0]
+
+
+def forces(m: Mechanism, variant: frozenset[str]) -> Forces:
+    """The variant's ``Forces``, once per thread (CasADi functions are not shared)."""
+    cache: dict[tuple[str, frozenset[str]], Forces] = _local.__dict__.setdefault("forces", {})
+    key = (m.type, variant)
+    if key not in cache:
+        cache[key] = Forces(m, variant)
+    return cache[key]
+
+
 def model(m: Mechanism, variant: frozenset[str], kind: str = "kinematics") -> Model:
     """The compiled model, cached per thread: CasADi functions are never shared by threads."""
     cache: dict[tuple[str, frozenset[str], str], Model] = _local.__dict__.setdefault("models", {})
@@ -205,8 +250,10 @@ def compile_all() -> None:
         for k in range(len(optional) + 1):
             for parts, kind in itertools.product(itertools.combinations(optional, k), KINDS):
                 f = Model(m, frozenset(parts), kind)
-                fns = (f.fn.fn, f._dp.fn, f.polish.fn, f.dead.fn if f.dead else None,
-                       f.dead_polish.fn if f.dead_polish else None)  # fmt: skip
+                fns = [f.fn.fn, f._dp.fn, f.polish.fn, f.dead.fn if f.dead else None,
+                       f.dead_polish.fn if f.dead_polish else None]  # fmt: skip
+                if m.frame is not None and kind == KINDS[0]:  # the loads', once a variant
+                    fns.append(Forces(m, frozenset(parts)).fn.fn)
                 for fn in fns:
                     if fn is not None and fn.class_name() != "External":
                         raise RuntimeError(

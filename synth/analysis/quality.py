@@ -69,6 +69,21 @@ class Strokes:
         self.stroke = s_max - s_min
 
 
+def reached(f: Model, pv: np.ndarray, st: Strokes, fractions: np.ndarray) -> np.ndarray:
+    """The crank angles (radians, from ``st.start`` on) where the working stroke has run each
+    of ``fractions`` (0 < each < 1) of its travel: roots of s − level, bracketed by the
+    stroke's dead centres, where s is monotonic."""
+
+    def fd(t: np.ndarray) -> np.ndarray:
+        g, g1, _ = f(t, pv)
+        return np.array([g[0] - levels, g1[0]])
+
+    levels = st.s0 + fractions * (st.s1 - st.s0)
+    k = fractions.size
+    lo, hi = np.full(k, st.start), np.full(k, st.start + st.working)
+    return _rtsafe(fd, lo, hi, st.s0 - levels, st.s1 - levels, np.full(k, abs(st.stroke)))
+
+
 def _inside(x: np.ndarray, start: float, length: float) -> np.ndarray:
     """Which angles x lie in the crank interval [start, start + length) (radians)."""
     return (x - start) % TWO_PI < length
@@ -105,14 +120,7 @@ def motion_terms(
     rows, x, values = stationary_points(fm, pv)
     v_at, a_at = x[rows == 0], x[rows == 1]  # where |s′| and |s″| may peak
 
-    # s − level and s′, for the ends of the middle of the working stroke
-    def fd(t: np.ndarray) -> np.ndarray:
-        g, g1, _ = f(t, pv)
-        return np.array([g[0] - levels, g1[0]])
-
-    levels = st.s0 + np.array([CUT, 1 - CUT]) * (st.s1 - st.s0)
-    lo, hi = np.full(2, st.start), np.full(2, st.start + st.working)
-    ends = _rtsafe(fd, lo, hi, st.s0 - levels, st.s1 - levels, np.full(2, abs(st.stroke)))
+    ends = reached(f, pv, st, np.array([CUT, 1 - CUT]))  # the middle of the working stroke
     middle = ends[1] - ends[0]
     dead = np.array([st.start, st.start + st.working])  # the working stroke's dead centres
     v_in, a_work, a_ret = (

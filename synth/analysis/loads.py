@@ -1,0 +1,209 @@
+"""The loads a design carries at constant crank speed: the crank torque, its power and the
+flywheel that evens it out, and the forces at the joints and the ram's guide.
+
+The forces at a crank angle solve the design's Newton–Euler equations A z = b
+(``synth.mechanisms.kinetics``); their derivatives in the crank angle solve the same system
+differentiated, A z′ = b′ − A′ z and A z″ = b″ − 2 A′ z′ − A″ z, with A′, A″, b′, b″ by
+automatic differentiation. The cutting force switches on and off where the working stroke
+enters and leaves the cutting zone (``quality.reached``), so the turn is two pieces, each
+smooth:
+
+- extremes: the stationary points of each quantity on each piece (bracketed on a grid,
+  polished by the safeguarded Newton iteration that finds the dead centres, ``roots``), and
+  the pieces' ends;
+- the mean and the root mean square: Gauss–Legendre quadrature on each piece;
+- the flywheel: the crank's energy E(θ) = ∫ (T − T_mean) dθ is extreme where T crosses its
+  mean (roots, polished alike) or jumps across it at a piece's end; its largest swing ΔE
+  over a turn gives the inertia I = ΔE / (Cs ω²).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import cast
+
+import numpy as np
+
+from ..mechanisms import Mechanism
+from ..results import Flywheel, Force, Load, Loads, Power, Torque
+from .model import GRID, Forces, Model, forces
+from .quality import Strokes, reached
+from .roots import TWO_PI, _rtsafe
+
+PANEL = math.pi / 64  # the widest panel of the quadrature (π/16: 1e-7 off on a sharp Whitworth)
+NODES, WEIGHTS = np.polynomial.legendre.leggauss(16)  # per panel
+
+
+# a quantity of z, z′, z″ (rows: angles): its value and first two derivatives at each angle
+Quantity = Callable[[np.ndarray], np.ndarray]
+
+
+def _torque(z: np.ndarray) -> np.ndarray:
+    return z[:, :, 0]
+
+
+def _magnitude(cols: list[int]) -> Quantity:
+    """|z[cols]| (a pin's force, a block's push, the guide's), with its derivatives."""
+
+    def q(z: np.ndarray) -> np.ndarray:
+        v, v1, v2 = z[:, :, cols]
+        mag = np.sqrt((v * v).sum(axis=1))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d1 = (v * v1).sum(axis=1) / mag
+            d2 = ((v1 * v1).sum(axis=1) + (v * v2).sum(axis=1) - d1 * d1) / mag
+        return np.array([mag, d1, d2])
+
+    return q
+
+
+class Piece:
+    """A span of the turn [lo, hi] (radians) where the load is one (``pv``), smooth, and its
+    quantities on a grid (``GRID`` cells a turn, at least 8)."""
+
+    def __init__(self, sys: Forces, lo: float, hi: float, pv: np.ndarray) -> None:
+        self.sys, self.lo, self.hi, self.pv = sys, lo, hi, pv
+        self.grid = np.linspace(lo, hi, max(8, math.ceil(GRID * (hi - lo) / TWO_PI)) + 1)
+        self.z = sys(self.grid, pv)
+        self._integrals: tuple[np.ndarray, np.ndarray] | None = None
+
+    def roots(self, fs: list[Quantity], k: int, falling: int = 0) -> list[np.ndarray]:
+        """Each quantity's roots of its row k (0: value, 1: derivative) in the piece: sign
+        changes on the grid, polished together (``roots._rtsafe`` on rows k and k + 1); only
+        the falling ones for the first ``falling`` quantities (their derivative's: maxima)."""
+        which, lo, hi, f_lo, f_hi, scale = [], [], [], [], [], []
+        for i, f in enumerate(fs):
+            g = f(self.z)[k]
+            down = (g[:-1] > 0) & (g[1:] < 0)
+            c = np.nonzero(down if i < falling else down | (g[:-1] < 0) & (g[1:] > 0))[0]
+            which.append(np.full(c.size, i))
+            lo.append(self.grid[c])
+            hi.append(self.grid[c + 1])
+            f_lo.append(g[c])
+            f_hi.append(g[c + 1])
+            scale.append(np.full(c.size, np.max(np.abs(g[np.isfinite(g)]), initial=0.0)))
+        w = np.concatenate(which)
+
+        def fd(x: np.ndarray) -> np.ndarray:
+            z = self.sys(x, self.pv)
+            out = np.empty((2, x.size))
+            for i, f in enumerate(fs):
+                mine = w == i
+                if mine.any():
+                    out[:, mine] = f(z[:, mine])[k : k + 2]
+            return out
+
+        cat = [np.concatenate(c) for c in (lo, hi, f_lo, f_hi, scale)]
+        x = _rtsafe(fd, *cat)
+        return [x[w == i] for i in range(len(fs))]
+
+    def integrals(self) -> tuple[np.ndarray, np.ndarray]:
+        """The panels' edges (each at most ``PANEL`` wide) and ∫ T dθ and ∫ T² dθ over each:
+        Gauss–Legendre, in one evaluation; once per piece."""
+        if self._integrals is None:
+            edges = np.linspace(self.lo, self.hi, math.ceil((self.hi - self.lo) / PANEL) + 1)
+            self._integrals = edges, _gauss(self, edges[:-1], edges[1:], 2)
+        return self._integrals
+
+    def at(self, x: np.ndarray, f: Quantity) -> np.ndarray:
+        return cast(np.ndarray, f(self.sys(x, self.pv))[0])
+
+
+def _gauss(piece: Piece, lo: np.ndarray, hi: np.ndarray, powers: int) -> np.ndarray:
+    """∫ T^k dθ over each [lo, hi] (16-point Gauss–Legendre), for k = 1 … powers: shape
+    (powers, spans)."""
+    mid, half = (lo + hi) / 2, (hi - lo) / 2
+    x = (mid[:, None] + half[:, None] * NODES[None, :]).ravel()
+    t = piece.sys(x, piece.pv, order=0)[0, :, 0].reshape(lo.size, NODES.size)
+    return np.array([(t**k @ WEIGHTS) * half for k in range(1, powers + 1)])
+
+
+def _extremes(
+    pieces: list[Piece], fs: list[Quantity], largest: int
+) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Where each quantity may be extreme (radians) and its values there: its stationary
+    points on each piece (only its maxima for the first ``largest``) and the pieces' ends
+    (the value from each side)."""
+    xs: list[list[np.ndarray]] = [[] for _ in fs]
+    vs: list[list[np.ndarray]] = [[] for _ in fs]
+    for piece in pieces:
+        found = piece.roots(fs, 1, largest)
+        for i, f in enumerate(fs):
+            x = np.concatenate([found[i], [piece.lo, piece.hi]])
+            xs[i].append(x)
+            vs[i].append(piece.at(x, f))
+    return [(np.concatenate(x), np.concatenate(v)) for x, v in zip(xs, vs, strict=True)]
+
+
+def loads(
+    m: Mechanism,
+    variant: frozenset[str],
+    f: Model,
+    pv: np.ndarray,
+    st: Strokes,
+    load: Load,
+) -> tuple[Loads, Callable[[np.ndarray], np.ndarray]]:
+    """The loads of a design (``pv``: its parameters; ``st``: its strokes) under ``load``, and
+    its torque as a function of crank angles (radians), for curves."""
+    sys = forces(m, variant)
+    a, b = load.cutting_zone
+    ends = (st.start, st.start + st.working)
+    inner = [x for x in (a, b) if 0 < x < 1]
+    found = iter(reached(f, pv, st, np.array(inner)).tolist() if inner else [])
+    lo, hi = (ends[0] if x == 0 else ends[1] if x == 1 else next(found) for x in (a, b))
+    # the cutting force resists the ram: against its travel in the working stroke
+    push = -load.cutting_force * math.copysign(1.0, st.s1 - st.s0)
+    common = [load.metres, load.omega, load.slider_mass, load.link_mass_per_length]
+    cut, idle = (np.concatenate([pv, common, [x]]) for x in (push, 0.0))
+    pieces = [Piece(sys, lo, hi, cut), Piece(sys, hi, lo + TWO_PI, idle)]
+
+    lay = sys.layout
+    pushes = [_magnitude([lay.pin(j), lay.pin(j) + 1]) for j in range(len(lay.pins))]
+    pushes += [_magnitude([lay.slot(j)]) for j in range(len(lay.slots))]
+    pushes.append(_magnitude([lay.size - 1]))
+    *found_all, (x, v) = _extremes(pieces, [*pushes, _torque], len(pushes))  # forces: maxima
+    total, squares = np.sum([piece.integrals()[1].sum(axis=1) for piece in pieces], axis=0)
+    mean = float(total / TWO_PI)
+    k_hi, k_lo = int(np.argmax(v)), int(np.argmin(v))
+    t = Torque(float(v[k_hi]), _deg(x[k_hi]), float(v[k_lo]), _deg(x[k_lo]), mean,
+               math.sqrt(squares / TWO_PI))  # fmt: skip
+    energy = _energy(pieces, mean)
+    om = load.omega
+    power = Power(mean * om, t.max * om, mean * om / load.efficiency)
+    flywheel = Flywheel(energy, energy / (load.speed_fluctuation * om**2))
+    largest = [Force(float(v.max()), _deg(x[int(np.argmax(v))])) for x, v in found_all]
+    joints = dict(zip((*lay.pins, *lay.slots), largest[:-1], strict=True))
+
+    def torque(theta: np.ndarray) -> np.ndarray:
+        inside = (theta - lo) % TWO_PI <= hi - lo
+        out = np.empty(theta.size)
+        for mask, piece in ((inside, pieces[0]), (~inside, pieces[1])):
+            if mask.any():
+                out[mask] = piece.at(theta[mask], _torque)
+        return out
+
+    return Loads(t, power, flywheel, joints, largest[-1]), torque
+
+
+def _energy(pieces: list[Piece], mean: float) -> float:
+    """The largest swing of E(θ) = ∫ (T − mean) dθ over a turn (J): its extremes lie where T
+    crosses its mean, or steps across it at a piece's end. E at the panels' edges from the
+    pieces' integrals, and on from an edge to each crossing by a short quadrature."""
+
+    def excess(z: np.ndarray) -> np.ndarray:
+        return cast(np.ndarray, _torque(z) - np.array([mean, 0.0, 0.0])[:, None])
+
+    values, start = [0.0], 0.0
+    for piece in pieces:
+        edges, sums = piece.integrals()
+        at_edges = start + np.concatenate([[0.0], np.cumsum(sums[0] - mean * np.diff(edges))])
+        (crossings,) = piece.roots([excess], 0)
+        k = np.clip(np.searchsorted(edges, crossings) - 1, 0, edges.size - 2)
+        partial = _gauss(piece, edges[k], crossings, 1)[0] - mean * (crossings - edges[k])
+        values += [*(at_edges[k] + partial), at_edges[-1]]
+        start = at_edges[-1]
+    return float(max(values) - min(values))
+
+
+def _deg(x: float) -> float:
+    return float(np.degrees(x % TWO_PI))

@@ -1,0 +1,269 @@
+"""The loads (synth.analysis.loads) against independent computations.
+
+- Virtual work, links massless: the crank's power is the ram's, T = (m s″ ω² + F [cutting])
+  |s′| in SI, with s′ by complex step and s″ by a Cauchy integral on tests/support's own
+  geometry, the working stroke and the cutting zone by its brute force. 1e-9 of the turn's
+  largest |T|.
+- With link masses, the Newton–Euler torque against the energy balance T = dKE/dθ + F |s′|
+  [cutting], the kinetic energy of the drawn members (uniform slender rods) and the ram from
+  the pins' positions, differentiated by central differences (fourth order, two steps
+  Richardson-combined). 1e-8.
+- The flywheel's energy swing against Simpson's rule on 200 000 points a turn, on each
+  smooth piece of the torque curve (the zone's ends from the brute force). 1e-7.
+- Units: one design in m, mm and in gives the same SI numbers. 1e-12.
+- The torque's extremes are never below dense sampling, and the mean equals the work a turn
+  over 2π (the cut's work, F × its travel).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import cumulative_simpson, simpson
+from scipy.optimize import brentq
+
+import synth
+from synth.errors import InvalidParameters
+from synth.mechanisms import get
+from synth.results import Load
+
+from ..support import bruteforce
+from ..support.designs import TYPES, random_designs
+from ..support.motion_bruteforce import acceleration, velocity
+
+N = 200  # designs per type for the identities
+RPM = 45.0
+OMEGA = 2 * math.pi * RPM / 60
+FIXED = ("O2", "O4")  # pivots on the frame: a member between them is the ground
+
+
+def _strokes(mtype, p, zone):
+    """The working stroke's start and length and the cutting zone's crank angles (radians),
+    by the brute force."""
+    b = bruteforce.simulate(mtype, p, n=4000)
+    work = b["working_angle"]
+    start = b["theta_min"] if b["working_direction"] == 1 else b["theta_max"]
+    s0, s1 = (b["s_min"], b["s_max"]) if b["working_direction"] == 1 else (b["s_max"], b["s_min"])
+
+    def at(x):
+        if x in (0.0, 1.0):
+            return start + x * work
+        level = s0 + x * (s1 - s0)
+        return brentq(lambda t: bruteforce.position(mtype, p, np.array([t]))[0] - level,
+                      start, start + work, xtol=1e-15, rtol=1e-15)  # fmt: skip
+
+    return start, work, at(zone[0]), at(zone[1])
+
+
+def _cutting(theta, lo, hi, margin):
+    """Whether each angle is in the cutting zone [lo, hi], and whether it is more than
+    ``margin`` from the zone's ends (where the force steps)."""
+    d = (theta - lo) % (2 * math.pi)
+    span = hi - lo
+    clear = (np.abs(d - span) > margin) & (d > margin) & (2 * math.pi - d > margin)
+    return d <= span, clear
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_the_torque_does_the_rams_work(mtype):
+    rng = np.random.default_rng(TYPES.index(mtype))
+    for p in random_designs(mtype, N, seed=21):
+        a = float(rng.uniform(0.0, 0.45))
+        zone = (a, float(rng.uniform(a + 0.05, 1.0)))
+        unit = str(rng.choice(["m", "mm", "in"]))
+        load = Load(unit, RPM, cutting_force=float(rng.uniform(0, 5000)), cutting_zone=zone,
+                    slider_mass=float(rng.uniform(0, 200)))  # fmt: skip
+        theta = rng.uniform(0, 2 * math.pi, 48)
+        got = synth.analyze(mtype, p, crank_angles_deg=np.degrees(theta), load=load)
+        k = load.metres
+        _, _, lo, hi = _strokes(mtype, p, zone)
+        inside, clear = _cutting(theta, lo, hi, margin=1e-9)
+        s1, s2 = velocity(mtype, p, theta) * k, acceleration(mtype, p, theta) * k
+        expected = load.slider_mass * OMEGA**2 * s2 * s1 + load.cutting_force * np.abs(s1) * inside
+        scale = max(np.abs(expected).max(), abs(got.loads.torque.max), abs(got.loads.torque.min))
+        err = np.abs(got.curves.torque - expected)[clear].max(initial=0.0)
+        assert err <= 1e-9 * scale, (p, zone, err / scale)
+
+
+def _kinetic_energy(mtype, p, theta, load, h):
+    """KE(θ) (J) of the drawn members (uniform slender rods) and the ram, the members'
+    velocities by fourth-order central differences (step h) of the pins' positions, the ram's
+    by complex step."""
+    m = get(mtype)
+    k = load.metres
+    offsets = np.array([-2, -1, 1, 2]) * h
+    weights = np.array([1, -8, 8, -1]) / (12 * h)
+    at = (theta[:, None] + offsets[None, :]).ravel()
+    pins = synth.joints(mtype, p, np.degrees(at))
+    pins = {q: xy.reshape(theta.size, 4, 2) * k for q, xy in pins.items()}
+
+    def rate(x):  # d/dθ × ω of each angle's four offsets
+        return (x * weights[None, :, None]).sum(axis=1) * OMEGA
+
+    full = m.complete(p)
+    ke = np.zeros(theta.size)
+    for name, a, b in m.drawing:
+        if {a, b} <= set(FIXED) or full[name] == 0:
+            continue
+        length = full[name] * k
+        mass = load.link_mass_per_length * length
+        va, vb = rate(pins[a]), rate(pins[b])
+        vg = (va + vb) / 2
+        rel = pins[b] - pins[a]
+        angle = np.unwrap(np.arctan2(rel[..., 1], rel[..., 0]), axis=1)
+        spin = (angle * weights[None, :]).sum(axis=1) * OMEGA
+        ke += 0.5 * mass * (vg**2).sum(axis=1) + 0.5 * mass * length**2 / 12 * spin**2
+    ram = velocity(mtype, p, theta) * k * OMEGA
+    return ke + 0.5 * load.slider_mass * ram**2
+
+
+def _energy_rate(mtype, p, theta, load, h):
+    """dKE/dθ by central differences of ``_kinetic_energy``, steps h and h/2 combined
+    (Richardson: the h⁴ error terms cancel)."""
+
+    def at(h):
+        offsets = np.array([-2, -1, 1, 2]) * h
+        weights = np.array([1, -8, 8, -1]) / (12 * h)
+        ke = _kinetic_energy(mtype, p, (theta[:, None] + offsets).ravel(), load, h)
+        return (ke.reshape(theta.size, 4) * weights).sum(axis=1)
+
+    return (16 * at(h / 2) - at(h)) / 15
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_newton_euler_keeps_the_energy_balance(mtype):
+    rng = np.random.default_rng(100 + TYPES.index(mtype))
+    h = 2e-3  # with h/2: ~1e-11 on the sharpest Whitworth; rounding grows below (as 1/h²)
+    for p in random_designs(mtype, 40, seed=22):
+        load = Load("mm", RPM, cutting_force=float(rng.uniform(0, 5000)), cutting_zone=(0.0, 1.0),
+                    slider_mass=float(rng.uniform(0, 200)),
+                    link_mass_per_length=float(rng.uniform(0.1, 50)))  # fmt: skip
+        theta = rng.uniform(0, 2 * math.pi, 16)
+        got = synth.analyze(mtype, p, crank_angles_deg=np.degrees(theta), load=load)
+        _, _, lo, hi = _strokes(mtype, p, (0.0, 1.0))
+        inside, clear = _cutting(theta, lo, hi, margin=1e-9)
+        s1 = velocity(mtype, p, theta) * load.metres
+        expected = _energy_rate(mtype, p, theta, load, h) + load.cutting_force * np.abs(s1) * inside
+        scale = max(abs(got.loads.torque.max), abs(got.loads.torque.min))
+        err = np.abs(got.curves.torque - expected)[clear].max(initial=0.0)
+        assert err <= 1e-8 * scale, (p, err / scale)
+
+
+def _dense_swing(mtype, p, load, n=200_000):
+    """The largest swing of ∫ (T − mean) dθ on n points a turn, by Simpson's rule on each
+    smooth piece of the torque curve (the cutting zone and the rest, split at the zone's ends,
+    where the force steps), and the mean."""
+    _, _, lo, hi = _strokes(mtype, p, load.cutting_zone)
+    pieces = []
+    for a, b in ((lo, hi), (hi, lo + 2 * math.pi)):
+        t = np.linspace(a, b, 2 * max(1, round(n * (b - a) / (4 * math.pi))) + 1)
+        inner = np.degrees(np.clip(t, a + 1e-12, b - 1e-12))  # each end as its piece has it
+        y = np.concatenate([synth.analyze(mtype, p, crank_angles_deg=inner[i : i + 50_000],
+                                          load=load).curves.torque
+                            for i in range(0, inner.size, 50_000)])  # fmt: skip
+        pieces.append((t, y))
+    mean = sum(simpson(y, x=t) for t, y in pieces) / (2 * math.pi)
+    e = [np.zeros(1)]
+    for t, y in pieces:
+        e.append(e[-1][-1] + cumulative_simpson(y - mean, x=t))
+    e = np.concatenate(e)
+    return e.max() - e.min(), mean
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_the_flywheel_matches_a_dense_integration(mtype):
+    rng = np.random.default_rng(200 + TYPES.index(mtype))
+    for p in random_designs(mtype, 3, seed=23):
+        for zone in ((0.1, 0.9), (0.0, 1.0)):
+            load = Load("mm", RPM, cutting_force=float(rng.uniform(100, 5000)), cutting_zone=zone,
+                        slider_mass=float(rng.uniform(0, 200)),
+                        link_mass_per_length=float(rng.uniform(0, 20)))  # fmt: skip
+            got = synth.analyze(mtype, p, load=load).loads
+            swing, mean = _dense_swing(mtype, p, load)
+            assert got.flywheel.energy == pytest.approx(swing, rel=1e-7), (p, zone)
+            assert got.torque.mean == pytest.approx(mean, rel=1e-7, abs=1e-9 * got.torque.rms)
+            om = load.omega
+            assert got.flywheel.inertia == pytest.approx(swing / (0.05 * om**2), rel=1e-7)
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_the_mean_torque_is_the_cuts_work(mtype):
+    for p in random_designs(mtype, 20, seed=24):
+        load = Load("mm", RPM, cutting_force=1500.0, cutting_zone=(0.2, 0.7), slider_mass=80.0,
+                    link_mass_per_length=5.0)  # fmt: skip
+        a = synth.analyze(mtype, p, load=load)
+        work = 1500.0 * 0.5 * a.stroke * 1e-3  # J a turn: the inertia's work is 0 over a turn
+        assert a.loads.torque.mean == pytest.approx(work / (2 * math.pi), rel=1e-10)
+        assert a.loads.power.mean == pytest.approx(work * RPM / 60, rel=1e-10)
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_the_extremes_are_never_below_sampling(mtype):
+    for p in random_designs(mtype, 10, seed=25):
+        load = Load("m", RPM, cutting_force=3000.0, slider_mass=60.0, link_mass_per_length=8.0)
+        a = synth.analyze(mtype, p, samples=20_000, load=load)
+        t, sampled = a.loads.torque, a.curves.torque
+        scale = max(abs(t.max), abs(t.min))
+        assert t.max >= sampled.max() - 1e-12 * scale
+        assert t.min <= sampled.min() + 1e-12 * scale
+        assert t.max - sampled.max() <= 1e-3 * scale  # the grid's points are near
+        # where the analysis says each extreme is, the curve has it (from one side, at a
+        # cutting zone's end, where the force steps)
+        for value, deg in ((t.max, t.max_at_deg), (t.min, t.min_at_deg)):
+            near = deg + np.array([-1e-9, 0.0, 1e-9])
+            curve = synth.analyze(mtype, p, crank_angles_deg=near, load=load).curves.torque
+            assert np.abs(curve - value).min() <= 1e-7 * scale
+        assert t.rms >= abs(t.mean)
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_units_give_the_same_si_numbers(mtype):
+    for p in random_designs(mtype, 5, seed=26):
+        out = []
+        for unit, per_metre in (("m", 1.0), ("mm", 1000.0), ("in", 1 / 0.0254)):
+            load = Load(unit, RPM, cutting_force=2000.0, slider_mass=50.0,
+                        link_mass_per_length=10.0)  # fmt: skip
+            q = {k: v * per_metre for k, v in p.items()}
+            out.append(synth.analyze(mtype, q, load=load).loads)
+        first = out[0]
+        # each number to 1e-12 of its kind's scale: the mean is a small difference of large
+        # inertia torques where the links are large and heavy
+        torque = max(abs(first.torque.max), abs(first.torque.min))
+        scales = {"torque": torque, "power": torque * OMEGA, "flywheel": torque * 2 * math.pi}
+        for other in out[1:]:
+            for kind, scale in scales.items():
+                a, b = getattr(first, kind), getattr(other, kind)
+                for k, v in vars(a).items():
+                    if k.endswith("_deg"):
+                        assert getattr(b, k) == pytest.approx(v, abs=1e-7), k
+                    else:
+                        size = scale / (0.05 * OMEGA**2) if k == "inertia" else scale
+                        assert getattr(b, k) == pytest.approx(v, abs=1e-12 * size), (kind, k)
+            for pin, f in first.joints.items():
+                assert other.joints[pin].max == pytest.approx(f.max, rel=1e-12)
+            assert other.guide.max == pytest.approx(first.guide.max, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("change", "field", "words"),
+    [
+        ({"length_unit": "ft"}, "length_unit", "one of m, mm, in"),
+        ({"crank_rpm": 0.0}, "crank_rpm", "> 0"),
+        ({"crank_rpm": math.inf}, "crank_rpm", "finite"),
+        ({"cutting_force": -1.0}, "cutting_force", "≥ 0"),
+        ({"slider_mass": math.nan}, "slider_mass", "finite"),
+        ({"link_mass_per_length": -2.0}, "link_mass_per_length", "≥ 0"),
+        ({"cutting_zone": (0.9, 0.1)}, "cutting_zone", "start < end"),
+        ({"cutting_zone": (-0.1, 0.5)}, "cutting_zone", "0 ≤ start"),
+        ({"cutting_zone": (0.1, 1.5)}, "cutting_zone", "end ≤ 1"),
+        ({"speed_fluctuation": 0.0}, "speed_fluctuation", "> 0"),
+        ({"efficiency": 1.2}, "efficiency", "(0, 1]"),
+    ],
+)
+def test_a_bad_load_names_its_field(change, field, words):
+    with pytest.raises(InvalidParameters) as e:
+        Load(**{"length_unit": "mm", "crank_rpm": 40.0, **change})
+    assert e.value.loc == ("load", field)
+    assert words in str(e.value)
