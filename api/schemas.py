@@ -18,6 +18,7 @@ from pydantic import (
     ConfigDict,
     Field,
     create_model,
+    field_validator,
     model_validator,
 )
 
@@ -221,6 +222,42 @@ class Extras(Strict):
     )
 
 
+class LoadSpec(Strict):
+    """What the design drives at constant crank speed: adds ``loads`` (the crank torque, power
+    and flywheel, the joints' and the guide's largest forces) and, with curves, the torque
+    curve. Forces and masses are SI; the design's lengths are in ``length_unit``."""
+
+    length_unit: Literal[tuple(results.LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
+        ..., description="the unit of the design's lengths (forces and masses are SI)"
+    )
+    crank_rpm: float = Field(..., gt=0.0, le=1e6, description="the crank's constant speed")
+    cutting_force: float = Field(
+        0.0, ge=0.0, le=1e12, description="N, resisting the ram through the cutting zone"
+    )
+    cutting_zone: Annotated[
+        list[Annotated[float, Field(ge=0.0, le=1.0)]], Field(min_length=2, max_length=2)
+    ] = Field(
+        [0.1, 0.9],
+        description="[start, end]: the fractions of the working stroke (by position) where "
+        "the tool cuts, 0 ≤ start < end ≤ 1",
+    )
+    slider_mass: float = Field(0.0, ge=0.0, le=1e12, description="kg: the ram and its tool")
+    link_mass_per_length: float = Field(
+        0.0, ge=0.0, le=1e12, description="kg/m: each drawn link a uniform slender rod (0: none)"
+    )
+    speed_fluctuation: float = Field(
+        0.05, gt=0.0, le=1.0, description="Cs = (ω_max − ω_min)/ω the flywheel keeps the crank to"
+    )
+    efficiency: float = Field(1.0, gt=0.0, le=1.0, description="the drive's, motor to crank")
+
+    @field_validator("cutting_zone")
+    @classmethod
+    def _zone(cls, zone: list[float]) -> list[float]:
+        if not zone[0] < zone[1]:
+            raise ValueError(f"start {zone[0]:g} must be less than end {zone[1]:g}")
+        return zone
+
+
 class AnalyzeRequest(Extras):
     # an analysis also has its curves' pins (a candidate has no curves)
     include: list[Literal[ANALYSIS_INCLUDE]] = Field(  # type: ignore[valid-type]
@@ -229,7 +266,9 @@ class AnalyzeRequest(Extras):
         description=_include(ANALYSIS_INCLUDE),
     )
     mechanism: Design
-    crank_speed: float = Field(1.0, ge=-1e6, le=1e6, description="ω, rad/s")
+    crank_speed: float | None = Field(
+        None, ge=-1e6, le=1e6, description="ω, rad/s; omitted: 1, or a load's crank_rpm"
+    )
     crank_acceleration: float = Field(0.0, ge=-1e9, le=1e9, description="α, rad/s²")
     crank_angles_deg: list[Annotated[float, Field(ge=-1e6, le=1e6)]] | None = Field(
         None,
@@ -239,6 +278,9 @@ class AnalyzeRequest(Extras):
     )
     samples: int | None = Field(
         None, ge=1, le=MAX_CURVE_POINTS, description="curves at evenly spaced angles"
+    )
+    load: LoadSpec | None = Field(
+        None, description="what the design drives: adds loads (its crank_rpm is the curves' speed)"
     )
 
 
@@ -411,6 +453,9 @@ class Curves(BaseModel):
         "at the origin, x along the ground line), by name in the drawing's order, x and y at "
         "each crank_angle_deg",
     )
+    torque: list[float] | None = Field(
+        None, description="with a load: the crank torque (N·m) at each crank_angle_deg"
+    )
 
 
 # what an analysis answers only when asked, and a field's meaning where its name needs one
@@ -420,6 +465,7 @@ _ANALYSIS_NOTES = {
     "motion": "when include has motion",
     "sensitivities": "when include has sensitivities, or with a tolerance",
     "envelope": "when include has envelope",
+    "loads": "with a load",
 }
 
 

@@ -7,7 +7,7 @@ import pydantic_core
 from fastapi import APIRouter, Body, Request
 from fastapi.responses import Response
 
-from synth.results import Analysis, Curves
+from synth.results import Analysis, Curves, Load
 
 from ..examples import ANALYZE
 from ..json_route import Route
@@ -36,20 +36,23 @@ async def analyze(
     """Time ratio, stroke, dead centres, strokes and transmission angles of a design; curves at
     exactly ``crank_angles_deg`` or at ``samples`` evenly spaced angles, and only then; motion
     quality, sensitivities, the envelope and the curves' pins only when ``include`` names them
-    (or, for sensitivities, a ``tolerance`` is given)."""
+    (or, for sensitivities, a ``tolerance`` is given); the loads (crank torque, power,
+    flywheel, joint forces) only with a ``load``."""
     points = len(body.crank_angles_deg or ()) + (body.samples or 0)
+    load = Load(**body.load.model_dump()) if body.load else None
     a = await run_design(
         request,
         engine,
         "analyze",
         body.mechanism,
-        inline=points <= INLINE_CURVE_POINTS,
+        inline=points <= INLINE_CURVE_POINTS and load is None,  # loads: ~10–30 ms
         crank_speed=body.crank_speed,
         crank_acceleration=body.crank_acceleration,
         crank_angles_deg=body.crank_angles_deg,
         samples=body.samples,
         include=body.include,
         tolerance=tolerance(body),
+        load=load,
     )
     return Response(encoded(a), media_type="application/json")
 

@@ -284,6 +284,7 @@ SYNTH = {"time_ratio": 1.5, "stroke": 1.0}
 SPEC = {"type": "whitworth"}
 SWEEP = {"mechanism": design("crank_shaper", **SHAPER), "vary": "crank", "start": 10.0,
          "stop": 50.0}  # fmt: skip
+LOAD = {"length_unit": "mm", "crank_rpm": 40.0, "cutting_force": 2000.0, "slider_mass": 50.0}
 
 
 def with_(base, path, value):
@@ -321,6 +322,19 @@ BAD = [
     ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"relative": "nan"}), "relative"),
     ("/v1/analyze", with_(ANALYZE, ["include"], ["curvature"]), "include"),
     ("/v1/analyze", with_(ANALYZE, ["include"], ["pins"]), "include"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {"crank_rpm": 40.0}), "length_unit"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "length_unit": "ft"}), "length_unit"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "crank_rpm": 0.0}), "crank_rpm"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "cutting_force": -1.0}), "cutting_force"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "slider_mass": "NaN"}), "slider_mass"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "cutting_zone": [0.9, 0.1]}),
+     "cutting_zone"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "cutting_zone": [0.1, 1.5]}),
+     "cutting_zone"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "efficiency": 0.0}), "efficiency"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "colour": 1}), "colour"),
+    ("/v1/analyze", {**ANALYZE, "load": LOAD, "crank_speed": 2.0}, "crank_speed"),
+    ("/v1/analyze", {**ANALYZE, "load": LOAD, "crank_acceleration": 2.0}, "crank_acceleration"),
     ("/v1/synthesize", {**SYNTH, "time_ratio": 0.5}, "time_ratio"),
     ("/v1/synthesize", {**SYNTH, "time_ratio": "NaN"}, "time_ratio"),
     ("/v1/synthesize", {**SYNTH, "stroke": -1.0}, "stroke"),
@@ -371,11 +385,12 @@ def test_an_analysis_answers_every_field_synth_gives(client):
     params = {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0}
     everything = list(ANALYSIS_INCLUDE)
     body = {"mechanism": {"type": "whitworth", "params": params}, "samples": 4,
-            "include": everything, "tolerance": {"relative": 1e-3}}  # fmt: skip
+            "include": everything, "tolerance": {"relative": 1e-3}, "load": LOAD}  # fmt: skip
     r = client.post("/v1/analyze", json=body)
     assert r.status_code == 200, r.text
     want = synth.analyze("whitworth", params, samples=4, include=everything,
-                         tolerance=synth.Tolerance(relative=1e-3)).to_dict()  # fmt: skip
+                         tolerance=synth.Tolerance(relative=1e-3),
+                         load=synth.Load(**LOAD)).to_dict()  # fmt: skip
     assert set(want) == {f.name for f in dataclasses.fields(synth.Analysis)}
     assert r.json() == json.loads(json.dumps(want))
 
@@ -426,6 +441,7 @@ def test_a_synthesis_on_the_exact_solvers_alone_runs_without_a_solver_slot(clien
 @pytest.mark.parametrize("kwargs", [
     {}, {"samples": 7}, {"crank_angles_deg": [0.0, 33.3, 90.0], "include": ["pins"]},
     {"samples": 4, "include": list(ANALYSIS_INCLUDE), "tolerance": synth.Tolerance(relative=1e-3)},
+    {"samples": 5, "load": synth.Load("mm", 40.0, cutting_force=2000.0, slider_mass=50.0)},
 ])  # fmt: skip
 @pytest.mark.parametrize("mtype", DESIGNS)
 def test_an_analysis_is_encoded_as_its_model_encodes_it(mtype, kwargs):
