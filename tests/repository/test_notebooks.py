@@ -12,7 +12,7 @@ from nbclient import NotebookClient
 
 NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
 NAMES = ("crank_slotted_lever_lab", "scotch_yoke_shm", "drag_link_project", "textbook_examples",
-         "synthesis_tour", "benchmark", "atlas")  # fmt: skip
+         "synthesis_tour", "shaper_loads", "benchmark", "atlas")  # fmt: skip
 
 
 def test_the_notebooks_are_the_ones_named():
