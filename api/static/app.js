@@ -250,12 +250,30 @@ function designFieldId(prefix) {
   };
 }
 
+const LOAD_FIELDS = ["crank_rpm", "cutting_force", "slider_mass", "link_mass_per_length"];
+
+function loadOf() {
+  // the analysis view's load, while its box is open (else none)
+  if (!$("a-load").open) return null;
+  const load = { length_unit: $("a-load-length_unit").value,
+    cutting_zone: [num("a-load-cutting_zone"), num("a-load-cutting_zone-end")] };
+  for (const k of LOAD_FIELDS) load[k] = num(`a-load-${k}`);
+  return load;
+}
+
+function analysisFieldId(loc) {
+  const i = loc.indexOf("load");
+  if (i >= 0 && typeof loc[i + 1] === "string") return `a-load-${loc[i + 1]}`;
+  return designFieldId("a")(loc);
+}
+
 async function analyzeView() {
   const form = $("analyze-form");
   clearErrors(form);
   const d = designOf("a");
   saveState("analyze", { type: d.type, ...d.params });
-  await showDesign(d.type, d.params, 0, (detail) => showErrors(detail, designFieldId("a"), "a-form-error"));
+  await showDesign(d.type, d.params, 0, (detail) => showErrors(detail, analysisFieldId, "a-form-error"),
+    loadOf());
 }
 
 function setSweepRange() {
@@ -296,9 +314,10 @@ function pinsOf(curves) {
   return curves.pins || {};
 }
 
-async function showDesign(type, params, bound, onError) {
+async function showDesign(type, params, bound, onError, load = null) {
   const mine = ++shown;
-  const summary = await api("v1/analyze", { mechanism: { type, params } });
+  const loaded = load ? { load } : {};
+  const summary = await api("v1/analyze", { mechanism: { type, params }, ...loaded });
   if (mine !== shown) return;
   if (!summary.ok) {
     if (onError) onError(summary.data.detail);
@@ -309,10 +328,10 @@ async function showDesign(type, params, bound, onError) {
   const tmin = a.extremes.min.crank_angle_deg, tmax = a.extremes.max.crank_angle_deg;
   const angles = [...Array(FRAMES).keys()].map((k) => (k * 360) / FRAMES).concat([tmin, tmax]);
   const r = await api("v1/analyze", { mechanism: { type, params }, crank_angles_deg: angles,
-    include: TYPES[type].drawing.length ? ["pins"] : [] });
+    include: TYPES[type].drawing.length ? ["pins"] : [], ...loaded });
   if (mine !== shown) return;
   if (!r.ok) { if (onError) onError(r.data.detail); return; }
-  current = { type, params: a.params, analysis: a, curves: r.data.curves, bound };
+  current = { type, params: a.params, analysis: a, curves: r.data.curves, bound, load };
   $("detail").hidden = false;
   $("detail-title").textContent = `${TYPES[type].title}`;
   $("detail-summary").textContent = `time ratio ${fmt(a.time_ratio, 8)}, stroke ${fmt(a.stroke, 8)}, ` +
@@ -320,6 +339,7 @@ async function showDesign(type, params, bound, onError) {
     (a.conditioning.flags.length ? ` (${a.conditioning.flags.join(", ")})` : "");
   drawLinkage();
   curvePlots();
+  loadsView();
   setFrame(0);
   play(true);
   $("detail").dataset.shown = String(mine); // drawn: for tests and tools that wait on it
@@ -420,10 +440,32 @@ function curvePlots() {
   const dead = [a.extremes.min.crank_angle_deg, a.extremes.max.crank_angle_deg];
   const common = { xlabel: "crank angle (°)", vlines: dead, cursor: true, phases: true };
   plot($("plot-position"), th, [{ ys: c.position.slice(0, FRAMES), color: COLORS[0], label: "position" }], common);
-  plot($("plot-velocity"), th, [{ ys: c.velocity.slice(0, FRAMES), color: COLORS[0], label: "velocity (ω = 1)" }], common);
-  plot($("plot-acceleration"), th, [{ ys: c.acceleration.slice(0, FRAMES), color: COLORS[0], label: "acceleration (ω = 1)" }], common);
+  const speed = current.load ? `at ${current.load.crank_rpm} rpm, ${current.load.length_unit}/s` : "ω = 1";
+  plot($("plot-velocity"), th, [{ ys: c.velocity.slice(0, FRAMES), color: COLORS[0], label: `velocity (${speed})` }], common);
+  plot($("plot-acceleration"), th, [{ ys: c.acceleration.slice(0, FRAMES), color: COLORS[0], label: `acceleration (${speed}²)` }], common);
   plot($("plot-transmission"), th, [{ ys: c.transmission_deg.slice(0, FRAMES), color: COLORS[0], label: "transmission angle (°)" }],
     { ...common, hlines: current.bound > 0 ? [{ y: current.bound, label: `bound ${current.bound}°` }] : [] });
+}
+
+function loadsView() {
+  // with a load: its figures, and the torque over the turn against its mean, the areas between
+  // them shaded (above the mean the flywheel gives, below it takes)
+  const l = current.analysis.loads;
+  $("loads").hidden = !l;
+  if (!l) return;
+  const top = Object.entries(l.joints).reduce((a, b) => (b[1].max > a[1].max ? b : a));
+  $("loads-summary").textContent = `torque ${fmt(l.torque.min, 4)} … ${fmt(l.torque.max, 4)} N·m ` +
+    `(mean ${fmt(l.torque.mean, 4)}, rms ${fmt(l.torque.rms, 4)}); power mean ${fmt(l.power.mean, 4)} W, ` +
+    `peak ${fmt(l.power.peak, 4)} W, motor ${fmt(l.power.rated, 4)} W; flywheel: energy swing ` +
+    `${fmt(l.flywheel.energy, 4)} J, inertia ${fmt(l.flywheel.inertia, 4)} kg·m² on the crank shaft; ` +
+    `largest joint force ${fmt(top[1].max, 4)} N at ${top[0]}, guide ${fmt(l.guide.max, 4)} N.`;
+  const c = current.curves;
+  const th = c.crank_angle_deg.slice(0, FRAMES);
+  const torque = c.torque.slice(0, FRAMES);
+  const dead = [current.analysis.extremes.min.crank_angle_deg, current.analysis.extremes.max.crank_angle_deg];
+  plot($("plot-torque"), th, [{ ys: torque, color: COLORS[0], label: "crank torque (N·m)" }],
+    { xlabel: "crank angle (°)", vlines: dead, cursor: true, phases: true, fillTo: l.torque.mean,
+      hlines: [{ y: l.torque.mean, label: `mean ${fmt(l.torque.mean, 4)}` }] });
 }
 
 // A small line plot in an SVG: series against xs (a second scale on the right for `right`
@@ -457,6 +499,14 @@ function plot(svg, xs, series, opts = {}) {
     const xl = s.right ? W - R + 2 : 2;
     svg.append(el("text", { x: xl, y: T + 8 + 12 * (s.right ? 1 : 0) }, fmt(hi, 4)), el("text", { x: xl, y: H - B - 2 }, fmt(lo, 4)));
     svg.append(el("text", { x: L + 4 + 150 * i, y: 12, fill: s.color }, s.label));
+    if (opts.fillTo !== undefined) { // the areas between the series and a level, by sign
+      for (let k = 0; k + 1 < xs.length; k++) {
+        const y = (s.ys[k] + s.ys[k + 1]) / 2;
+        svg.append(el("rect", { class: y >= opts.fillTo ? "gives" : "takes", x: sx(xs[k]),
+          y: Math.min(sy(y), sy(opts.fillTo)), width: sx(xs[k + 1]) - sx(xs[k]),
+          height: Math.abs(sy(y) - sy(opts.fillTo)), fill: y >= opts.fillTo ? "#f6d5d5" : "#d5ecd9" }));
+      }
+    }
     const pts = [];
     s.ys.forEach((y, k) => { if (y !== null && Number.isFinite(y)) pts.push(`${sx(xs[k])},${sy(y)}`); });
     svg.append(el("polyline", { points: pts.join(" "), fill: "none", stroke: s.color, "stroke-width": 1.5, class: "series" }));

@@ -220,6 +220,28 @@ def test_analysis_and_sweep_views(page):
     assert pg.locator("#sweep-plot rect.valid").count() >= 1  # the valid interval, shaded
 
 
+def test_the_analysis_takes_a_load(page):
+    """A load opened in the analysis view brings the torque curve with its mean and energy
+    areas and the loads' figures; a bad load field is marked, and a closed box sends none."""
+    pg = page.page
+    pg.click("#tab-analyze")
+    pg.wait_for_selector("#a-param-coupler")
+    pg.click("#a-load summary")
+    pg.fill("#a-load-crank_rpm", "-5")
+    pg.click("#a-run")
+    pg.wait_for_selector("#a-load-crank_rpm-error:not(:empty)")
+    pg.fill("#a-load-crank_rpm", "40")
+    pg.select_option("#a-load-length_unit", "m")
+    pg.click("#a-run")
+    pg.wait_for_selector("#plot-torque polyline.series", state="attached")
+    assert pg.locator("#plot-torque rect.gives").count() and pg.locator("#plot-torque rect.takes").count()
+    summary = pg.inner_text("#loads-summary")
+    assert "N·m" in summary and "kg·m²" in summary and "at 40 rpm" in pg.inner_html("#plot-velocity")
+    pg.click("#a-load summary")  # closed: no load
+    pg.click("#a-run")
+    pg.wait_for_selector("#loads", state="hidden")
+
+
 def test_a_sweep_out_of_budget_says_where_it_ended(page):
     """The page sends no budget; the request is given a 50 ms one on its way (the real server
     answers it): the plot ends where the server stopped, and the page says so."""
