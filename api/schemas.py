@@ -337,6 +337,9 @@ class SynthesizeRequest(Extras):
         f"at most {MAX_CANDIDATES}, a front of one point taking one)",
     )
     time_budget_ms: float | None = BUDGET
+    load: LoadSpec | None = Field(
+        None, description="what the design drives: adds each candidate's loads"
+    )
 
 
 class SweepRequest(Strict):

@@ -370,6 +370,7 @@ class Candidate:
     envelope: Envelope | None = None
     front: FrontPoint | None = None  # objective pareto: its place on the front
     family: Family | None = None  # where the targets leave a family of equal designs
+    loads: Loads | None = None  # with a load: what it asks of the drive and the bearings
 
 
 @dataclass(frozen=True)

@@ -5,6 +5,7 @@ from typing import Annotated
 from fastapi import APIRouter, Body, Request
 
 from synth.errors import SynthError
+from synth.results import Load
 
 from ..examples import SYNTHESIZE
 from ..json_route import Route
@@ -58,5 +59,6 @@ async def synthesize(
         include=body.include,
         max_working_speed_fluctuation=body.max_working_speed_fluctuation,
         tolerance=tolerance(body),
+        load=Load(**body.load.model_dump()) if body.load else None,
     )
     return r

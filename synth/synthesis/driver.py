@@ -13,13 +13,13 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
-from ..analysis.kinematics import check_drawn, check_include
+from ..analysis.kinematics import analyze, check_drawn, check_include
 from ..errors import InvalidParameters
 from ..mechanisms import all_types, get
-from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
+from ..results import Candidate, Infeasible, Load, SynthesisResult, Tolerance
 from ..targets import MIN_SIZE, MOTION_OBJECTIVES, OBJECTIVES, PARETO
 from .candidate import candidate, predicted_rank, rank
 from .diagnose import diagnose
@@ -48,6 +48,7 @@ def synthesize(
     include: Collection[str] = (),
     tolerance: Tolerance | None = None,
     max_working_speed_fluctuation: float | None = None,
+    load: Load | None = None,
     solver: Solver = DEFAULT,
 ) -> SynthesisResult:
     """Every good design for the targets, verified and ranked (POST /v1/synthesize).
@@ -65,7 +66,8 @@ def synthesize(
     without a reduced solver would be, by cold multistart IPOPT on the formulation: the
     generic path, for cross-checks.
     ``include`` and ``tolerance`` add to each candidate what they add to an analysis
-    (``synth.analyze``): motion quality, sensitivities, the envelope.
+    (``synth.analyze``): motion quality, sensitivities, the envelope; a ``load`` adds each
+    returned candidate's ``loads`` (crank torque, power, flywheel, joint forces).
 
     >>> r = synthesize(2.0, 450.0, mechanisms=[{"type": "crank_shaper",
     ...                "fixed": {"pivot_distance": 240.0, "ram_link": 0.0}}])
@@ -75,7 +77,8 @@ def synthesize(
     t0 = time.monotonic()
     specs = check(time_ratio, stroke, min_transmission_angle_deg, mechanisms, objective,
                   max_candidates, time_budget_ms, include=include,
-                  max_working_speed_fluctuation=max_working_speed_fluctuation)  # fmt: skip
+                  max_working_speed_fluctuation=max_working_speed_fluctuation,
+                  load=load)  # fmt: skip
     per_type = max_candidates or PER_TYPE  # the most one type's front takes
     if max_candidates is None:
         max_candidates = min(PER_TYPE * (len(specs) if objective == PARETO else 1), MAX_CANDIDATES)
@@ -91,6 +94,8 @@ def synthesize(
         )
     else:
         cands, infeasible = _single(specs, targets, max_candidates, extras)
+    if load is not None:  # what the returned candidates carry, theirs alone
+        cands = [replace(c, loads=analyze(c.type, c.params, load=load).loads) for c in cands]
     return SynthesisResult(
         candidates=tuple(cands),
         infeasible=tuple(infeasible),
@@ -152,6 +157,7 @@ def check(
     *,
     include: Collection[str] = (),
     max_working_speed_fluctuation: float | None = None,
+    load: Load | None = None,
     **_: Any,
 ) -> list[Spec]:
     """What ``synthesize`` checks before it solves (its arguments' meaning); the specs, every
@@ -166,6 +172,8 @@ def check(
     check_include(include)
     for s in specs:
         check_drawn(s.type, include)
+        if load is not None and get(s.type).frame is None:
+            raise InvalidParameters(f"load: {s.type} has no force model yet", ("load",))
     if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
         raise InvalidParameters(
             f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
@@ -186,6 +194,7 @@ def short(
     *,
     include: Collection[str] = (),
     tolerance: Tolerance | None = None,
+    load: Load | None = None,
     solver: Solver = DEFAULT,
     **_: Any,
 ) -> bool:
@@ -195,7 +204,7 @@ def short(
     one type and at most ~15 ms for the six over time ratios 1.005–4.5 and bounds 0–70°
     (``docs/benchmarks.md``). Takes ``synthesize``'s arguments unchecked (and ignores the
     others); False for any it would refuse."""
-    if objective in MOTION_OBJECTIVES or include or tolerance is not None:
+    if objective in MOTION_OBJECTIVES or include or tolerance is not None or load is not None:
         return False
     if not solver.accelerators:  # the generic path: IPOPT's multistart
         return False

@@ -267,3 +267,15 @@ def test_a_bad_load_names_its_field(change, field, words):
         Load(**{"length_unit": "mm", "crank_rpm": 40.0, **change})
     assert e.value.loc == ("load", field)
     assert words in str(e.value)
+
+
+def test_a_synthesis_with_a_load_gives_each_candidate_its_loads():
+    """Each returned candidate carries its loads, and only with a load: the mean torque is the
+    cut's work over 2π at the request's stroke, whatever the design."""
+    load = Load("mm", RPM, cutting_force=2000.0, slider_mass=60.0, link_mass_per_length=5.0)
+    r = synth.synthesize(1.6, 300.0, 35.0, load=load)
+    assert r.candidates
+    for c in r.candidates:
+        assert c.loads.torque.mean == pytest.approx(2000.0 * 0.8 * 0.3 / (2 * math.pi), rel=1e-9)
+        assert c.loads.flywheel.inertia > 0 and c.loads.torque.max > c.loads.torque.mean
+    assert all(c.loads is None for c in synth.synthesize(1.6, 300.0, 35.0).candidates)

@@ -258,6 +258,18 @@ def test_a_motion_objective_answers_with_each_candidates_motion(client):
     assert out["complete"] and c["verified"]
 
 
+def test_a_synthesis_with_a_load_gives_each_candidate_its_loads(client):
+    body = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 35.0,
+            "mechanisms": [{"type": "whitworth"}], "load": LOAD}  # fmt: skip
+    r = client.post("/v1/synthesize", json=body)
+    assert r.status_code == 200, r.text
+    cands = r.json()["candidates"]
+    assert cands and all(c["loads"]["flywheel"]["inertia"] > 0 for c in cands)
+    assert cands[0]["loads"]["torque"]["mean"] == pytest.approx(2000 * 0.8 * 0.3 / (2 * math.pi))
+    plain = client.post("/v1/synthesize", json={k: v for k, v in body.items() if k != "load"})
+    assert all(c["loads"] is None for c in plain.json()["candidates"])
+
+
 def test_synthesize_infeasible_is_200_with_reasons(client):
     body = {"time_ratio": 3.0, "stroke": 100.0, "min_transmission_angle_deg": 30.0,
             "mechanisms": [{"type": "offset_slider_crank"}]}  # fmt: skip
@@ -350,6 +362,9 @@ BAD = [
     ("/v1/synthesize", {**SYNTH, "max_working_speed_fluctuation": "NaN",
                         "objective": "min_peak_acceleration"}, "max_working_speed_fluctuation"),
     ("/v1/synthesize", {**SYNTH, "include": ["colour"]}, "include"),
+    ("/v1/synthesize", {**SYNTH, "load": {**LOAD, "length_unit": None}}, "length_unit"),
+    ("/v1/synthesize", {**SYNTH, "load": {**LOAD, "speed_fluctuation": 0.0}},
+     "speed_fluctuation"),
     ("/v1/synthesize", {**SYNTH, "include": ["pins"]}, "include"),
     ("/v1/synthesize", {**SYNTH, "tolerance": {"relative": -1e-3}}, "tolerance"),
     ("/v1/synthesize", {**SYNTH, "stroke_mm": 1.0}, "stroke_mm"),
