@@ -249,6 +249,19 @@ class LoadSpec(Strict):
         0.05, gt=0.0, le=1.0, description="Cs = (ω_max − ω_min)/ω the flywheel keeps the crank to"
     )
     efficiency: float = Field(1.0, gt=0.0, le=1.0, description="the drive's, motor to crank")
+    force_profile: (
+        Annotated[
+            list[Annotated[list[Annotated[float, Field(ge=0.0, le=1e12)]],
+                           Field(min_length=2, max_length=2)]],
+            Field(min_length=2, max_length=100),
+        ]
+        | None
+    ) = Field(
+        None,
+        description="instead of cutting_force and cutting_zone: [fraction of the working "
+        "stroke, N] points, the fractions increasing in [0, 1], the force linear between them "
+        "and 0 outside them",
+    )  # fmt: skip
 
     @field_validator("cutting_zone")
     @classmethod
@@ -256,6 +269,24 @@ class LoadSpec(Strict):
         if not zone[0] < zone[1]:
             raise ValueError(f"start {zone[0]:g} must be less than end {zone[1]:g}")
         return zone
+
+    @field_validator("force_profile")
+    @classmethod
+    def _profile(cls, profile: list[list[float]] | None) -> list[list[float]] | None:
+        for i, (u, _) in enumerate(profile or ()):
+            if u > 1:
+                raise ValueError(f"[{i}]: the fraction {u:g} must be at most 1")
+            if i and u <= profile[i - 1][0]:  # type: ignore[index]
+                raise ValueError(f"[{i}]: fractions must increase, got {u:g} after "
+                                 f"{profile[i - 1][0]:g}")  # type: ignore[index]  # fmt: skip
+        return profile
+
+    @model_validator(mode="after")
+    def _one_force(self) -> LoadSpec:
+        if self.force_profile is not None and (self.cutting_force or "cutting_zone" in
+                                               self.model_fields_set):  # fmt: skip
+            raise ValueError("give cutting_force (and cutting_zone) or force_profile, not both")
+        return self
 
 
 class AnalyzeRequest(Extras):

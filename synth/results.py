@@ -148,7 +148,9 @@ class Load:
 
     The lengths stay in the caller's unit, ``length_unit`` (one of ``LENGTH_UNITS``); forces
     and masses are SI. ``cutting_force`` (N) resists the ram through ``cutting_zone``, the
-    fractions of the working stroke (by position) where the tool cuts; ``slider_mass`` (kg)
+    fractions of the working stroke (by position) where the tool cuts; or ``force_profile``
+    gives the resisting force as (fraction of the working stroke, N) points, increasing in
+    the fraction, linear between them and 0 outside them; ``slider_mass`` (kg)
     is the ram and its tool, ``link_mass_per_length`` (kg/m) the links' (uniform slender
     rods; 0: massless). ``speed_fluctuation`` is the coefficient Cs = (ω_max − ω_min)/ω a
     flywheel must hold the crank within, ``efficiency`` the drive's from motor to crank."""
@@ -161,6 +163,7 @@ class Load:
     link_mass_per_length: float = 0.0
     speed_fluctuation: float = 0.05
     efficiency: float = 1.0
+    force_profile: tuple[tuple[float, float], ...] | None = None
 
     def __post_init__(self) -> None:
         if self.length_unit not in LENGTH_UNITS:
@@ -190,6 +193,38 @@ class Load:
                    f"of the working stroke), got {list(zone)!r}")  # fmt: skip
             raise InvalidParameters(msg, ("load", "cutting_zone"))
         object.__setattr__(self, "cutting_zone", (float(zone[0]), float(zone[1])))
+        if self.force_profile is not None:
+            self._check_profile()
+
+    def _check_profile(self) -> None:
+        loc = ("load", "force_profile")
+        if self.cutting_force or self.cutting_zone != (0.1, 0.9):
+            msg = "load: give cutting_force (and cutting_zone) or force_profile, not both"
+            raise InvalidParameters(msg, loc)
+        points = [tuple(q) for q in self.force_profile or ()]
+        if len(points) < 2 or any(len(q) != 2 or not all(map(_number, q)) for q in points):
+            msg = (f"load.force_profile must be at least two [fraction, force] pairs of finite "
+                   f"numbers, got {self.force_profile!r}")  # fmt: skip
+            raise InvalidParameters(msg, loc)
+        for i, (u, f) in enumerate(points):
+            if not 0 <= u <= 1 or f < 0:
+                msg = (f"load.force_profile[{i}]: the fraction must be in [0, 1] and the force "
+                       f"≥ 0, got [{u:g}, {f:g}]")  # fmt: skip
+                raise InvalidParameters(msg, (*loc, i))
+            if i and u <= points[i - 1][0]:
+                msg = (f"load.force_profile[{i}]: fractions must increase, got {u:g} after "
+                       f"{points[i - 1][0]:g}")  # fmt: skip
+                raise InvalidParameters(msg, (*loc, i))
+        object.__setattr__(self, "force_profile", tuple((float(u), float(f)) for u, f in points))
+
+    @property
+    def profile(self) -> tuple[tuple[float, float], ...]:
+        """The resisting force as (fraction of the working stroke, N) points: the given
+        profile, or the cutting force over its zone."""
+        if self.force_profile is not None:
+            return self.force_profile
+        (a, b), f = self.cutting_zone, self.cutting_force
+        return ((a, f), (b, f))
 
     @property
     def metres(self) -> float:

@@ -7,12 +7,12 @@ import pydantic_core
 from fastapi import APIRouter, Body, Request
 from fastapi.responses import Response
 
-from synth.results import Analysis, Curves, Load
+from synth.results import Analysis, Curves
 
 from ..examples import ANALYZE
 from ..json_route import Route
 from ..schemas import REFUSALS, AnalyzeRequest, AnalyzeResponse
-from .common import EngineDep, run_design, tolerance
+from .common import EngineDep, load, run_design, tolerance
 
 router = APIRouter(tags=["analysis"], route_class=Route)
 # an analysis with at most this many curve points runs in the request's own thread: it costs
@@ -39,20 +39,19 @@ async def analyze(
     (or, for sensitivities, a ``tolerance`` is given); the loads (crank torque, power,
     flywheel, joint forces) only with a ``load``."""
     points = len(body.crank_angles_deg or ()) + (body.samples or 0)
-    load = Load(**body.load.model_dump()) if body.load else None
     a = await run_design(
         request,
         engine,
         "analyze",
         body.mechanism,
-        inline=points <= INLINE_CURVE_POINTS and load is None,  # loads: ~10–30 ms
+        inline=points <= INLINE_CURVE_POINTS and body.load is None,  # loads: ~10–30 ms
         crank_speed=body.crank_speed,
         crank_acceleration=body.crank_acceleration,
         crank_angles_deg=body.crank_angles_deg,
         samples=body.samples,
         include=body.include,
         tolerance=tolerance(body),
-        load=load,
+        load=load(body.load),
     )
     return Response(encoded(a), media_type="application/json")
 

@@ -7,12 +7,12 @@ from typing import Annotated, Any
 from fastapi import Depends, Request
 
 from synth.errors import InvalidDesign, InvalidParameters, SynthError
-from synth.results import Tolerance
+from synth.results import Load, Tolerance
 
 from ..engine import Engine
 from ..gate import arrival
 from ..operations import OPERATIONS
-from ..schemas import Extras
+from ..schemas import Extras, LoadSpec
 
 Loc = tuple[str | int, ...]
 
@@ -88,3 +88,8 @@ async def run_design(
 def tolerance(body: Extras) -> Tolerance | None:
     """The request's tolerance as synth takes it."""
     return Tolerance(**body.tolerance.model_dump()) if body.tolerance else None
+
+
+def load(spec: LoadSpec | None) -> Load | None:
+    """A request's load as synth takes it."""
+    return Load(**spec.model_dump(exclude_unset=True)) if spec else None

@@ -5,12 +5,11 @@ from typing import Annotated
 from fastapi import APIRouter, Body, Request
 
 from synth.errors import SynthError
-from synth.results import Load
 
 from ..examples import SYNTHESIZE
 from ..json_route import Route
 from ..schemas import REFUSALS, SynthesizeRequest, SynthesizeResponse
-from .common import EngineDep, Loc, budget, run, tolerance
+from .common import EngineDep, Loc, budget, load, run, tolerance
 
 router = APIRouter(tags=["synthesis"], route_class=Route)
 
@@ -59,6 +58,6 @@ async def synthesize(
         include=body.include,
         max_working_speed_fluctuation=body.max_working_speed_fluctuation,
         tolerance=tolerance(body),
-        load=Load(**body.load.model_dump()) if body.load else None,
+        load=load(body.load),
     )
     return r

@@ -4,9 +4,10 @@ flywheel that evens it out, and the forces at the joints and the ram's guide.
 The forces at a crank angle solve the design's Newton–Euler equations A z = b
 (``synth.mechanisms.kinetics``); their derivatives in the crank angle solve the same system
 differentiated, A z′ = b′ − A′ z and A z″ = b″ − 2 A′ z′ − A″ z, with A′, A″, b′, b″ by
-automatic differentiation. The cutting force switches on and off where the working stroke
-enters and leaves the cutting zone (``quality.reached``), so the turn is two pieces, each
-smooth:
+automatic differentiation. The resisting force is linear in the ram's position between the
+points of the load's profile (a cutting force over its zone: two points), and steps where the
+working stroke passes them (``quality.reached``): the turn is a piece between each two and a
+piece for the rest, each smooth:
 
 - extremes: the stationary points of each quantity on each piece (bracketed on a grid,
   polished by the safeguarded Newton iteration that finds the dead centres, ``roots``), and
@@ -146,16 +147,26 @@ def loads(
     """The loads of a design (``pv``: its parameters; ``st``: its strokes) under ``load``, and
     its torque as a function of crank angles (radians), for curves."""
     sys = forces(m, variant)
-    a, b = load.cutting_zone
-    ends = (st.start, st.start + st.working)
-    inner = [x for x in (a, b) if 0 < x < 1]
-    found = iter(reached(f, pv, st, np.array(inner)).tolist() if inner else [])
-    lo, hi = (ends[0] if x == 0 else ends[1] if x == 1 else next(found) for x in (a, b))
-    # the cutting force resists the ram: against its travel in the working stroke
-    push = -load.cutting_force * math.copysign(1.0, st.s1 - st.s0)
+    # the profile's points' crank angles: roots of s − level inside the working stroke, the
+    # stroke's dead centres at its ends
+    profile = np.array(load.profile)
+    fractions = profile[:, 0]
+    inner = (fractions > 0) & (fractions < 1)
+    at = np.where(fractions == 0, st.start, st.start + st.working)
+    at[inner] = reached(f, pv, st, fractions[inner])
+    # each segment's force resists the ram (against its travel in the working stroke), linear
+    # in its position: F = F0 + (F1 − F0)(s − s0)/(s1 − s0) between its points' positions
+    sign = math.copysign(1.0, st.s1 - st.s0)
     common = [load.metres, load.omega, load.slider_mass, load.link_mass_per_length]
-    cut, idle = (np.concatenate([pv, common, [x]]) for x in (push, 0.0))
-    pieces = [Piece(sys, lo, hi, cut), Piece(sys, hi, lo + TWO_PI, idle)]
+    travel = (st.s1 - st.s0) * load.metres  # the working stroke, m, signed
+    pieces = []
+    for (u0, f0), (u1, f1), lo, hi in zip(profile[:-1], profile[1:], at[:-1], at[1:], strict=True):
+        slope = (f1 - f0) / ((u1 - u0) * travel)  # N per metre of s
+        level = (st.s0 * load.metres) + u0 * travel  # s at the segment's start, m
+        force = [-sign * (f0 - slope * level), -sign * slope]
+        pieces.append(Piece(sys, float(lo), float(hi), np.concatenate([pv, common, force])))
+    pieces.append(Piece(sys, float(at[-1]), float(at[0]) + TWO_PI,
+                        np.concatenate([pv, common, [0.0, 0.0]])))  # fmt: skip
 
     lay = sys.layout
     pushes = [_magnitude([lay.pin(j), lay.pin(j) + 1]) for j in range(len(lay.pins))]
@@ -175,11 +186,15 @@ def loads(
     joints = dict(zip((*lay.pins, *lay.slots), largest[:-1], strict=True))
 
     def torque(theta: np.ndarray) -> np.ndarray:
-        inside = (theta - lo) % TWO_PI <= hi - lo
+        """The torque at each crank angle, from the piece it lies in (the earlier piece's at
+        a piece's end)."""
         out = np.empty(theta.size)
-        for mask, piece in ((inside, pieces[0]), (~inside, pieces[1])):
-            if mask.any():
-                out[mask] = piece.at(theta[mask], _torque)
+        left = np.ones(theta.size, dtype=bool)
+        for piece in pieces:
+            mine = left & ((theta - piece.lo) % TWO_PI <= piece.hi - piece.lo)
+            if mine.any():
+                out[mine] = piece.at(theta[mine], _torque)
+            left &= ~mine
         return out
 
     return Loads(t, power, flywheel, joints, largest[-1]), torque

@@ -10,8 +10,9 @@ type's pin positions (``joints``), differentiated twice in the crank angle and m
 
 Mass model: each drawn member of a body is a uniform slender rod of ``mass_per_length``
 (its mass at its middle, m L²/12 about it); the ram's mass is ``slider_mass``; blocks are
-massless; nothing rubs (the guide's friction is not modelled). ``force`` acts on the ram
-along its path (positive as s grows).
+massless; nothing rubs (the guide's friction is not modelled). The force on the ram acts
+along its path (positive as s grows): ``force`` + ``force_slope`` × s, s in metres (a cut
+whose force varies linearly with the ram's position).
 """
 
 from __future__ import annotations
@@ -24,8 +25,9 @@ import casadi as ca
 from .registry import GROUND, RAM, Mechanism, Params
 
 # the load's numbers a compiled model takes after the type's parameters: metres per length
-# unit, crank speed (rad/s), ram mass (kg), link mass per metre (kg/m), force on the ram (N)
-LOAD = ("unit", "omega", "slider_mass", "mass_per_length", "force")
+# unit, crank speed (rad/s), ram mass (kg), link mass per metre (kg/m), the force on the ram
+# (N) at s = 0 and its change per metre of s (N/m)
+LOAD = ("unit", "omega", "slider_mass", "mass_per_length", "force", "force_slope")
 
 
 def system(
@@ -99,7 +101,8 @@ def system(
             b[r] += fx
             b[r + 1] += fy
             b[r + 2] += gx * fy - gy * fx + mass * length**2 / 12 * alpha
-    b[ram] += w["slider_mass"] * d2(u * m.position(p, th)) - w["force"]
+    s = u * m.position(p, th)
+    b[ram] += w["slider_mass"] * d2(s) - w["force"] - w["force_slope"] * s
     return a, b, layout
 
 

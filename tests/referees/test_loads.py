@@ -1,9 +1,9 @@
 """The loads (synth.analysis.loads) against independent computations.
 
-- Virtual work, links massless: the crank's power is the ram's, T = (m s″ ω² + F [cutting])
-  |s′| in SI, with s′ by complex step and s″ by a Cauchy integral on tests/support's own
-  geometry, the working stroke and the cutting zone by its brute force. 1e-9 of the turn's
-  largest |T|.
+- Virtual work, links massless: the crank's power is the ram's, T = (m s″ ω² + F(s)) |s′| in
+  SI (F the cutting force in its zone, or a profile's, linear between its points), with s′
+  by complex step and s″ by a Cauchy integral on tests/support's own geometry, the working
+  stroke and the cutting zone by its brute force. 1e-9 of the turn's largest |T|.
 - With link masses, the Newton–Euler torque against the energy balance T = dKE/dθ + F |s′|
   [cutting], the kinetic energy of the drawn members (uniform slender rods) and the ram from
   the pins' positions, differentiated by central differences (fourth order, two steps
@@ -41,7 +41,7 @@ FIXED = ("O2", "O4")  # pivots on the frame: a member between them is the ground
 
 def _strokes(mtype, p, zone):
     """The working stroke's start and length and the cutting zone's crank angles (radians),
-    by the brute force."""
+    by the brute force; and the fraction of the working stroke the ram has run, at angles."""
     b = bruteforce.simulate(mtype, p, n=4000)
     work = b["working_angle"]
     start = b["theta_min"] if b["working_direction"] == 1 else b["theta_max"]
@@ -54,7 +54,10 @@ def _strokes(mtype, p, zone):
         return brentq(lambda t: bruteforce.position(mtype, p, np.array([t]))[0] - level,
                       start, start + work, xtol=1e-15, rtol=1e-15)  # fmt: skip
 
-    return start, work, at(zone[0]), at(zone[1])
+    def run(theta):
+        return (bruteforce.position(mtype, p, theta) - s0) / (s1 - s0)
+
+    return start, work, at(zone[0]), at(zone[1]), run
 
 
 def _cutting(theta, lo, hi, margin):
@@ -69,22 +72,30 @@ def _cutting(theta, lo, hi, margin):
 @pytest.mark.parametrize("mtype", TYPES)
 def test_the_torque_does_the_rams_work(mtype):
     rng = np.random.default_rng(TYPES.index(mtype))
-    for p in random_designs(mtype, N, seed=21):
-        a = float(rng.uniform(0.0, 0.45))
-        zone = (a, float(rng.uniform(a + 0.05, 1.0)))
+    for i, p in enumerate(random_designs(mtype, N, seed=21)):
         unit = str(rng.choice(["m", "mm", "in"]))
-        load = Load(unit, RPM, cutting_force=float(rng.uniform(0, 5000)), cutting_zone=zone,
-                    slider_mass=float(rng.uniform(0, 200)))  # fmt: skip
+        mass = float(rng.uniform(0, 200))
+        if i % 2:  # a force profile: 2 to 5 points, linear between them
+            k = int(rng.integers(2, 6))
+            fractions = np.sort(rng.choice(np.linspace(0, 1, 41), size=k, replace=False))
+            profile = tuple((float(u), float(rng.uniform(0, 5000))) for u in fractions)
+            load = Load(unit, RPM, slider_mass=mass, force_profile=profile)
+        else:
+            a = float(rng.uniform(0.0, 0.45))
+            load = Load(unit, RPM, cutting_force=float(rng.uniform(0, 5000)), slider_mass=mass,
+                        cutting_zone=(a, float(rng.uniform(a + 0.05, 1.0))))  # fmt: skip
+        profile = np.array(load.profile)
         theta = rng.uniform(0, 2 * math.pi, 48)
         got = synth.analyze(mtype, p, crank_angles_deg=np.degrees(theta), load=load)
         k = load.metres
-        _, _, lo, hi = _strokes(mtype, p, zone)
+        _, _, lo, hi, run = _strokes(mtype, p, (profile[0, 0], profile[-1, 0]))
         inside, clear = _cutting(theta, lo, hi, margin=1e-9)
+        force = np.where(inside, np.interp(run(theta), profile[:, 0], profile[:, 1]), 0.0)
         s1, s2 = velocity(mtype, p, theta) * k, acceleration(mtype, p, theta) * k
-        expected = load.slider_mass * OMEGA**2 * s2 * s1 + load.cutting_force * np.abs(s1) * inside
+        expected = load.slider_mass * OMEGA**2 * s2 * s1 + force * np.abs(s1)
         scale = max(np.abs(expected).max(), abs(got.loads.torque.max), abs(got.loads.torque.min))
         err = np.abs(got.curves.torque - expected)[clear].max(initial=0.0)
-        assert err <= 1e-9 * scale, (p, zone, err / scale)
+        assert err <= 1e-9 * scale, (p, load.profile, err / scale)
 
 
 def _kinetic_energy(mtype, p, theta, load, h):
@@ -142,7 +153,7 @@ def test_newton_euler_keeps_the_energy_balance(mtype):
                     link_mass_per_length=float(rng.uniform(0.1, 50)))  # fmt: skip
         theta = rng.uniform(0, 2 * math.pi, 16)
         got = synth.analyze(mtype, p, crank_angles_deg=np.degrees(theta), load=load)
-        _, _, lo, hi = _strokes(mtype, p, (0.0, 1.0))
+        _, _, lo, hi, _ = _strokes(mtype, p, (0.0, 1.0))
         inside, clear = _cutting(theta, lo, hi, margin=1e-9)
         s1 = velocity(mtype, p, theta) * load.metres
         expected = _energy_rate(mtype, p, theta, load, h) + load.cutting_force * np.abs(s1) * inside
@@ -155,7 +166,7 @@ def _dense_swing(mtype, p, load, n=200_000):
     """The largest swing of ∫ (T − mean) dθ on n points a turn, by Simpson's rule on each
     smooth piece of the torque curve (the cutting zone and the rest, split at the zone's ends,
     where the force steps), and the mean."""
-    _, _, lo, hi = _strokes(mtype, p, load.cutting_zone)
+    _, _, lo, hi, _ = _strokes(mtype, p, load.cutting_zone)
     pieces = []
     for a, b in ((lo, hi), (hi, lo + 2 * math.pi)):
         t = np.linspace(a, b, 2 * max(1, round(n * (b - a) / (4 * math.pi))) + 1)
@@ -188,15 +199,22 @@ def test_the_flywheel_matches_a_dense_integration(mtype):
             assert got.flywheel.inertia == pytest.approx(swing / (0.05 * om**2), rel=1e-7)
 
 
+PROFILE = ((0.0, 500.0), (0.1, 3000.0), (0.6, 2000.0), (0.95, 2000.0))
+
+
 @pytest.mark.parametrize("mtype", TYPES)
 def test_the_mean_torque_is_the_cuts_work(mtype):
     for p in random_designs(mtype, 20, seed=24):
-        load = Load("mm", RPM, cutting_force=1500.0, cutting_zone=(0.2, 0.7), slider_mass=80.0,
-                    link_mass_per_length=5.0)  # fmt: skip
-        a = synth.analyze(mtype, p, load=load)
-        work = 1500.0 * 0.5 * a.stroke * 1e-3  # J a turn: the inertia's work is 0 over a turn
-        assert a.loads.torque.mean == pytest.approx(work / (2 * math.pi), rel=1e-10)
-        assert a.loads.power.mean == pytest.approx(work * RPM / 60, rel=1e-10)
+        for load, per_stroke in (
+            (Load("mm", RPM, cutting_force=1500.0, cutting_zone=(0.2, 0.7), slider_mass=80.0,
+                  link_mass_per_length=5.0), 1500.0 * 0.5),
+            (Load("mm", RPM, force_profile=PROFILE, slider_mass=80.0),
+             np.trapezoid([f for _, f in PROFILE], [u for u, _ in PROFILE])),
+        ):  # fmt: skip
+            a = synth.analyze(mtype, p, load=load)
+            work = per_stroke * a.stroke * 1e-3  # J a turn: the inertia's is 0 over a turn
+            assert a.loads.torque.mean == pytest.approx(work / (2 * math.pi), rel=1e-10)
+            assert a.loads.power.mean == pytest.approx(work * RPM / 60, rel=1e-10)
 
 
 @pytest.mark.parametrize("mtype", TYPES)
@@ -260,12 +278,18 @@ def test_units_give_the_same_si_numbers(mtype):
         ({"cutting_zone": (0.1, 1.5)}, "cutting_zone", "end ≤ 1"),
         ({"speed_fluctuation": 0.0}, "speed_fluctuation", "> 0"),
         ({"efficiency": 1.2}, "efficiency", "(0, 1]"),
+        ({"force_profile": ((0.0, 10.0),)}, "force_profile", "at least two"),
+        ({"force_profile": ((0.0, 10.0), (0.5, math.nan))}, "force_profile", "finite"),
+        ({"force_profile": ((0.5, 10.0), (0.5, 20.0))}, "force_profile", "must increase"),
+        ({"force_profile": ((0.0, 10.0), (1.5, 20.0))}, "force_profile", "in [0, 1]"),
+        ({"force_profile": ((0.0, -1.0), (1.0, 20.0))}, "force_profile", "≥ 0"),
+        ({"force_profile": PROFILE, "cutting_force": 5.0}, "force_profile", "not both"),
     ],
 )
 def test_a_bad_load_names_its_field(change, field, words):
     with pytest.raises(InvalidParameters) as e:
         Load(**{"length_unit": "mm", "crank_rpm": 40.0, **change})
-    assert e.value.loc == ("load", field)
+    assert e.value.loc[:2] == ("load", field)
     assert words in str(e.value)
 
 

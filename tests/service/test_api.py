@@ -270,6 +270,17 @@ def test_a_synthesis_with_a_load_gives_each_candidate_its_loads(client):
     assert all(c["loads"] is None for c in plain.json()["candidates"])
 
 
+def test_an_analysis_takes_a_force_profile(client):
+    """A profile's force, linear between its points: the mean torque is its work a turn
+    (the trapezoid's area under the profile, times the stroke) over 2π."""
+    profile = [[0.0, 500.0], [0.1, 3000.0], [0.9, 2000.0]]
+    load = {"length_unit": "mm", "crank_rpm": 40.0, "force_profile": profile, "slider_mass": 50.0}
+    r = client.post("/v1/analyze", json={**ANALYZE, "load": load})
+    assert r.status_code == 200, r.text
+    work = (0.1 * 1750.0 + 0.8 * 2500.0) * r.json()["stroke"] * 1e-3
+    assert r.json()["loads"]["torque"]["mean"] == pytest.approx(work / (2 * math.pi), rel=1e-9)
+
+
 def test_synthesize_infeasible_is_200_with_reasons(client):
     body = {"time_ratio": 3.0, "stroke": 100.0, "min_transmission_angle_deg": 30.0,
             "mechanisms": [{"type": "offset_slider_crank"}]}  # fmt: skip
@@ -345,6 +356,14 @@ BAD = [
      "cutting_zone"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "efficiency": 0.0}), "efficiency"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "colour": 1}), "colour"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, 5.0], [1.2, 6.0]]}),
+     "force_profile"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.5, 5.0], [0.4, 6.0]]}),
+     "force_profile"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, -5.0], [1, 6.0]]}),
+     "force_profile"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, 5.0], [1, 6.0]]}),
+     "not both"),
     ("/v1/analyze", {**ANALYZE, "load": LOAD, "crank_speed": 2.0}, "crank_speed"),
     ("/v1/analyze", {**ANALYZE, "load": LOAD, "crank_acceleration": 2.0}, "crank_acceleration"),
     ("/v1/synthesize", {**SYNTH, "time_ratio": 0.5}, "time_ratio"),
