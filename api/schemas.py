@@ -201,6 +201,8 @@ _INCLUDES = {
     "envelope": "envelope (the box the frame must hold: every pivot and every pin's path)",
     "pins": "pins (with crank_angles_deg or samples: curves.pins, every pin of the type's "
     "drawing at the curves' angles)",
+    "forces": "forces (with a load and curves: curves.forces, each joint's and the guide's "
+    "force at the curves' angles)",
 }
 
 
@@ -249,6 +251,9 @@ class LoadSpec(Strict):
         0.05, gt=0.0, le=1.0, description="Cs = (ω_max − ω_min)/ω the flywheel keeps the crank to"
     )
     efficiency: float = Field(1.0, gt=0.0, le=1.0, description="the drive's, motor to crank")
+    guide_friction: float = Field(
+        0.0, ge=0.0, le=2.0, description="Coulomb coefficient at the ram's guide (0: none)"
+    )
     force_profile: (
         Annotated[
             list[Annotated[list[Annotated[float, Field(ge=0.0, le=1e12)]],
@@ -489,6 +494,11 @@ class Curves(BaseModel):
     )
     torque: list[float] | None = Field(
         None, description="with a load: the crank torque (N·m) at each crank_angle_deg"
+    )
+    forces: dict[str, list[float]] | None = Field(
+        None,
+        description="with a load, when include has forces: each joint's force (by pin, the "
+        "blocks in slots too) and the ram guide's normal force, N, at each crank_angle_deg",
     )
 
 

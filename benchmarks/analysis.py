@@ -20,6 +20,7 @@ import itertools
 import statistics
 import time
 from collections.abc import Callable
+from dataclasses import replace
 from functools import partial
 from pathlib import Path
 
@@ -41,6 +42,9 @@ DESIGNS = {
                          "follower_arm": 0.15, "connecting_rod": 0.3},
 }  # fmt: skip
 SAMPLES = (10, 100, 1_000, 10_000, 100_000)
+# a shaper's load on each reference design (the lengths read as mm): a 2 kN cut, a 60 kg ram,
+# links of 8 kg/m, 40 strokes a minute
+LOAD = synth.Load("mm", 40.0, cutting_force=2000.0, slider_mass=60.0, link_mass_per_length=8.0)
 LIMIT = 1.5  # the fluctuation limit of motion_targets' "limit" requests
 FIXED_TARGETS = 30  # motion_targets' fixed-part targets per type
 
@@ -68,6 +72,9 @@ def analysis_costs(repeats: int, samples: tuple[int, ...]) -> list[dict]:
             "sensitivities": partial(summary, include=["sensitivities"]),
             "tolerance": partial(summary, tolerance=synth.Tolerance(relative=1e-3)),
             "envelope": partial(summary, include=["envelope"]),
+            "load": partial(summary, load=LOAD),
+            "load with friction": partial(summary, load=replace(LOAD, guide_friction=0.2)),
+            "load, 1 000 samples": partial(summary, load=LOAD, samples=1_000),
         }
         for case, fn in cases.items():
             ms, ref = median_ms(fn, summary, repeats)

@@ -78,6 +78,8 @@ class Curves:
     # ``synth.joints`` gives them
     pins: dict[str, PinPath] | None = None
     torque: np.ndarray | None = None  # N·m, only with a load
+    # with a load, when asked (include "forces"): each joint's force and the guide's (N)
+    forces: dict[str, np.ndarray] | None = None
 
 
 @dataclass(frozen=True)
@@ -150,10 +152,11 @@ class Load:
     and masses are SI. ``cutting_force`` (N) resists the ram through ``cutting_zone``, the
     fractions of the working stroke (by position) where the tool cuts; or ``force_profile``
     gives the resisting force as (fraction of the working stroke, N) points, increasing in
-    the fraction, linear between them and 0 outside them; ``slider_mass`` (kg)
-    is the ram and its tool, ``link_mass_per_length`` (kg/m) the links' (uniform slender
-    rods; 0: massless). ``speed_fluctuation`` is the coefficient Cs = (ω_max − ω_min)/ω a
-    flywheel must hold the crank within, ``efficiency`` the drive's from motor to crank."""
+    the fraction, linear between them and 0 outside them. ``slider_mass`` (kg) is the ram
+    and its tool, ``link_mass_per_length`` (kg/m) the links' (uniform slender rods; 0:
+    massless), ``guide_friction`` the Coulomb coefficient at the ram's guide.
+    ``speed_fluctuation`` is the coefficient Cs = (ω_max − ω_min)/ω a flywheel must hold the
+    crank within, ``efficiency`` the drive's from motor to crank."""
 
     length_unit: str
     crank_rpm: float
@@ -164,6 +167,7 @@ class Load:
     speed_fluctuation: float = 0.05
     efficiency: float = 1.0
     force_profile: tuple[tuple[float, float], ...] | None = None
+    guide_friction: float = 0.0
 
     def __post_init__(self) -> None:
         if self.length_unit not in LENGTH_UNITS:
@@ -175,6 +179,7 @@ class Load:
         for name, low, strict in (("crank_rpm", 0.0, True), ("cutting_force", 0.0, False),
                                   ("slider_mass", 0.0, False),
                                   ("link_mass_per_length", 0.0, False),
+                                  ("guide_friction", 0.0, False),
                                   ("speed_fluctuation", 0.0, True)):  # fmt: skip
             v = getattr(self, name)
             ok = _number(v) and (v > low if strict else v >= low)

@@ -250,7 +250,7 @@ function designFieldId(prefix) {
   };
 }
 
-const LOAD_FIELDS = ["crank_rpm", "cutting_force", "slider_mass", "link_mass_per_length"];
+const LOAD_FIELDS = ["crank_rpm", "cutting_force", "slider_mass", "link_mass_per_length", "guide_friction"];
 
 function loadOf() {
   // the analysis view's load, while its box is open (else none)

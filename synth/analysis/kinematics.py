@@ -41,8 +41,9 @@ MAX_CURVE_POINTS = 100_000
 # 100 000 points of curves alone, ~8 MB of JSON (README, "What a client can rely on")
 MAX_CURVE_VALUES = 500_000
 INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis or a candidate adds when asked
-# an analysis also adds its curves' pins when asked (they need the curves' angles)
-ANALYSIS_INCLUDE = (*INCLUDE, "pins")
+# an analysis also adds its curves' pins when asked (they need the curves' angles), and with a
+# load its curves' forces
+ANALYSIS_INCLUDE = (*INCLUDE, "pins", "forces")
 
 
 def analyze(
@@ -144,17 +145,19 @@ def _analysis(
     """``analyze``'s answer from the stationary points ``found`` of the design's rows."""
     rows, theta, values = found
     summary = _summary(m, p, f, rows, theta, values)
-    torque = None
+    loaded = None
     if load is not None:
         st = quality.Strokes(*_ends(rows, theta, values))
-        summary["loads"], torque = loads.loads(m, variant, f, pv, st, load)
+        summary["loads"], loaded = loads.loads(m, variant, f, pv, st, load)
     if deg is not None:
         curves = _curves(f, pv, crank_speed, crank_acceleration, deg)
         if "pins" in include:
             xy = _pins(model(m, variant, "pins"), pv, deg)
             curves = replace(curves, pins={k: PinPath(x, y) for k, (x, y) in xy.items()})
-        if torque is not None:
-            curves = replace(curves, torque=torque(np.radians(deg)))
+        if loaded is not None:
+            at = loaded(np.radians(deg))
+            torque = at.pop("torque")
+            curves = replace(curves, torque=torque, forces=at if "forces" in include else None)
         summary["curves"] = curves
     if "envelope" in include:
         summary["envelope"] = quality.envelope(m, variant, p, pv)
@@ -236,6 +239,9 @@ def _asked(
         msg = "include 'pins' needs crank_angles_deg or samples (the angles the pins are wanted at)"
         raise InvalidParameters(msg, ("include",))
     check_drawn(mechanism, include)
+    if "forces" in include and not (loaded and deg is not None):
+        msg = "include 'forces' needs a load, and crank_angles_deg or samples (its curves' angles)"
+        raise InvalidParameters(msg, ("include",))
     if deg is not None:
         loc = "samples" if samples else "crank_angles_deg"
         _check_values(mechanism, include, deg.size, loc, loaded)
@@ -245,8 +251,12 @@ def _asked(
 def _check_values(
     mechanism: str, include: Collection[str], points: int, loc: str, loaded: bool
 ) -> None:
-    curves = len(fields(Curves)) - 2 + loaded  # the pins aside, the torque with a load
-    pins = len({pin for d in get(mechanism).drawing for pin in d[1:]}) if "pins" in include else 0
+    m = get(mechanism)
+    curves = len(fields(Curves)) - 3 + loaded  # the pins and forces aside, the torque with a load
+    pins = len({pin for d in m.drawing for pin in d[1:]}) if "pins" in include else 0
+    if "forces" in include and m.frame is not None:  # each joint's, the guide's
+        fr = m.frame(frozenset())
+        curves += len(fr.pins) + len(fr.slots) + 1
     per = curves + 2 * pins
     if points * per > MAX_CURVE_VALUES:
         what = f"{curves} curves" + (f" and x, y of {pins} pins" if pins else "")

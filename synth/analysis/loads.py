@@ -20,12 +20,14 @@ piece for the rest, each smooth:
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable
 from typing import cast
 
 import numpy as np
 
+from ..errors import InvalidDesign
 from ..mechanisms import Mechanism
 from ..results import Flywheel, Force, Load, Loads, Power, Torque
 from .model import GRID, Forces, Model, forces
@@ -143,9 +145,9 @@ def loads(
     pv: np.ndarray,
     st: Strokes,
     load: Load,
-) -> tuple[Loads, Callable[[np.ndarray], np.ndarray]]:
+) -> tuple[Loads, Callable[[np.ndarray], dict[str, np.ndarray]]]:
     """The loads of a design (``pv``: its parameters; ``st``: its strokes) under ``load``, and
-    its torque as a function of crank angles (radians), for curves."""
+    its torque and forces as functions of crank angles (radians), for curves."""
     sys = forces(m, variant)
     # the profile's points' crank angles: roots of s − level inside the working stroke, the
     # stroke's dead centres at its ends
@@ -159,15 +161,19 @@ def loads(
     sign = math.copysign(1.0, st.s1 - st.s0)
     common = [load.metres, load.omega, load.slider_mass, load.link_mass_per_length]
     travel = (st.s1 - st.s0) * load.metres  # the working stroke, m, signed
-    pieces = []
+    spans = []  # (lo, hi, force, slope)
     for (u0, f0), (u1, f1), lo, hi in zip(profile[:-1], profile[1:], at[:-1], at[1:], strict=True):
         slope = (f1 - f0) / ((u1 - u0) * travel)  # N per metre of s
         level = (st.s0 * load.metres) + u0 * travel  # s at the segment's start, m
-        force = [-sign * (f0 - slope * level), -sign * slope]
-        pieces.append(Piece(sys, float(lo), float(hi), np.concatenate([pv, common, force])))
-    pieces.append(Piece(sys, float(at[-1]), float(at[0]) + TWO_PI,
-                        np.concatenate([pv, common, [0.0, 0.0]])))  # fmt: skip
-
+        spans.append((lo, hi, -sign * (f0 - slope * level), -sign * slope))
+    spans.append((at[-1], at[0] + TWO_PI, 0.0, 0.0))
+    pieces = []
+    for lo, hi, force, slope in spans:
+        base = np.concatenate([pv, common, [force, slope]])
+        if load.guide_friction == 0:
+            pieces.append(Piece(sys, float(lo), float(hi), np.append(base, 0.0)))
+        else:
+            pieces += _rubbing(sys, float(lo), float(hi), base, st, load.guide_friction)
     lay = sys.layout
     pushes = [_magnitude([lay.pin(j), lay.pin(j) + 1]) for j in range(len(lay.pins))]
     pushes += [_magnitude([lay.slot(j)]) for j in range(len(lay.slots))]
@@ -185,19 +191,59 @@ def loads(
     largest = [Force(float(v.max()), _deg(x[int(np.argmax(v))])) for x, v in found_all]
     joints = dict(zip((*lay.pins, *lay.slots), largest[:-1], strict=True))
 
-    def torque(theta: np.ndarray) -> np.ndarray:
-        """The torque at each crank angle, from the piece it lies in (the earlier piece's at
-        a piece's end)."""
-        out = np.empty(theta.size)
+    def curves(theta: np.ndarray) -> dict[str, np.ndarray]:
+        """The torque and each force (``Loads``' names, the guide's last) at each crank angle,
+        from the piece it lies in (the earlier piece's at a piece's end)."""
+        out = np.empty((len(quantities), theta.size))
         left = np.ones(theta.size, dtype=bool)
         for piece in pieces:
             mine = left & ((theta - piece.lo) % TWO_PI <= piece.hi - piece.lo)
             if mine.any():
-                out[mine] = piece.at(theta[mine], _torque)
+                z = piece.sys(theta[mine], piece.pv)
+                out[:, mine] = [q(z)[0] for q in quantities]
             left &= ~mine
-        return out
+        return dict(zip(("torque", *joints, "guide"), out, strict=True))
 
-    return Loads(t, power, flywheel, joints, largest[-1]), torque
+    quantities = [_torque, *pushes]
+    return Loads(t, power, flywheel, joints, largest[-1]), curves
+
+
+def _rubbing(
+    sys: Forces, lo: float, hi: float, pv: np.ndarray, st: Strokes, mu: float
+) -> list[Piece]:
+    """[lo, hi] as pieces on which the guide's friction, −μ |N| sign(v), is one multiple of
+    N (``kinetics``): split at the dead centres, where the ram turns, and where N changes
+    sign (there N = 0 whichever sign is assumed, so the roots of N with one assumed sign are
+    the changes); each part takes the sign of N that its middle is consistent with."""
+    turns = TWO_PI * np.arange(-1, 3)
+    dead = np.concatenate([st.start + turns, st.start + st.working + turns])
+    cuts = np.sort(np.concatenate([[lo, hi], dead[(dead > lo) & (dead < hi)]]))
+    up = math.copysign(1.0, st.s1 - st.s0)  # sign(v) in the working stroke
+    out = []
+    for a, b in itertools.pairwise(cuts):
+        working = (0.5 * (a + b) - st.start) % TWO_PI < st.working
+        v = up if working else -up
+        pushing = Piece(sys, a, b, np.append(pv, -mu * v))  # N > 0 assumed
+        (changes,) = pushing.roots([_guide], 0)
+        tiny = 1e-12 * np.abs(pushing.z[0]).max()  # a guide force 0 to rounding
+        for c, d in itertools.pairwise(np.concatenate([[a], np.sort(changes), [b]])):
+            mid = np.array([0.5 * (c + d)])
+            if pushing.at(mid, _guide)[0] >= -tiny:
+                piece = pushing if (c, d) == (a, b) else Piece(sys, c, d, pushing.pv)
+            else:
+                piece = Piece(sys, c, d, np.append(pv, mu * v))  # N < 0
+                if piece.at(mid, _guide)[0] > tiny:
+                    raise InvalidDesign(
+                        f"the guide's friction {mu:g} locks the ram at crank angle "
+                        f"{_deg(float(mid[0])):.6g}°: no guide force is consistent with it",
+                        (), "friction",
+                    )  # fmt: skip
+            out.append(piece)
+    return out
+
+
+def _guide(z: np.ndarray) -> np.ndarray:
+    return z[:, :, -1]
 
 
 def _energy(pieces: list[Piece], mean: float) -> float:

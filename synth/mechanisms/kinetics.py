@@ -10,9 +10,11 @@ type's pin positions (``joints``), differentiated twice in the crank angle and m
 
 Mass model: each drawn member of a body is a uniform slender rod of ``mass_per_length``
 (its mass at its middle, m L²/12 about it); the ram's mass is ``slider_mass``; blocks are
-massless; nothing rubs (the guide's friction is not modelled). The force on the ram acts
-along its path (positive as s grows): ``force`` + ``force_slope`` × s, s in metres (a cut
-whose force varies linearly with the ram's position).
+massless. The force on the ram acts along its path (positive as s grows): ``force`` +
+``force_slope`` × s, s in metres (a cut whose force varies linearly with the ram's position).
+Only the ram's guide rubs: its friction, −μ |N| sign(v) along the path, is ``friction`` × N
+where the signs of N and v hold (``friction`` = −μ sign(v) sign(N): the caller splits the
+turn where they change); pins and slots are frictionless.
 """
 
 from __future__ import annotations
@@ -26,8 +28,8 @@ from .registry import GROUND, RAM, Mechanism, Params
 
 # the load's numbers a compiled model takes after the type's parameters: metres per length
 # unit, crank speed (rad/s), ram mass (kg), link mass per metre (kg/m), the force on the ram
-# (N) at s = 0 and its change per metre of s (N/m)
-LOAD = ("unit", "omega", "slider_mass", "mass_per_length", "force", "force_slope")
+# (N) at s = 0 and its change per metre of s (N/m), the guide's friction per unit of N
+LOAD = ("unit", "omega", "slider_mass", "mass_per_length", "force", "force_slope", "friction")
 
 
 def system(
@@ -84,6 +86,7 @@ def system(
         push(slotted, layout.slot(j), nx, ny, x, y)
         push(carrier, layout.slot(j), -nx, -ny, x, y)
     a[ram + 1, n - 1] = 1.0  # the guide's normal force
+    a[ram, n - 1] = w["friction"]  # and its friction along the path
 
     # what the unknowns balance: each body's inertia (Σ m a, and the moment of m a and I α
     # about the crank pivot), the ram's, less the force on the ram

@@ -5,9 +5,10 @@
   by complex step and s″ by a Cauchy integral on tests/support's own geometry, the working
   stroke and the cutting zone by its brute force. 1e-9 of the turn's largest |T|.
 - With link masses, the Newton–Euler torque against the energy balance T = dKE/dθ + F |s′|
-  [cutting], the kinetic energy of the drawn members (uniform slender rods) and the ram from
-  the pins' positions, differentiated by central differences (fourth order, two steps
-  Richardson-combined). 1e-8.
+  [cutting] + μ |N| |s′| (the guide's friction), the kinetic energy of the drawn members
+  (uniform slender rods) and the ram from the pins' positions, differentiated by central
+  differences (fourth order, two steps Richardson-combined). 1e-8.
+- The guide's friction on a slider-crank with massless links, by hand. 1e-9.
 - The flywheel's energy swing against Simpson's rule on 200 000 points a turn, on each
   smooth piece of the torque curve (the zone's ends from the brute force). 1e-7.
 - Units: one design in m, mm and in gives the same SI numbers. 1e-12.
@@ -25,7 +26,7 @@ from scipy.integrate import cumulative_simpson, simpson
 from scipy.optimize import brentq
 
 import synth
-from synth.errors import InvalidParameters
+from synth.errors import InvalidDesign, InvalidParameters
 from synth.mechanisms import get
 from synth.results import Load
 
@@ -145,21 +146,66 @@ def _energy_rate(mtype, p, theta, load, h):
 
 @pytest.mark.parametrize("mtype", TYPES)
 def test_newton_euler_keeps_the_energy_balance(mtype):
+    """T = dKE/dθ + F |s′| + μ |N| |s′|: the work the ram and the links store, the cut's and
+    the guide's friction's (with the guide's force N the analysis gives, half the designs)."""
     rng = np.random.default_rng(100 + TYPES.index(mtype))
     h = 2e-3  # with h/2: ~1e-11 on the sharpest Whitworth; rounding grows below (as 1/h²)
-    for p in random_designs(mtype, 40, seed=22):
+    for i, p in enumerate(random_designs(mtype, 40, seed=22)):
+        mu = float(rng.uniform(0, 0.3)) if i % 2 else 0.0
         load = Load("mm", RPM, cutting_force=float(rng.uniform(0, 5000)), cutting_zone=(0.0, 1.0),
-                    slider_mass=float(rng.uniform(0, 200)),
+                    slider_mass=float(rng.uniform(0, 200)), guide_friction=mu,
                     link_mass_per_length=float(rng.uniform(0.1, 50)))  # fmt: skip
         theta = rng.uniform(0, 2 * math.pi, 16)
-        got = synth.analyze(mtype, p, crank_angles_deg=np.degrees(theta), load=load)
+        got = synth.analyze(mtype, p, crank_angles_deg=np.degrees(theta), load=load,
+                            include=["forces"])  # fmt: skip
         _, _, lo, hi, _ = _strokes(mtype, p, (0.0, 1.0))
         inside, clear = _cutting(theta, lo, hi, margin=1e-9)
-        s1 = velocity(mtype, p, theta) * load.metres
-        expected = _energy_rate(mtype, p, theta, load, h) + load.cutting_force * np.abs(s1) * inside
+        s1 = np.abs(velocity(mtype, p, theta) * load.metres)
+        rub = mu * got.curves.forces["guide"]
+        expected = _energy_rate(mtype, p, theta, load, h) + (load.cutting_force * inside + rub) * s1
         scale = max(abs(got.loads.torque.max), abs(got.loads.torque.min))
         err = np.abs(got.curves.torque - expected)[clear].max(initial=0.0)
-        assert err <= 1e-8 * scale, (p, err / scale)
+        assert err <= 1e-8 * scale, (p, mu, err / scale)
+
+
+def test_the_guides_friction_on_a_slider_crank_by_hand():
+    """Links massless, the coupler pushes along itself (P along e, from B to C): along the
+    path P e_x − μ sign(v) |P e_y| = m a, across it N = −P e_y; the crank takes T = B × P e."""
+    rng = np.random.default_rng(7)
+    locked = 0
+    for p in random_designs("offset_slider_crank", 100, seed=27):
+        mu, mass = float(rng.uniform(0.01, 0.4)), float(rng.uniform(1, 200))
+        load = Load("m", RPM, slider_mass=mass, guide_friction=mu)
+
+        def coupler(theta, p=p):  # the crank pin, and the coupler's direction e
+            bx, by = p["crank"] * np.cos(theta), p["crank"] * np.sin(theta)
+            ex, ey = bruteforce.position("offset_slider_crank", p, theta) - bx, p["offset"] - by
+            return bx, by, ex / p["coupler"], ey / p["coupler"]
+
+        # where the coupler leans more than the friction angle off the path, no force moves
+        # the ram: the analysis refuses the design
+        _, _, ex, ey = coupler(np.linspace(0, 2 * math.pi, 20_001))
+        if np.any(np.abs(ex) <= mu * np.abs(ey)):
+            with pytest.raises(InvalidDesign, match="friction"):
+                synth.analyze("offset_slider_crank", p, load=load)
+            locked += 1
+            continue
+        theta = rng.uniform(0, 2 * math.pi, 32)
+        got = synth.analyze("offset_slider_crank", p, crank_angles_deg=np.degrees(theta),
+                            load=load, include=["forces"])  # fmt: skip
+        bx, by, ex, ey = coupler(theta)
+        v = velocity("offset_slider_crank", p, theta)
+        ram = mass * OMEGA**2 * acceleration("offset_slider_crank", p, theta)
+        push = ram / (ex - mu * np.sign(v) * np.abs(ey))  # P, if it pushes (P > 0)
+        pull = ram / (ex + mu * np.sign(v) * np.abs(ey))
+        force = np.where(push > 0, push, pull)
+        torque = force * (bx * ey - by * ex)
+        clear = (np.abs(v) > 1e-6 * p["crank"]) & (np.abs(ey) > 1e-6)
+        scale = np.abs(torque).max()
+        assert np.abs(got.curves.torque - torque)[clear].max() <= 1e-9 * scale, (p, mu)
+        guide = np.abs(force * ey)
+        assert np.abs(got.curves.forces["guide"] - guide)[clear].max() <= 1e-9 * guide.max()
+    assert 0 < locked < 20  # both kinds were met
 
 
 def _dense_swing(mtype, p, load, n=200_000):

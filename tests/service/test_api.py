@@ -180,18 +180,20 @@ def test_analyze_has_no_pins_unless_asked(client):
     assert list(asked.json()["curves"]["pins"]) == ["O2", "B", "yoke"]  # the same, asked
 
 
-def test_the_openapi_shows_the_pins_for_an_analysis_only(client):
+def test_the_openapi_shows_the_pins_and_forces_for_an_analysis_only(client):
     schemas = client.get("/openapi.json").json()["components"]["schemas"]
     include = schemas["AnalyzeRequest"]["properties"]["include"]
-    assert include["items"]["enum"] == ["motion", "sensitivities", "envelope", "pins"]
+    assert include["items"]["enum"] == ["motion", "sensitivities", "envelope", "pins", "forces"]
     assert "pins (with crank_angles_deg or samples" in include["description"]
+    assert "forces (with a load and curves" in include["description"]
     pins = schemas["Curves"]["properties"]["pins"]
     assert {"$ref": "#/components/schemas/PinPath"} in [
         s.get("additionalProperties") for s in pins["anyOf"]
     ]
     assert set(schemas["PinPath"]["required"]) == {"x", "y"}
     # a candidate has no curves: synthesis does not offer them
-    assert "pins" not in schemas["SynthesizeRequest"]["properties"]["include"]["items"]["enum"]
+    offered = schemas["SynthesizeRequest"]["properties"]["include"]["items"]["enum"]
+    assert "pins" not in offered and "forces" not in offered
 
 
 def test_invalid_design_names_each_parameter(client):
@@ -345,6 +347,9 @@ BAD = [
     ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"relative": "nan"}), "relative"),
     ("/v1/analyze", with_(ANALYZE, ["include"], ["curvature"]), "include"),
     ("/v1/analyze", with_(ANALYZE, ["include"], ["pins"]), "include"),
+    ("/v1/analyze", {**ANALYZE, "samples": 4, "include": ["forces"]}, "include"),
+    ("/v1/analyze", {**ANALYZE, "load": LOAD, "include": ["forces"]}, "include"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "guide_friction": -0.1}), "guide_friction"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {"crank_rpm": 40.0}), "length_unit"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "length_unit": "ft"}), "length_unit"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "crank_rpm": 0.0}), "crank_rpm"),
@@ -474,8 +479,10 @@ def test_a_synthesis_on_the_exact_solvers_alone_runs_without_a_solver_slot(clien
 
 @pytest.mark.parametrize("kwargs", [
     {}, {"samples": 7}, {"crank_angles_deg": [0.0, 33.3, 90.0], "include": ["pins"]},
-    {"samples": 4, "include": list(ANALYSIS_INCLUDE), "tolerance": synth.Tolerance(relative=1e-3)},
-    {"samples": 5, "load": synth.Load("mm", 40.0, cutting_force=2000.0, slider_mass=50.0)},
+    {"samples": 4, "include": ["motion", "sensitivities", "envelope", "pins"],
+     "tolerance": synth.Tolerance(relative=1e-3)},
+    {"samples": 5, "include": ["forces"],
+     "load": synth.Load("mm", 40.0, cutting_force=2000.0, slider_mass=50.0, guide_friction=0.1)},
 ])  # fmt: skip
 @pytest.mark.parametrize("mtype", DESIGNS)
 def test_an_analysis_is_encoded_as_its_model_encodes_it(mtype, kwargs):
