@@ -254,6 +254,11 @@ class LoadSpec(Strict):
     guide_friction: float = Field(
         0.0, ge=0.0, le=2.0, description="Coulomb coefficient at the ram's guide (0: none)"
     )
+    gravity_deg: float | None = Field(
+        None, ge=-360.0, le=360.0,
+        description="the direction gravity pulls in, in the drawing's frame (degrees from +x, "
+        "counter-clockwise: -90 is down the drawing's y axis); omitted: no weight",
+    )  # fmt: skip
     force_profile: (
         Annotated[
             list[Annotated[list[Annotated[float, Field(ge=0.0, le=1e12)]],

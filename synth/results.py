@@ -142,6 +142,7 @@ class Tolerance:
 
 
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "in": 0.0254}  # metres per length unit
+GRAVITY = 9.80665  # m/s², standard
 
 
 @dataclass(frozen=True)
@@ -154,7 +155,9 @@ class Load:
     gives the resisting force as (fraction of the working stroke, N) points, increasing in
     the fraction, linear between them and 0 outside them. ``slider_mass`` (kg) is the ram
     and its tool, ``link_mass_per_length`` (kg/m) the links' (uniform slender rods; 0:
-    massless), ``guide_friction`` the Coulomb coefficient at the ram's guide.
+    massless), ``guide_friction`` the Coulomb coefficient at the ram's guide. ``gravity_deg``
+    is the direction gravity pulls in, in the drawing's frame (degrees from +x, counter-
+    clockwise; −90: down the drawing's y axis); None: no weight (the plane is horizontal).
     ``speed_fluctuation`` is the coefficient Cs = (ω_max − ω_min)/ω a flywheel must hold the
     crank within, ``efficiency`` the drive's from motor to crank."""
 
@@ -168,6 +171,7 @@ class Load:
     efficiency: float = 1.0
     force_profile: tuple[tuple[float, float], ...] | None = None
     guide_friction: float = 0.0
+    gravity_deg: float | None = None
 
     def __post_init__(self) -> None:
         if self.length_unit not in LENGTH_UNITS:
@@ -187,6 +191,9 @@ class Load:
                 sign = ">" if strict else "≥"
                 msg = f"load.{name} must be a finite number {sign} {low:g}, got {v!r}"
                 raise InvalidParameters(msg, ("load", name))
+        if self.gravity_deg is not None and not _number(self.gravity_deg):
+            msg = f"load.gravity_deg must be a finite angle, got {self.gravity_deg!r}"
+            raise InvalidParameters(msg, ("load", "gravity_deg"))
         e = self.efficiency
         if not (_number(e) and 0 < e <= 1):
             msg = f"load.efficiency must be in (0, 1], got {e!r}"
@@ -240,6 +247,14 @@ class Load:
     def omega(self) -> float:
         """The crank speed, rad/s."""
         return 2 * math.pi * self.crank_rpm / 60
+
+    @property
+    def gravity(self) -> tuple[float, float]:
+        """Gravity's acceleration in the drawing's frame, m/s² (0 without ``gravity_deg``)."""
+        if self.gravity_deg is None:
+            return 0.0, 0.0
+        a = math.radians(self.gravity_deg)
+        return GRAVITY * math.cos(a), GRAVITY * math.sin(a)
 
 
 def _number(v: Any) -> bool:

@@ -160,6 +160,7 @@ def loads(
     # in its position: F = F0 + (F1 − F0)(s − s0)/(s1 − s0) between its points' positions
     sign = math.copysign(1.0, st.s1 - st.s0)
     common = [load.metres, load.omega, load.slider_mass, load.link_mass_per_length]
+    gravity = load.gravity
     travel = (st.s1 - st.s0) * load.metres  # the working stroke, m, signed
     spans = []  # (lo, hi, force, slope)
     for (u0, f0), (u1, f1), lo, hi in zip(profile[:-1], profile[1:], at[:-1], at[1:], strict=True):
@@ -169,7 +170,7 @@ def loads(
     spans.append((at[-1], at[0] + TWO_PI, 0.0, 0.0))
     pieces = []
     for lo, hi, force, slope in spans:
-        base = np.concatenate([pv, common, [force, slope]])
+        base = np.concatenate([pv, common, [force, slope], gravity])
         if load.guide_friction == 0:
             pieces.append(Piece(sys, float(lo), float(hi), np.append(base, 0.0)))
         else:

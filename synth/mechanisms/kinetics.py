@@ -12,7 +12,8 @@ Mass model: each drawn member of a body is a uniform slender rod of ``mass_per_l
 (its mass at its middle, m L²/12 about it); the ram's mass is ``slider_mass``; blocks are
 massless. The force on the ram acts along its path (positive as s grows): ``force`` +
 ``force_slope`` × s, s in metres (a cut whose force varies linearly with the ram's position).
-Only the ram's guide rubs: its friction, −μ |N| sign(v) along the path, is ``friction`` × N
+Gravity (``gx``, ``gy``) pulls each member at its middle and the ram. Only the ram's guide
+rubs: its friction, −μ |N| sign(v) along the path, is ``friction`` × N
 where the signs of N and v hold (``friction`` = −μ sign(v) sign(N): the caller splits the
 turn where they change); pins and slots are frictionless.
 """
@@ -28,8 +29,10 @@ from .registry import GROUND, RAM, Mechanism, Params
 
 # the load's numbers a compiled model takes after the type's parameters: metres per length
 # unit, crank speed (rad/s), ram mass (kg), link mass per metre (kg/m), the force on the ram
-# (N) at s = 0 and its change per metre of s (N/m), the guide's friction per unit of N
-LOAD = ("unit", "omega", "slider_mass", "mass_per_length", "force", "force_slope", "friction")
+# (N) at s = 0 and its change per metre of s (N/m), gravity's x and y in the drawing's frame
+# (m/s²), the guide's friction per unit of N
+LOAD = ("unit", "omega", "slider_mass", "mass_per_length", "force", "force_slope", "gx", "gy",
+        "friction")  # fmt: skip
 
 
 def system(
@@ -89,8 +92,8 @@ def system(
     a[ram, n - 1] = w["friction"]  # and its friction along the path
 
     # what the unknowns balance: each body's inertia (Σ m a, and the moment of m a and I α
-    # about the crank pivot), the ram's, less the force on the ram
-    lam = w["mass_per_length"]
+    # about the crank pivot) less its weight, the ram's, less the force on the ram
+    lam, g = w["mass_per_length"], (w["gx"], w["gy"])
     for body in fr.bodies:
         r = rows_of[body[0]]
         (ax, ay), (bx, by) = (pins[q] for q in members[body[0]])
@@ -99,13 +102,16 @@ def system(
             (ax, ay), (bx, by) = (pins[q] for q in members[member])
             length = u * p[member]
             mass = lam * length
-            gx, gy = (ax + bx) / 2, (ay + by) / 2
-            fx, fy = mass * d2(gx), mass * d2(gy)
+            cx, cy = (ax + bx) / 2, (ay + by) / 2
+            fx, fy = mass * (d2(cx) - g[0]), mass * (d2(cy) - g[1])
             b[r] += fx
             b[r + 1] += fy
-            b[r + 2] += gx * fy - gy * fx + mass * length**2 / 12 * alpha
+            b[r + 2] += cx * fy - cy * fx + mass * length**2 / 12 * alpha
     s = u * m.position(p, th)
+    weight = (w["slider_mass"] * g[0], w["slider_mass"] * g[1])
     b[ram] += w["slider_mass"] * d2(s) - w["force"] - w["force_slope"] * s
+    b[ram] -= weight[0] * tx + weight[1] * ty
+    b[ram + 1] -= -weight[0] * ty + weight[1] * tx
     return a, b, layout
 
 

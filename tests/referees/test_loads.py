@@ -4,10 +4,10 @@
   SI (F the cutting force in its zone, or a profile's, linear between its points), with s′
   by complex step and s″ by a Cauchy integral on tests/support's own geometry, the working
   stroke and the cutting zone by its brute force. 1e-9 of the turn's largest |T|.
-- With link masses, the Newton–Euler torque against the energy balance T = dKE/dθ + F |s′|
-  [cutting] + μ |N| |s′| (the guide's friction), the kinetic energy of the drawn members
-  (uniform slender rods) and the ram from the pins' positions, differentiated by central
-  differences (fourth order, two steps Richardson-combined). 1e-8.
+- With link masses, the Newton–Euler torque against the energy balance T = d(KE + PE)/dθ +
+  F |s′| [cutting] + μ |N| |s′| (the guide's friction), the kinetic and potential energy of
+  the drawn members (uniform slender rods) and the ram from the pins' positions,
+  differentiated by central differences (fourth order, two steps Richardson-combined). 1e-8.
 - The guide's friction on a slider-crank with massless links, by hand. 1e-9.
 - The flywheel's energy swing against Simpson's rule on 200 000 points a turn, on each
   smooth piece of the torque curve (the zone's ends from the brute force). 1e-7.
@@ -100,9 +100,9 @@ def test_the_torque_does_the_rams_work(mtype):
 
 
 def _kinetic_energy(mtype, p, theta, load, h):
-    """KE(θ) (J) of the drawn members (uniform slender rods) and the ram, the members'
+    """KE(θ) + PE(θ) (J) of the drawn members (uniform slender rods) and the ram, the members'
     velocities by fourth-order central differences (step h) of the pins' positions, the ram's
-    by complex step."""
+    by complex step; PE in the load's gravity (the ram at the last pin of the drawing)."""
     m = get(mtype)
     k = load.metres
     offsets = np.array([-2, -1, 1, 2]) * h
@@ -115,6 +115,8 @@ def _kinetic_energy(mtype, p, theta, load, h):
         return (x * weights[None, :, None]).sum(axis=1) * OMEGA
 
     full = m.complete(p)
+    g = np.array(load.gravity)
+    here = {q: xy * k for q, xy in synth.joints(mtype, p, np.degrees(theta)).items()}
     ke = np.zeros(theta.size)
     for name, a, b in m.drawing:
         if {a, b} <= set(FIXED) or full[name] == 0:
@@ -127,8 +129,10 @@ def _kinetic_energy(mtype, p, theta, load, h):
         angle = np.unwrap(np.arctan2(rel[..., 1], rel[..., 0]), axis=1)
         spin = (angle * weights[None, :]).sum(axis=1) * OMEGA
         ke += 0.5 * mass * (vg**2).sum(axis=1) + 0.5 * mass * length**2 / 12 * spin**2
+        ke -= mass * ((here[a] + here[b]) / 2) @ g
     ram = velocity(mtype, p, theta) * k * OMEGA
-    return ke + 0.5 * load.slider_mass * ram**2
+    lifted = -load.slider_mass * list(here.values())[-1] @ g
+    return ke + 0.5 * load.slider_mass * ram**2 + lifted
 
 
 def _energy_rate(mtype, p, theta, load, h):
@@ -146,14 +150,16 @@ def _energy_rate(mtype, p, theta, load, h):
 
 @pytest.mark.parametrize("mtype", TYPES)
 def test_newton_euler_keeps_the_energy_balance(mtype):
-    """T = dKE/dθ + F |s′| + μ |N| |s′|: the work the ram and the links store, the cut's and
-    the guide's friction's (with the guide's force N the analysis gives, half the designs)."""
+    """T = d(KE + PE)/dθ + F |s′| + μ |N| |s′|: the work the ram and the links store, in
+    motion and in height (gravity in any direction, half the designs), the cut's and the
+    guide's friction's (with the guide's force N the analysis gives, half the designs)."""
     rng = np.random.default_rng(100 + TYPES.index(mtype))
     h = 2e-3  # with h/2: ~1e-11 on the sharpest Whitworth; rounding grows below (as 1/h²)
     for i, p in enumerate(random_designs(mtype, 40, seed=22)):
         mu = float(rng.uniform(0, 0.3)) if i % 2 else 0.0
+        down = float(rng.uniform(-180, 180)) if i % 4 > 1 else None
         load = Load("mm", RPM, cutting_force=float(rng.uniform(0, 5000)), cutting_zone=(0.0, 1.0),
-                    slider_mass=float(rng.uniform(0, 200)), guide_friction=mu,
+                    slider_mass=float(rng.uniform(0, 200)), guide_friction=mu, gravity_deg=down,
                     link_mass_per_length=float(rng.uniform(0.1, 50)))  # fmt: skip
         theta = rng.uniform(0, 2 * math.pi, 16)
         got = synth.analyze(mtype, p, crank_angles_deg=np.degrees(theta), load=load,
@@ -324,6 +330,8 @@ def test_units_give_the_same_si_numbers(mtype):
         ({"cutting_zone": (0.1, 1.5)}, "cutting_zone", "end ≤ 1"),
         ({"speed_fluctuation": 0.0}, "speed_fluctuation", "> 0"),
         ({"efficiency": 1.2}, "efficiency", "(0, 1]"),
+        ({"gravity_deg": math.inf}, "gravity_deg", "finite"),
+        ({"guide_friction": -0.1}, "guide_friction", "≥ 0"),
         ({"force_profile": ((0.0, 10.0),)}, "force_profile", "at least two"),
         ({"force_profile": ((0.0, 10.0), (0.5, math.nan))}, "force_profile", "finite"),
         ({"force_profile": ((0.5, 10.0), (0.5, 20.0))}, "force_profile", "must increase"),

@@ -350,6 +350,7 @@ BAD = [
     ("/v1/analyze", {**ANALYZE, "samples": 4, "include": ["forces"]}, "include"),
     ("/v1/analyze", {**ANALYZE, "load": LOAD, "include": ["forces"]}, "include"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "guide_friction": -0.1}), "guide_friction"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "gravity_deg": 400.0}), "gravity_deg"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {"crank_rpm": 40.0}), "length_unit"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "length_unit": "ft"}), "length_unit"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "crank_rpm": 0.0}), "crank_rpm"),
