@@ -66,9 +66,9 @@ def analyze(
     ``tolerance``, which adds the worst-case deviations), ``"envelope"`` (the box the frame
     must hold) and ``"pins"`` (the curves' ``pins``: every pin of the type's drawing at the
     curves' angles, as ``joints`` gives them; only with curves). A ``load`` adds ``loads``
-    (the crank torque, power and flywheel, the joints' and the guide's forces) and, with
-    curves, the torque curve; its crank speed is the curves' too (``crank_speed``, rad/s,
-    1 by default).
+    (the crank torque, power and flywheel, the joints' and the guide's largest forces) and,
+    with curves, the torque curve (and with ``"forces"`` the forces'); its crank speed is the
+    curves' too (``crank_speed``, rad/s, is 1 by default).
 
     >>> a = analyze("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
     ...                           "connecting_rod": 200})

@@ -7,7 +7,8 @@ differentiated, A z′ = b′ − A′ z and A z″ = b″ − 2 A′ z′ − A
 automatic differentiation. The resisting force is linear in the ram's position between the
 points of the load's profile (a cutting force over its zone: two points), and steps where the
 working stroke passes them (``quality.reached``): the turn is a piece between each two and a
-piece for the rest, each smooth:
+piece for the rest; with the guide's friction, split further where the ram turns and where
+the guide's force changes sign (``_rubbing``). On each piece everything is smooth:
 
 - extremes: the stationary points of each quantity on each piece (bracketed on a grid,
   polished by the safeguarded Newton iteration that finds the dead centres, ``roots``), and
@@ -191,6 +192,7 @@ def loads(
     flywheel = Flywheel(energy, energy / (load.speed_fluctuation * om**2))
     largest = [Force(float(v.max()), _deg(x[int(np.argmax(v))])) for x, v in found_all]
     joints = dict(zip((*lay.pins, *lay.slots), largest[:-1], strict=True))
+    quantities = [_torque, *pushes]
 
     def curves(theta: np.ndarray) -> dict[str, np.ndarray]:
         """The torque and each force (``Loads``' names, the guide's last) at each crank angle,
@@ -205,7 +207,6 @@ def loads(
             left &= ~mine
         return dict(zip(("torque", *joints, "guide"), out, strict=True))
 
-    quantities = [_torque, *pushes]
     return Loads(t, power, flywheel, joints, largest[-1]), curves
 
 

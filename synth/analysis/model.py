@@ -2,7 +2,8 @@
 
 The rows are the slider's position s(θ) and each pin joint's transmission cosine, with their
 first and second θ-derivatives (automatic differentiation); ``kind="motion"`` gives the rows
-s′ and s″ instead, whose stationary points are the velocity and acceleration extremes. The
+s′ and s″ instead, whose stationary points are the velocity and acceleration extremes.
+``Forces`` compiles a variant's Newton–Euler equations for the loads the same way. The
 functions are built to machine code where a C compiler is at hand (``native``), and are never
 shared between threads.
 """
