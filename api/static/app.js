@@ -119,10 +119,14 @@ function synthRequest() {
   const bound = num("bound");
   if (bound !== null) body.min_transmission_angle_deg = bound;
   if (mechanisms.length) body.mechanisms = mechanisms;
+  const load = loadOf("y");
+  if (load) body.load = load;
   return body;
 }
 
 function synthFieldId(loc) {
+  const loaded = loadFieldId("y", loc);
+  if (loaded) return loaded;
   const where = loc[0] === "body" ? loc.slice(1) : loc;
   const top = { time_ratio: "time_ratio", stroke: "stroke", min_transmission_angle_deg: "bound",
     objective: "objective" };
@@ -161,12 +165,14 @@ async function synthesize(choose = 0) {
     btn.addEventListener("click", () => choose_(cands, i, body));
     tr.append(el("td", {}, c.type), el("td", {}, fmt(c.min_transmission_angle_deg, 6)),
       el("td", {}, fmt(c.size, 6)), el("td", {}, links), el("td", {}, c.method));
+    if (body.load) tr.append(el("td", {}, fmt(c.loads.torque.max, 5)), el("td", {}, fmt(c.loads.flywheel.inertia, 4)));
     const last = el("td"); last.append(btn); tr.append(last);
     tbody.append(tr);
   });
   for (const why of r.data.infeasible) {
     $("refusals").append(el("li", { "data-type": why.type }, `${why.type}: ${why.code} — ${why.reason}`));
   }
+  $("candidates").classList.toggle("with-loads", Boolean(body.load));
   frontPlot(cands, body);
   if (cands.length) choose_(cands, Math.min(choose, cands.length - 1), body);
 }
@@ -177,7 +183,7 @@ function choose_(cands, i, body) {
   }
   const c = cands[i];
   saveState("synthesize", { ...synthState(), choose: String(i) });
-  showDesign(c.type, c.params, body.min_transmission_angle_deg || 0);
+  showDesign(c.type, c.params, body.min_transmission_angle_deg || 0, null, body.load || null);
 }
 
 function synthState() {
@@ -250,21 +256,48 @@ function designFieldId(prefix) {
   };
 }
 
-const LOAD_FIELDS = ["crank_rpm", "cutting_force", "slider_mass", "link_mass_per_length", "guide_friction"];
+// a load's fields: [name, label, default]; the cutting zone's two ends and the unit aside
+const LOAD_FIELDS = [["crank_rpm", "Crank speed (rpm)", 40], ["cutting_force", "Cutting force (N)", 2000],
+  ["slider_mass", "Ram and tool (kg)", 60], ["link_mass_per_length", "Links (kg/m)", 0],
+  ["guide_friction", "Guide friction (μ)", 0]];
 
-function loadOf() {
-  // the analysis view's load, while its box is open (else none)
-  if (!$("a-load").open) return null;
-  const load = { length_unit: $("a-load-length_unit").value,
-    cutting_zone: [num("a-load-cutting_zone"), num("a-load-cutting_zone-end")] };
-  for (const k of LOAD_FIELDS) load[k] = num(`a-load-${k}`);
+function loadBox(prefix) {
+  // the load form of a view (ids `${prefix}-load-...`), closed: no load until opened
+  const id = (k) => `${prefix}-load-${k}`;
+  const fields = el("div", { class: "fields" });
+  const row = (k, label, input) => fields.append(el("label", { for: id(k) }, label), input,
+    el("p", { class: "error", id: `${id(k)}-error`, role: "alert" }));
+  const unit = el("select", { id: id("length_unit") });
+  unit.append(...["mm", "m", "in"].map((u) => el("option", { value: u }, u)));
+  row("length_unit", "Lengths in", unit);
+  const number = (k, v) => { const x = el("input", { id: k, type: "number", step: "any" }); x.value = v; return x; };
+  for (const [k, label, v] of LOAD_FIELDS.slice(0, 2)) row(k, label, number(id(k), v));
+  fields.append(el("label", { for: id("cutting_zone") }, "Cuts from (fraction of the working stroke)"),
+    number(id("cutting_zone"), 0.1), el("label", { for: id("cutting_zone-end") }, "to"),
+    number(id("cutting_zone-end"), 0.9), el("p", { class: "error", id: `${id("cutting_zone")}-error`, role: "alert" }));
+  for (const [k, label, v] of LOAD_FIELDS.slice(2)) row(k, label, number(id(k), v));
+  const box = el("details", { id: `${prefix}-load` });
+  box.append(el("summary", {}, "Load: torque, flywheel, joint forces"), fields);
+  return box;
+}
+
+function loadOf(prefix) {
+  // a view's load, while its box is open (else none)
+  if (!$(`${prefix}-load`).open) return null;
+  const load = { length_unit: $(`${prefix}-load-length_unit`).value,
+    cutting_zone: [num(`${prefix}-load-cutting_zone`), num(`${prefix}-load-cutting_zone-end`)] };
+  for (const [k] of LOAD_FIELDS) load[k] = num(`${prefix}-load-${k}`);
   return load;
 }
 
-function analysisFieldId(loc) {
+function loadFieldId(prefix, loc) {
+  // the load field an error is at, or null
   const i = loc.indexOf("load");
-  if (i >= 0 && typeof loc[i + 1] === "string") return `a-load-${loc[i + 1]}`;
-  return designFieldId("a")(loc);
+  return i >= 0 && typeof loc[i + 1] === "string" ? `${prefix}-load-${loc[i + 1]}` : null;
+}
+
+function analysisFieldId(loc) {
+  return loadFieldId("a", loc) ?? designFieldId("a")(loc);
 }
 
 async function analyzeView() {
@@ -273,7 +306,7 @@ async function analyzeView() {
   const d = designOf("a");
   saveState("analyze", { type: d.type, ...d.params });
   await showDesign(d.type, d.params, 0, (detail) => showErrors(detail, analysisFieldId, "a-form-error"),
-    loadOf());
+    loadOf("a"));
 }
 
 function setSweepRange() {
@@ -602,6 +635,7 @@ async function init() {
   for (const m of r.data) TYPES[m.type] = m;
   buildObjectives(schema.data);
   buildTypes();
+  for (const slot of document.querySelectorAll(".load-slot")) slot.replaceWith(loadBox(slot.dataset.prefix));
   for (const prefix of ["a", "s"]) {
     const sel = $(`${prefix}-type`);
     sel.replaceChildren(...Object.values(TYPES).map((m) => el("option", { value: m.type }, m.title)));

@@ -244,6 +244,22 @@ def test_the_analysis_takes_a_load(page):
     pg.wait_for_selector("#loads", state="hidden")
 
 
+def test_the_synthesis_takes_a_load(page):
+    """With a load, each candidate shows its peak torque and flywheel, and the chosen design
+    its torque curve; a bad load field is marked."""
+    pg = page.page
+    pg.click("#y-load summary")
+    pg.fill("#y-load-cutting_force", "-1")
+    pg.click("#run")
+    pg.wait_for_selector("#y-load-cutting_force-error:not(:empty)")
+    pg.fill("#y-load-cutting_force", "2000")
+    pg.click("#run")
+    pg.wait_for_selector("#candidates.with-loads tbody tr")
+    cells = pg.locator("#candidates tbody tr").first.locator("td")
+    assert float(cells.nth(5).inner_text()) > 0 and float(cells.nth(6).inner_text()) > 0
+    pg.wait_for_selector("#plot-torque polyline.series", state="attached")
+
+
 def test_a_sweep_out_of_budget_says_where_it_ended(page):
     """The page sends no budget; the request is given a 50 ms one on its way (the real server
     answers it): the plot ends where the server stopped, and the page says so."""
