@@ -39,6 +39,23 @@ ANALYZE = {
             }
         },
     ),
+    "loads": Example(
+        summary="the same Whitworth driving a shaper's ram: a 2 kN cut at 40 strokes a minute",
+        value={
+            "mechanism": {
+                "type": "whitworth",
+                "params": {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200},
+            },
+            "load": {
+                "length_unit": "mm",
+                "crank_rpm": 40,
+                "cutting_force": 2000,
+                "slider_mass": 60,
+                "link_mass_per_length": 8,
+            },
+            "samples": 72,
+        },
+    ),
 }
 
 SYNTHESIZE = {

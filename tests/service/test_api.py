@@ -272,6 +272,22 @@ def test_a_synthesis_with_a_load_gives_each_candidate_its_loads(client):
     assert all(c["loads"] is None for c in plain.json()["candidates"])
 
 
+def test_every_worked_example_of_the_docs_answers(client):
+    """Each example /docs offers for a request (OpenAPI's examples) is a request the service
+    answers with 200."""
+    paths = client.get("/openapi.json").json()["paths"]
+    tried = 0
+    for path, methods in paths.items():
+        body = methods.get("post", {}).get("requestBody", {})
+        for example in (
+            body.get("content", {}).get("application/json", {}).get("examples", {}).values()
+        ):
+            r = client.post(path, json=example["value"])
+            assert r.status_code == 200, (path, example["summary"], r.text[:300])
+            tried += 1
+    assert tried >= 6
+
+
 def test_an_analysis_takes_a_force_profile(client):
     """A profile's force, linear between its points: the mean torque is its work a turn
     (the trapezoid's area under the profile, times the stroke) over 2π."""
