@@ -26,6 +26,7 @@ from synth import results
 from synth.analysis.kinematics import ANALYSIS_INCLUDE, INCLUDE, MAX_CURVE_POINTS
 from synth.analysis.quality import CUT
 from synth.analysis.sweep import MAX_POINTS
+from synth.load import LENGTH_UNITS
 from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.synthesis.driver import MAX_CANDIDATES, PER_TYPE
 from synth.targets import OBJECTIVES, PARETO
@@ -229,7 +230,7 @@ class LoadSpec(Strict):
     and flywheel, the joints' and the guide's largest forces) and, with curves, the torque
     curve. Forces and masses are SI; the design's lengths are in ``length_unit``."""
 
-    length_unit: Literal[tuple(results.LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
+    length_unit: Literal[tuple(LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
         ..., description="the unit of the design's lengths (forces and masses are SI)"
     )
     crank_rpm: float = Field(..., gt=0.0, le=1e6, description="the crank's constant speed")

@@ -17,16 +17,9 @@ from . import atlas, mechanisms
 from .analysis.kinematics import analyze, analyze_many, joints
 from .analysis.sweep import sweep
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
+from .load import Load
 from .mechanisms import register
-from .results import (
-    Analysis,
-    Candidate,
-    Infeasible,
-    Load,
-    SweepResult,
-    SynthesisResult,
-    Tolerance,
-)
+from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
 from .synthesis import Solver, Spec, synthesize
 from .version import __version__ as __version__
 

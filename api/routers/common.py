@@ -7,7 +7,8 @@ from typing import Annotated, Any
 from fastapi import Depends, Request
 
 from synth.errors import InvalidDesign, InvalidParameters, SynthError
-from synth.results import Load, Tolerance
+from synth.load import Load
+from synth.results import Tolerance
 
 from ..engine import Engine
 from ..gate import arrival

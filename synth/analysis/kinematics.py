@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidDesign, InvalidParameters, SynthError
+from ..load import Load
 from ..mechanisms import Mechanism, get
 from ..mechanisms.fourbar.geometry import grashof_class
 from ..results import (
@@ -26,7 +27,6 @@ from ..results import (
     Curves,
     Extreme,
     Joint,
-    Load,
     PinPath,
     Stroke,
     Tolerance,
@@ -77,18 +77,7 @@ def analyze(
     """
     deg = _asked(mechanism, include, crank_angles_deg, samples, load is not None)
     m, p, variant, f, pv, found = _prepared(mechanism, params)  # checked there
-    if load is not None:
-        if m.frame is None:
-            raise InvalidParameters(f"load: {mechanism} has no force model yet", ("load",))
-        if crank_acceleration:
-            msg = "with a load the crank turns at constant speed: crank_acceleration must be 0"
-            raise InvalidParameters(msg, ("crank_acceleration",))
-        if crank_speed is not None and crank_speed != load.omega:
-            msg = (f"crank_speed {crank_speed:g} rad/s differs from the load's crank_rpm "
-                   f"{load.crank_rpm:g} ({load.omega:.9g} rad/s): give one of them")  # fmt: skip
-            raise InvalidParameters(msg, ("crank_speed",))
-        crank_speed = load.omega
-    crank_speed = 1.0 if crank_speed is None else crank_speed
+    crank_speed = loads.speed(m, load, crank_speed, crank_acceleration)
     return _analysis(m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include,
                      tolerance, load)  # fmt: skip
 
@@ -254,9 +243,8 @@ def _check_values(
     m = get(mechanism)
     curves = len(fields(Curves)) - 3 + loaded  # the pins and forces aside, the torque with a load
     pins = len({pin for d in m.drawing for pin in d[1:]}) if "pins" in include else 0
-    if "forces" in include and m.frame is not None:  # each joint's, the guide's
-        fr = m.frame(frozenset())
-        curves += len(fr.pins) + len(fr.slots) + 1
+    if "forces" in include:
+        curves += loads.forces_of(m)
     per = curves + 2 * pins
     if points * per > MAX_CURVE_VALUES:
         what = f"{curves} curves" + (f" and x, y of {pins} pins" if pins else "")

@@ -28,9 +28,10 @@ from typing import cast
 
 import numpy as np
 
-from ..errors import InvalidDesign
+from ..errors import InvalidDesign, InvalidParameters
+from ..load import Load
 from ..mechanisms import Mechanism
-from ..results import Flywheel, Force, Load, Loads, Power, Torque
+from ..results import Flywheel, Force, Loads, Power, Torque
 from .model import GRID, Forces, Model, forces
 from .quality import Strokes, reached
 from .roots import TWO_PI, _rtsafe
@@ -137,6 +138,35 @@ def _extremes(
             xs[i].append(x)
             vs[i].append(piece.at(x, f))
     return [(np.concatenate(x), np.concatenate(v)) for x, v in zip(xs, vs, strict=True)]
+
+
+def speed(
+    m: Mechanism, load: Load | None, crank_speed: float | None, crank_acceleration: float
+) -> float:
+    """The curves' crank speed (rad/s): the load's, which a ``crank_speed`` given too must
+    equal; else ``crank_speed``, 1 by default. Raises InvalidParameters for a load the type
+    cannot take, or with a crank that accelerates."""
+    if load is None:
+        return 1.0 if crank_speed is None else crank_speed
+    if m.frame is None:
+        raise InvalidParameters(f"load: {m.type} has no force model yet", ("load",))
+    if crank_acceleration:
+        msg = "with a load the crank turns at constant speed: crank_acceleration must be 0"
+        raise InvalidParameters(msg, ("crank_acceleration",))
+    if crank_speed is not None and crank_speed != load.omega:
+        msg = (f"crank_speed {crank_speed:g} rad/s differs from the load's crank_rpm "
+               f"{load.crank_rpm:g} ({load.omega:.9g} rad/s): give one of them")  # fmt: skip
+        raise InvalidParameters(msg, ("crank_speed",))
+    return load.omega
+
+
+def forces_of(m: Mechanism) -> int:
+    """How many force curves an analysis with ``"forces"`` carries at most: each joint's and
+    the guide's (a variant's own joints are as many or fewer)."""
+    if m.frame is None:
+        return 0
+    fr = m.frame(frozenset())
+    return len(fr.pins) + len(fr.slots) + 1
 
 
 def loads(

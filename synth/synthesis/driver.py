@@ -18,8 +18,9 @@ from typing import Any
 
 from ..analysis.kinematics import analyze, check_drawn, check_include
 from ..errors import InvalidParameters
+from ..load import Load
 from ..mechanisms import all_types, get
-from ..results import Candidate, Infeasible, Load, SynthesisResult, Tolerance
+from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
 from ..targets import MIN_SIZE, MOTION_OBJECTIVES, OBJECTIVES, PARETO
 from .candidate import candidate, predicted_rank, rank
 from .diagnose import diagnose

@@ -27,8 +27,8 @@ from scipy.optimize import brentq
 
 import synth
 from synth.errors import InvalidDesign, InvalidParameters
+from synth.load import Load
 from synth.mechanisms import get
-from synth.results import Load
 
 from ..support import bruteforce
 from ..support.designs import TYPES, random_designs

@@ -1,0 +1,132 @@
+"""What a design drives: the load of an analysis (or of a synthesis's candidates), checked.
+
+Lengths stay in the caller's unit (``length_unit``); forces, masses and everything the loads
+answer are SI (``synth.analysis.loads``; ``docs/model.md``, *Loads*).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from .errors import InvalidParameters
+
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "in": 0.0254}  # metres per length unit
+GRAVITY = 9.80665  # m/s², standard
+
+
+@dataclass(frozen=True)
+class Load:
+    """What a design drives, at constant crank speed (an analysis's ``load``).
+
+    The lengths stay in the caller's unit, ``length_unit`` (one of ``LENGTH_UNITS``); forces
+    and masses are SI. ``cutting_force`` (N) resists the ram through ``cutting_zone``, the
+    fractions of the working stroke (by position) where the tool cuts; or ``force_profile``
+    gives the resisting force as (fraction of the working stroke, N) points, increasing in
+    the fraction, linear between them and 0 outside them. ``slider_mass`` (kg) is the ram
+    and its tool, ``link_mass_per_length`` (kg/m) the links' (uniform slender rods; 0:
+    massless), ``guide_friction`` the Coulomb coefficient at the ram's guide. ``gravity_deg``
+    is the direction gravity pulls in, in the drawing's frame (degrees from +x, counter-
+    clockwise; −90: down the drawing's y axis); None: no weight (the plane is horizontal).
+    ``speed_fluctuation`` is the coefficient Cs = (ω_max − ω_min)/ω a flywheel must hold the
+    crank within, ``efficiency`` the drive's from motor to crank."""
+
+    length_unit: str
+    crank_rpm: float
+    cutting_force: float = 0.0
+    cutting_zone: tuple[float, float] = (0.1, 0.9)
+    slider_mass: float = 0.0
+    link_mass_per_length: float = 0.0
+    speed_fluctuation: float = 0.05
+    efficiency: float = 1.0
+    force_profile: tuple[tuple[float, float], ...] | None = None
+    guide_friction: float = 0.0
+    gravity_deg: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.length_unit not in LENGTH_UNITS:
+            raise InvalidParameters(
+                f"load.length_unit must be one of {', '.join(LENGTH_UNITS)} (the unit of the "
+                f"design's lengths: forces and masses are SI), got {self.length_unit!r}",
+                ("load", "length_unit"),
+            )
+        for name, low, strict in (("crank_rpm", 0.0, True), ("cutting_force", 0.0, False),
+                                  ("slider_mass", 0.0, False),
+                                  ("link_mass_per_length", 0.0, False),
+                                  ("guide_friction", 0.0, False),
+                                  ("speed_fluctuation", 0.0, True)):  # fmt: skip
+            v = getattr(self, name)
+            ok = _number(v) and (v > low if strict else v >= low)
+            if not ok:
+                sign = ">" if strict else "≥"
+                msg = f"load.{name} must be a finite number {sign} {low:g}, got {v!r}"
+                raise InvalidParameters(msg, ("load", name))
+        if self.gravity_deg is not None and not _number(self.gravity_deg):
+            msg = f"load.gravity_deg must be a finite angle, got {self.gravity_deg!r}"
+            raise InvalidParameters(msg, ("load", "gravity_deg"))
+        e = self.efficiency
+        if not (_number(e) and 0 < e <= 1):
+            msg = f"load.efficiency must be in (0, 1], got {e!r}"
+            raise InvalidParameters(msg, ("load", "efficiency"))
+        zone = tuple(self.cutting_zone)
+        if not (len(zone) == 2 and all(_number(z) for z in zone)
+                and 0 <= zone[0] < zone[1] <= 1):  # fmt: skip
+            msg = (f"load.cutting_zone must be [start, end] with 0 ≤ start < end ≤ 1 (fractions "
+                   f"of the working stroke), got {list(zone)!r}")  # fmt: skip
+            raise InvalidParameters(msg, ("load", "cutting_zone"))
+        object.__setattr__(self, "cutting_zone", (float(zone[0]), float(zone[1])))
+        if self.force_profile is not None:
+            self._check_profile()
+
+    def _check_profile(self) -> None:
+        loc = ("load", "force_profile")
+        if self.cutting_force or self.cutting_zone != (0.1, 0.9):
+            msg = "load: give cutting_force (and cutting_zone) or force_profile, not both"
+            raise InvalidParameters(msg, loc)
+        points = [tuple(q) for q in self.force_profile or ()]
+        if len(points) < 2 or any(len(q) != 2 or not all(map(_number, q)) for q in points):
+            msg = (f"load.force_profile must be at least two [fraction, force] pairs of finite "
+                   f"numbers, got {self.force_profile!r}")  # fmt: skip
+            raise InvalidParameters(msg, loc)
+        for i, (u, f) in enumerate(points):
+            if not 0 <= u <= 1 or f < 0:
+                msg = (f"load.force_profile[{i}]: the fraction must be in [0, 1] and the force "
+                       f"≥ 0, got [{u:g}, {f:g}]")  # fmt: skip
+                raise InvalidParameters(msg, (*loc, i))
+            if i and u <= points[i - 1][0]:
+                msg = (f"load.force_profile[{i}]: fractions must increase, got {u:g} after "
+                       f"{points[i - 1][0]:g}")  # fmt: skip
+                raise InvalidParameters(msg, (*loc, i))
+        object.__setattr__(self, "force_profile", tuple((float(u), float(f)) for u, f in points))
+
+    @property
+    def profile(self) -> tuple[tuple[float, float], ...]:
+        """The resisting force as (fraction of the working stroke, N) points: the given
+        profile, or the cutting force over its zone."""
+        if self.force_profile is not None:
+            return self.force_profile
+        (a, b), f = self.cutting_zone, self.cutting_force
+        return ((a, f), (b, f))
+
+    @property
+    def metres(self) -> float:
+        """Metres per length unit."""
+        return LENGTH_UNITS[self.length_unit]
+
+    @property
+    def omega(self) -> float:
+        """The crank speed, rad/s."""
+        return 2 * math.pi * self.crank_rpm / 60
+
+    @property
+    def gravity(self) -> tuple[float, float]:
+        """Gravity's acceleration in the drawing's frame, m/s² (0 without ``gravity_deg``)."""
+        if self.gravity_deg is None:
+            return 0.0, 0.0
+        a = math.radians(self.gravity_deg)
+        return GRAVITY * math.cos(a), GRAVITY * math.sin(a)
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
