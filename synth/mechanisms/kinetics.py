@@ -13,9 +13,9 @@ Mass model: each drawn member of a body is a uniform slender rod of ``mass_per_l
 massless. The force on the ram acts along its path (positive as s grows): ``force`` +
 ``force_slope`` × s, s in metres (a cut whose force varies linearly with the ram's position).
 Gravity (``gx``, ``gy``) pulls each member at its middle and the ram. Only the ram's guide
-rubs: its friction, −μ |N| sign(v) along the path, is ``friction`` × N
-where the signs of N and v hold (``friction`` = −μ sign(v) sign(N): the caller splits the
-turn where they change); pins and slots are frictionless.
+rubs: its friction, −μ |N| sign(v) along the path, is ``friction`` × N where the signs of N
+and v hold (``friction`` = −μ sign(v) sign(N): the caller splits the turn where they
+change); pins and slots are frictionless.
 """
 
 from __future__ import annotations
