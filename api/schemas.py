@@ -284,12 +284,13 @@ class LoadSpec(Strict):
     @field_validator("force_profile")
     @classmethod
     def _profile(cls, profile: list[list[float]] | None) -> list[list[float]] | None:
-        for i, (u, _) in enumerate(profile or ()):
+        fractions = [u for u, _ in profile or ()]
+        for i, u in enumerate(fractions):
             if u > 1:
                 raise ValueError(f"[{i}]: the fraction {u:g} must be at most 1")
-            if i and u <= profile[i - 1][0]:  # type: ignore[index]
+            if i and u <= fractions[i - 1]:
                 raise ValueError(f"[{i}]: fractions must increase, got {u:g} after "
-                                 f"{profile[i - 1][0]:g}")  # type: ignore[index]  # fmt: skip
+                                 f"{fractions[i - 1]:g}")  # fmt: skip
         return profile
 
     @model_validator(mode="after")
