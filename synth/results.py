@@ -166,9 +166,10 @@ class Power:
 
 @dataclass(frozen=True)
 class Flywheel:
-    """The largest swing of the crank's energy over a turn (J: the turning-moment diagram's
-    largest area between the torque and its mean) and the flywheel inertia (kg·m²) on the
-    crank shaft that holds its speed within the load's ``speed_fluctuation``."""
+    """The largest swing of the crank's energy over a turn, ΔE = max E − min E with E(θ) =
+    ∫ (T − T_mean) dθ (J: the turning-moment diagram's areas between its highest and lowest
+    points), and the flywheel inertia (kg·m²) on the crank shaft that holds its speed within
+    the load's ``speed_fluctuation``."""
 
     energy: float
     inertia: float
