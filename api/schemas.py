@@ -360,9 +360,10 @@ class SynthesizeRequest(Extras):
         "design; min_size: the smallest sum of link lengths meeting the bound (which must "
         "then be > 0°); uniform_cutting_speed: the least speed fluctuation (largest speed over "
         f"mean speed) over the {_MIDDLE}, where a tool cuts; "
-        "min_peak_acceleration: the least peak acceleration over both strokes, in ω²·stroke. "
-        "The last two are local optima from many starts (method slsqp), each candidate "
-        "carrying its motion",
+        "min_peak_acceleration: the least peak acceleration over both strokes, in ω²·stroke; "
+        "min_peak_torque: the least peak crank torque under the request's load. "
+        "The last three are local optima from many starts (method slsqp), each candidate "
+        "carrying its motion, or its loads",
     )
     max_working_speed_fluctuation: float | None = Field(
         None,
@@ -381,8 +382,14 @@ class SynthesizeRequest(Extras):
     )
     time_budget_ms: float | None = BUDGET
     load: LoadSpec | None = Field(
-        None, description="what the design drives: adds each candidate's loads"
+        None,
+        description="what the design drives: adds each candidate's loads; the objective "
+        "min_peak_torque minimises its peak crank torque (a load without guide friction)",
     )
+    max_peak_torque: float | None = Field(
+        None, gt=0.0, le=1e15, description="N·m: a limit on the peak crank torque, with "
+        "the objective min_peak_torque",
+    )  # fmt: skip
 
 
 class SweepRequest(Strict):

@@ -19,14 +19,17 @@ if TYPE_CHECKING:
 # a number or a CasADi symbol (the IPOPT formulation's time ratio)
 T = TypeVar("T", float, "ca.DM", "ca.SX", "ca.MX")
 
-# the objectives: the reduced solvers' and IPOPT's two, the front between them, and the two on
-# how the slider moves (``synth.synthesis.motion``)
+# the objectives: the reduced solvers' and IPOPT's two, the front between them, the two on how
+# the slider moves (``synth.synthesis.motion``)
 MAX_TRANSMISSION = "max_transmission_angle"
 MIN_SIZE = "min_size"
 PARETO = "pareto"
 UNIFORM = "uniform_cutting_speed"
 PEAK = "min_peak_acceleration"
 MOTION_OBJECTIVES = (UNIFORM, PEAK)
+# and the least peak crank torque under a load (``synth.analysis.loads``), by the same search
+PEAK_TORQUE = "min_peak_torque"
+SEARCHED = (*MOTION_OBJECTIVES, PEAK_TORQUE)
 # every objective a request may name, the default first, each with the words a person reads
 OBJECTIVES = {
     PARETO: "Trade-off front (size against transmission)",
@@ -34,6 +37,7 @@ OBJECTIVES = {
     MIN_SIZE: "Smallest design",
     UNIFORM: "Most uniform cutting speed",
     PEAK: "Least peak acceleration",
+    PEAK_TORQUE: "Least peak torque (with a load)",
 }
 
 

@@ -59,5 +59,6 @@ async def synthesize(
         max_working_speed_fluctuation=body.max_working_speed_fluctuation,
         tolerance=tolerance(body),
         load=load(body.load),
+        max_peak_torque=body.max_peak_torque,
     )
     return r

@@ -162,33 +162,6 @@ def _analysis(
     return Analysis(**summary)
 
 
-def motion_terms(
-    mechanism: str, params: Mapping[str, float], gradient: bool = False
-) -> quality.MotionTerms:
-    """The values whose maxima are the motion measures (``quality.MotionTerms``), with their
-    derivatives in the parameters when ``gradient``, for an optimiser that bounds each;
-    raises SynthError for a design that does not run."""
-    m, _, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)
-    if np.count_nonzero(rows == 0) != 2:
-        msg = "the slider does not run one working and one return stroke"
-        raise InvalidDesign(msg, (), "stroke")
-    st = quality.Strokes(*_ends(rows, theta, values))
-    if st.stroke == 0:  # a design at the edge of running: its extremes coincide
-        raise InvalidDesign("the slider does not move: its stroke is 0", (), "stroke")
-    return quality.motion_terms(m, variant, f, pv, st, gradient)
-
-
-def worst_transmission(mechanism: str, params: Mapping[str, float]) -> tuple[float, ...]:
-    """Each transmission joint's crank angle (radians) where its |cos μ| is largest, in the
-    type's order; raises SynthError for a design that does not run."""
-    _, _, _, f, _, (rows, theta, values) = _prepared(mechanism, params)
-    out = []
-    for j in range(1, len(f.names) + 1):
-        k = np.nonzero(rows == j)[0]
-        out.append(float(theta[k[np.argmax(np.abs(values[k]))]]) if k.size else 0.0)
-    return tuple(out)
-
-
 def _prepared(
     mechanism: str, params: Mapping[str, float]
 ) -> tuple[Mechanism, dict[str, float], frozenset[str], Model, np.ndarray, Points]:

@@ -24,13 +24,14 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
 
 from ..errors import InvalidDesign, InvalidParameters
 from ..load import Load
-from ..mechanisms import Mechanism
+from ..mechanisms import Mechanism, kinetics
 from ..results import Flywheel, Force, Loads, Power, Torque
 from .model import GRID, Forces, Model, forces
 from .quality import Strokes, reached
@@ -180,32 +181,12 @@ def loads(
     """The loads of a design (``pv``: its parameters; ``st``: its strokes) under ``load``, and
     its torque and forces as functions of crank angles (radians), for curves."""
     sys = forces(m, variant)
-    # the profile's points' crank angles: roots of s − level inside the working stroke, the
-    # stroke's dead centres at its ends
-    profile = np.array(load.profile)
-    fractions = profile[:, 0]
-    inner = (fractions > 0) & (fractions < 1)
-    at = np.where(fractions == 0, st.start, st.start + st.working)
-    at[inner] = reached(f, pv, st, fractions[inner])
-    # each segment's force resists the ram (against its travel in the working stroke), linear
-    # in its position: F = F0 + (F1 − F0)(s − s0)/(s1 − s0) between its points' positions
-    sign = math.copysign(1.0, st.s1 - st.s0)
-    common = [load.metres, load.omega, load.slider_mass, load.link_mass_per_length]
-    gravity = load.gravity
-    travel = (st.s1 - st.s0) * load.metres  # the working stroke, m, signed
-    spans = []  # (lo, hi, force, slope)
-    for (u0, f0), (u1, f1), lo, hi in zip(profile[:-1], profile[1:], at[:-1], at[1:], strict=True):
-        slope = (f1 - f0) / ((u1 - u0) * travel)  # N per metre of s
-        level = (st.s0 * load.metres) + u0 * travel  # s at the segment's start, m
-        spans.append((lo, hi, -sign * (f0 - slope * level), -sign * slope))
-    spans.append((at[-1], at[0] + TWO_PI, 0.0, 0.0))
     pieces = []
-    for lo, hi, force, slope in spans:
-        base = np.concatenate([pv, common, [force, slope], gravity])
+    for span in _spans(f, pv, st, load, load.metres):
         if load.guide_friction == 0:
-            pieces.append(Piece(sys, float(lo), float(hi), np.append(base, 0.0)))
+            pieces.append(Piece(sys, span.lo, span.hi, np.append(span.pv, 0.0)))
         else:
-            pieces += _rubbing(sys, float(lo), float(hi), base, st, load.guide_friction)
+            pieces += _rubbing(sys, span.lo, span.hi, span.pv, st, load.guide_friction)
     lay = sys.layout
     pushes = [_magnitude([lay.pin(j), lay.pin(j) + 1]) for j in range(len(lay.pins))]
     pushes += [_magnitude([lay.slot(j)]) for j in range(len(lay.slots))]
@@ -238,6 +219,112 @@ def loads(
         return dict(zip(("torque", *joints, "guide"), out, strict=True))
 
     return Loads(t, power, flywheel, joints, largest[-1]), curves
+
+
+@dataclass(frozen=True)
+class _Span:
+    """A span [lo, hi] of the turn (radians) where the resisting force is one linear function
+    of the ram's position: between two points of the load's profile (``segment``: their
+    fractions and forces), or the rest of the turn (None, no force); ``pv``: the design's
+    parameters and the load's but the friction (``kinetics.LOAD``)."""
+
+    lo: float
+    hi: float
+    pv: np.ndarray
+    segment: tuple[float, float, float, float] | None
+
+
+def _spans(f: Model, pv: np.ndarray, st: Strokes, load: Load, metres: float) -> list[_Span]:
+    """The turn's spans (``_Span``) for a design's parameters ``pv`` (its lengths are
+    ``metres`` each) and strokes ``st``. The profile's points' crank angles are roots of
+    s − level inside the working stroke, its dead centres at its ends; each segment's force
+    resists the ram (against its travel in the working stroke), linear in its position:
+    F = F0 + (F1 − F0)(s − s0)/(s1 − s0) between its points' positions."""
+    profile = np.array(load.profile)
+    fractions = profile[:, 0]
+    inner = (fractions > 0) & (fractions < 1)
+    at = np.where(fractions == 0, st.start, st.start + st.working)
+    at[inner] = reached(f, pv, st, fractions[inner])
+    sign = math.copysign(1.0, st.s1 - st.s0)
+    common = np.concatenate([pv, [metres, load.omega, load.slider_mass,
+                                  load.link_mass_per_length]])  # fmt: skip
+    travel = (st.s1 - st.s0) * metres  # the working stroke, m, signed
+    out = []
+    for (u0, f0), (u1, f1), lo, hi in zip(profile[:-1], profile[1:], at[:-1], at[1:], strict=True):
+        slope = (f1 - f0) / ((u1 - u0) * travel)  # N per metre of s
+        level = (st.s0 * metres) + u0 * travel  # s at the segment's start, m
+        force = [-sign * (f0 - slope * level), -sign * slope]
+        pv_span = np.concatenate([common, force, load.gravity])
+        out.append(_Span(float(lo), float(hi), pv_span, (u0, f0, u1, f1)))
+    rest = np.concatenate([common, [0.0, 0.0], load.gravity])
+    out.append(_Span(float(at[-1]), float(at[0]) + TWO_PI, rest, None))
+    return out
+
+
+def peak_terms(
+    m: Mechanism,
+    variant: frozenset[str],
+    f: Model,
+    pv: np.ndarray,
+    st: Strokes,
+    load: Load,
+    metres: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The values whose largest is the peak torque (N·m): the torque at each of its maxima on
+    each span and at each span's ends (from its side), for a design whose lengths are
+    ``metres`` each; and their derivatives in the type's parameters (rows: terms): at a
+    maximum the partial derivative (the envelope theorem), at a span's end the torque's
+    change with its angle too (the implicit function theorem on s − level, or on s′ at a dead
+    centre); a segment's force depends on the stroke's dead centres' positions. Without the
+    guide's friction (a load with it is not taken)."""
+    assert load.guide_friction == 0
+    sys = forces(m, variant)
+    k = len(m.parameters)
+    dead = np.array([st.start, st.start + st.working])
+    kd = f.dp(dead, pv)  # (angle, [rows; θ-derivatives], parameter)
+    nr = kd.shape[1] // 2
+    ds0, ds1 = kd[0, 0], kd[1, 0]
+    dt_dead = -kd[:, nr] / f(dead, pv)[2][0][:, None]  # s′(θ, p) = 0 there
+    sign = math.copysign(1.0, st.s1 - st.s0)
+    force_at = k + kinetics.LOAD.index("force")
+    values, grads = [], []
+    for span in _spans(f, pv, st, load, metres):
+        piece = Piece(sys, span.lo, span.hi, np.append(span.pv, 0.0))
+        (x,) = piece.roots([_torque], 1, falling=1)
+        x = np.concatenate([x, [span.lo, span.hi]])
+        z = sys(x, piece.pv, order=1)
+        dz = sys.dp(x, piece.pv)[:, 0]  # ∂T/∂pv at each angle
+        grad = dz[:, :k].copy()
+        if span.segment is not None:  # the force's parameters move with the dead centres
+            u0, f0, u1, f1 = span.segment
+            travel = (st.s1 - st.s0) * metres
+            slope = (f1 - f0) / ((u1 - u0) * travel)
+            level = st.s0 * metres + u0 * travel
+            d_travel = metres * (ds1 - ds0)
+            d_slope = -slope * d_travel / travel
+            d_level = metres * ds0 + u0 * d_travel
+            d_force = sign * (d_slope * level + slope * d_level)
+            grad += np.outer(dz[:, force_at], d_force)
+            grad -= np.outer(dz[:, force_at + 1], sign * d_slope)
+        for j, u in zip((-2, -1), _end_fractions(span, load), strict=True):
+            if u in (0.0, 1.0):
+                dt = dt_dead[int(u)]
+            else:  # s(θ, p) = s0 + u (s1 − s0)
+                s1 = f(x[[j]], pv)[1][0][0]
+                dt = (ds0 + u * (ds1 - ds0) - f.dp(x[[j]], pv)[0, 0]) / s1
+            grad[j] += z[1, j, 0] * dt
+        values.append(z[0, :, 0])
+        grads.append(grad)
+    return np.concatenate(values), np.vstack(grads)
+
+
+def _end_fractions(span: _Span, load: Load) -> tuple[float, float]:
+    """The fractions of the working stroke at a span's ends: its segment's, or for the rest of
+    the turn the profile's last and first."""
+    if span.segment is not None:
+        return span.segment[0], span.segment[2]
+    profile = load.profile
+    return profile[-1][0], profile[0][0]
 
 
 def _rubbing(

@@ -201,9 +201,41 @@ class Forces:
         a, b, self.layout = kinetics.system(m, variant, p, th, w)
         g = ca.vertcat(ca.vec(a), b)
         g1 = ca.jacobian(g, th)
-        name = "_".join((m.type, *sorted(variant), "loads"))
-        self.fn = _Batched(name, th, pv, ca.vertcat(g, g1, ca.jacobian(g1, th)))
+        self.name = "_".join((m.type, *sorted(variant), "loads"))
+        self.fn = _Batched(self.name, th, pv, ca.vertcat(g, g1, ca.jacobian(g1, th)))
         self.n = self.layout.size
+        self._rows = (th, pv, g)
+
+    @functools.cached_property
+    def _dp(self) -> _Batched:  # built on first use: only the least peak torque needs it
+        th, pv, g = self._rows
+        return _Batched(f"{self.name}_dp", th, pv, ca.vec(ca.jacobian(g, pv)))
+
+    @functools.cached_property
+    def _values(self) -> _Batched:  # A and b alone: the screen's many designs
+        th, pv, g = self._rows
+        return _Batched(f"{self.name}_values", th, pv, g)
+
+    def each(self, theta: np.ndarray, pvs: np.ndarray) -> np.ndarray:
+        """z at each θ with its own numbers (``pvs``: one row each), ``EACH`` angles a call:
+        shape (len(θ), unknowns)."""
+        n = self.n
+        out = np.hstack([self._values.each(theta[i : i + EACH], pvs[i : i + EACH])
+                         for i in range(0, len(theta), EACH)]).T  # fmt: skip
+        a = out[:, : n * n].reshape(-1, n, n).transpose(0, 2, 1)
+        return cast(np.ndarray, np.linalg.solve(a, out[:, n * n :, None])[..., 0])
+
+    def dp(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
+        """∂z/∂pv at each θ (every number of ``pv``: the type's parameters, then the load's):
+        A ∂z/∂pv = ∂b/∂pv − ∂A/∂pv z; shape (len(θ), unknowns, len(pv))."""
+        n, k = self.n, len(theta)
+        z = self(theta, pv, order=0)[0][..., None]
+        out = self._dp(theta, pv).T.reshape(k, len(pv), n * n + n)
+        da = out[:, :, : n * n].reshape(k, len(pv), n, n).transpose(0, 1, 3, 2)  # by columns
+        db = out[:, :, n * n :, None]
+        a = self.fn(theta, pv).T[:, : n * n].reshape(k, n, n).transpose(0, 2, 1)
+        rhs = db - da @ z[:, None]
+        return cast(np.ndarray, np.linalg.solve(a[:, None], rhs)[..., 0].transpose(0, 2, 1))
 
     def __call__(self, theta: np.ndarray, pv: np.ndarray, order: int = 2) -> np.ndarray:
         """z and its derivatives up to ``order`` (at most 2) at each θ: shape

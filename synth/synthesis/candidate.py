@@ -11,7 +11,7 @@ from ..analysis.quality import measure
 from ..analysis.verify import verify, verify_many
 from ..mechanisms import Mechanism
 from ..results import Analysis, Candidate, Family
-from ..targets import MAX_TRANSMISSION, MIN_SIZE, MOTION_OBJECTIVES
+from ..targets import MAX_TRANSMISSION, MIN_SIZE, MOTION_OBJECTIVES, PEAK_TORQUE
 from .search import Proposal, Searched, Targets, Variant
 
 
@@ -50,6 +50,8 @@ def made(
         objective_value=(
             measure(a.motion, t.objective)
             if t.objective in MOTION_OBJECTIVES
+            else _peak_torque(a)
+            if t.objective == PEAK_TORQUE
             else mu
             if t.objective == MAX_TRANSMISSION
             else size
@@ -65,7 +67,13 @@ def made(
         sensitivities=a.sensitivities,
         envelope=a.envelope,
         family=family(m, params, limits),
+        loads=a.loads,
     )
+
+
+def _peak_torque(a: Analysis) -> float:
+    assert a.loads is not None  # the objective's request carries a load
+    return a.loads.torque.max
 
 
 def family(

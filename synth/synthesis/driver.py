@@ -21,7 +21,7 @@ from ..errors import InvalidParameters
 from ..load import Load
 from ..mechanisms import all_types, get
 from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
-from ..targets import MIN_SIZE, MOTION_OBJECTIVES, OBJECTIVES, PARETO
+from ..targets import MIN_SIZE, MOTION_OBJECTIVES, OBJECTIVES, PARETO, PEAK_TORQUE, SEARCHED
 from .candidate import candidate, predicted_rank, rank
 from .diagnose import diagnose
 from .front import pareto
@@ -50,6 +50,7 @@ def synthesize(
     tolerance: Tolerance | None = None,
     max_working_speed_fluctuation: float | None = None,
     load: Load | None = None,
+    max_peak_torque: float | None = None,
     solver: Solver = DEFAULT,
 ) -> SynthesisResult:
     """Every good design for the targets, verified and ranked (POST /v1/synthesize).
@@ -60,8 +61,11 @@ def synthesize(
     of link lengths meeting the bound); or one of how the slider moves (``motion_search``):
     ``uniform_cutting_speed`` (the least speed fluctuation over the middle 80% of the working
     stroke, where a tool cuts) or ``min_peak_acceleration`` (the least peak acceleration over
-    both strokes, in ω²·stroke). ``max_working_speed_fluctuation`` (≥ 1) limits that
-    fluctuation (with the motion objectives). ``max_candidates`` counts in all; by default it is
+    both strokes, in ω²·stroke); or ``min_peak_torque``, the least peak crank torque under the
+    request's ``load`` (the same search, its measure the loads' ``torque.max``; a load without
+    the guide's friction). ``max_working_speed_fluctuation`` (≥ 1) limits that fluctuation
+    (with the motion objectives), ``max_peak_torque`` (N·m) the peak torque (with
+    ``min_peak_torque``). ``max_candidates`` counts in all; by default it is
     ``PER_TYPE`` (pareto: per type of the request, at most ``MAX_CANDIDATES``).
     ``solver`` says how (``Solver``): ``Solver(accelerators=False)`` solves every type as one
     without a reduced solver would be, by cold multistart IPOPT on the formulation: the
@@ -79,7 +83,7 @@ def synthesize(
     specs = check(time_ratio, stroke, min_transmission_angle_deg, mechanisms, objective,
                   max_candidates, time_budget_ms, include=include,
                   max_working_speed_fluctuation=max_working_speed_fluctuation,
-                  load=load)  # fmt: skip
+                  load=load, max_peak_torque=max_peak_torque)  # fmt: skip
     per_type = max_candidates or PER_TYPE  # the most one type's front takes
     if max_candidates is None:
         max_candidates = min(PER_TYPE * (len(specs) if objective == PARETO else 1), MAX_CANDIDATES)
@@ -93,10 +97,15 @@ def synthesize(
         cands, infeasible = motion(
             specs, targets, max_candidates, extras, max_working_speed_fluctuation
         )
+    elif objective == PEAK_TORQUE:  # every candidate's analysis has its loads
+        cands, infeasible = motion(
+            specs, targets, max_candidates, {**extras, "load": load}, max_peak_torque
+        )
     else:
         cands, infeasible = _single(specs, targets, max_candidates, extras)
     if load is not None:  # what the returned candidates carry, theirs alone
-        cands = [replace(c, loads=analyze(c.type, c.params, load=load).loads) for c in cands]
+        cands = [c if c.loads else replace(c, loads=analyze(c.type, c.params, load=load).loads)
+                 for c in cands]  # fmt: skip
     return SynthesisResult(
         candidates=tuple(cands),
         infeasible=tuple(infeasible),
@@ -159,6 +168,7 @@ def check(
     include: Collection[str] = (),
     max_working_speed_fluctuation: float | None = None,
     load: Load | None = None,
+    max_peak_torque: float | None = None,
     **_: Any,
 ) -> list[Spec]:
     """What ``synthesize`` checks before it solves (its arguments' meaning); the specs, every
@@ -170,6 +180,7 @@ def check(
     for i, s in enumerate(specs):
         _check_scale(s, i, stroke)
     _check_limit(max_working_speed_fluctuation, objective)
+    _check_torque(objective, load, max_peak_torque)
     check_include(include)
     for s in specs:
         check_drawn(s.type, include)
@@ -205,7 +216,7 @@ def short(
     one type and at most ~15 ms for the six over time ratios 1.005–4.5 and bounds 0–70°
     (``docs/benchmarks.md``). Takes ``synthesize``'s arguments unchecked (and ignores the
     others); False for any it would refuse."""
-    if objective in MOTION_OBJECTIVES or include or tolerance is not None or load is not None:
+    if objective in SEARCHED or include or tolerance is not None or load is not None:
         return False
     if not solver.accelerators:  # the generic path: IPOPT's multistart
         return False
@@ -280,6 +291,25 @@ def _check_limit(limit: float | None, objective: str) -> None:
             f"{' and '.join(MOTION_OBJECTIVES)}, not {objective}",
             ("max_working_speed_fluctuation",),
         )
+
+
+def _check_torque(objective: str, load: Load | None, limit: float | None) -> None:
+    """The least peak torque needs a load its search takes (no friction at the guide); a
+    limit on the peak torque goes with it."""
+    if objective == PEAK_TORQUE and load is None:
+        msg = f"objective {PEAK_TORQUE} needs a load (the torque it minimises is the load's)"
+        raise InvalidParameters(msg, ("load",))
+    if objective == PEAK_TORQUE and load is not None and load.guide_friction:
+        msg = f"objective {PEAK_TORQUE} takes a load without the guide's friction (for now)"
+        raise InvalidParameters(msg, ("load", "guide_friction"))
+    if limit is None:
+        return
+    if not (math.isfinite(limit) and limit > 0):
+        msg = f"max_peak_torque must be a finite torque > 0 (N·m), got {limit!r}"
+        raise InvalidParameters(msg, ("max_peak_torque",))
+    if objective != PEAK_TORQUE:
+        msg = f"max_peak_torque is taken with the objective {PEAK_TORQUE}, not {objective}"
+        raise InvalidParameters(msg, ("max_peak_torque",))
 
 
 def checked_spec(s: Spec | Mapping[str, Any], i: int) -> Spec:

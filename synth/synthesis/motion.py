@@ -1,20 +1,23 @@
 """How the slider moves, as an objective or a limit: ``uniform_cutting_speed`` (the least speed
 fluctuation over the middle 80% of the working stroke, where a tool cuts),
 ``min_peak_acceleration`` (the least peak |acceleration| over both strokes, in ω²·stroke) and
-``max_working_speed_fluctuation`` (a limit on that fluctuation, with those objectives).
+``max_working_speed_fluctuation`` (a limit on that fluctuation, with those objectives); and
+what it asks of the drive: ``min_peak_torque`` (the least peak crank torque under the
+request's load) and ``max_peak_torque`` (a limit on it). What each search bounds is its
+``aims.Aim``.
 
 No closed form gives these measures: they are extremes over the crank's turn, found by root
-finding (``synth.analysis.quality``). So the designs come from a local NLP over each structural
-variant's free parameters (stroke units), solved by SLSQP:
+finding (``synth.analysis.quality``, ``synth.analysis.loads``). So the designs come from a
+local NLP over each structural variant's free parameters (stroke units), solved by SLSQP:
 
 - the time ratio, stroke, transmission bound, validity conditions and the closed forms' domain
   are the type's formulation (``synth.synthesis.formulation``: CasADi, exact derivatives),
   the bounds the request's;
-- the motion measures come from the analysis (exact values by root finding): each is the
-  largest of a few terms (the speed or acceleration at each place along the turn where it
+- the measures come from the analysis (exact values by root finding): each is the largest
+  of a few terms (the speed, acceleration or torque at each place along the turn where it
   may peak), so the NLP takes it in epigraph form; the terms' derivatives are exact too
-  (``quality.motion_terms``: the envelope theorem at a peak, the implicit function theorem
-  at a dead centre or a window's end);
+  (``quality.motion_terms``, ``loads.peak_terms``: the envelope theorem at a peak, the
+  implicit function theorem at a dead centre or a window's end);
 - its starts are the designs the exact solvers found for the same request (every variant's
   best-transmitting and smallest designs, at ``ACROSS_DEG`` without a bound: each meets the
   targets) and ``SAMPLES`` points of the box projected onto the time-ratio and stroke
@@ -36,21 +39,20 @@ import math
 import threading
 import time
 import warnings
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 from scipy.linalg import qr
 from scipy.optimize import minimize
 
-from ..analysis.kinematics import motion_terms
-from ..analysis.quality import MotionTerms, fluctuation
+from ..analysis.quality import fluctuation
 from ..errors import SynthError
 from ..mechanisms import Mechanism, get
 from ..results import TOL, Candidate, Infeasible
-from ..targets import MAX_TRANSMISSION, MIN_SIZE, PEAK, UNIFORM
-from . import screen
+from ..targets import MAX_TRANSMISSION, MIN_SIZE, PEAK_TORQUE, UNIFORM
+from . import aims, screen
 from .candidate import candidate
 from .diagnose import diagnose
 from .formulation import TIE, Formulation, formulate
@@ -66,8 +68,6 @@ AROUND = 3.0  # the box about the starts (each part within this factor of theirs
 STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
 NEAR = 1e-4  # how close (stroke units, each parameter) to an earlier run's end a run ends
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
-# a measure's terms and their derivatives in the type's parameters (quality.MotionTerms)
-Pick = Callable[[MotionTerms], tuple[np.ndarray, np.ndarray]]
 SAMPLES = 256  # Halton points in the box, projected onto the equalities (``screen``): starts
 # beside the exact solvers' designs
 # the least 1 − cos μ a search for motion keeps at every joint, whatever the bound: as a rod
@@ -100,18 +100,18 @@ def local_optima(
     bounds: Mapping[str, tuple[float, float]],
     explicit: frozenset[str],
     targets: tuple[float, float],
-    objective: str,
+    aim: aims.Aim,
     starts: list[dict[str, float]],
-    limit: float | None,
+    limit: tuple[aims.Pick, float] | None,
     deadline: float,
     fixed_parts: bool = False,
 ) -> list[dict[str, float]]:
-    """Local optima of a motion ``objective`` over one variant, from ``starts`` (designs,
+    """Local optima of the ``aim``'s measure over one variant, from ``starts`` (designs,
     stroke units); ``targets`` is (time ratio, cos of the transmission bound). The measure is
-    a maximum of terms (``quality.MotionTerms``), so it is minimised in epigraph form: t, with
-    t ≥ each of the ``TERMS`` largest terms (a peak that moves to another place along the
-    turn is then one constraint handing over to another, not a kink), with the terms' exact
-    derivatives; the ``limit`` bounds the fluctuation's terms alike. Designs in stroke units.
+    a maximum of terms, so it is minimised in epigraph form: t, with t ≥ each of the
+    ``TERMS`` largest terms (a peak that moves to another place along the turn is then one
+    constraint handing over to another, not a kink), with the terms' exact derivatives; a
+    ``limit`` (terms, cap) bounds its terms alike. Designs in stroke units.
     A default bound (not in ``explicit``) gives way to a start beyond it, as the exact
     solvers' does to a length the targets set on their own. ``fixed_parts``: whether the
     request fixes parts (more starts drawn, and about the starts where the box has few)."""
@@ -123,21 +123,21 @@ def local_optima(
     def design(y: np.ndarray) -> dict[str, float]:
         return {**fixed, **dict(zip(free, y[:n], strict=True)), **dict.fromkeys(variant, 0.0)}
 
-    memo: dict[bytes, MotionTerms | None] = {}
+    memo: dict[bytes, Any] = {}
     columns = [m.names.index(k) for k in free]  # the free parameters among the type's
 
-    def terms(y: np.ndarray) -> MotionTerms | None:
+    def terms(y: np.ndarray) -> Any:
         key = y[:n].tobytes()
         if key not in memo:
             if len(memo) > 256:
                 memo.clear()
             try:
-                memo[key] = motion_terms(m.type, design(y), gradient=True)
+                memo[key] = aim.evaluate(design(y))
             except SynthError:
                 memo[key] = None
         return memo[key]
 
-    def largest(y: np.ndarray, pick: Pick) -> tuple[np.ndarray, np.ndarray]:
+    def largest(y: np.ndarray, pick: aims.Pick) -> tuple[np.ndarray, np.ndarray]:
         """The ``TERMS`` largest terms (the last repeated where there are fewer), and their
         derivatives in the free parameters."""
         got = terms(y)
@@ -148,7 +148,7 @@ def local_optima(
         order = np.concatenate([order, np.full(TERMS - order.size, order[-1])])
         return values[order], dp[order][:, columns]
 
-    def bounded(pick: Pick, cap: float | None) -> dict[str, Any]:
+    def bounded(pick: aims.Pick, cap: float | None) -> dict[str, Any]:
         """The constraint cap − each of the largest terms ≥ 0 (cap None: the epigraph's t)."""
 
         def fun(y: np.ndarray) -> np.ndarray:
@@ -181,10 +181,10 @@ def local_optima(
     # ties (a free scale that leaves the motion as it is) to the smaller design, as the
     # formulation's max_transmission_angle does: the scale is then no flat direction
     links = np.array([float(m.parameter(k).link) for k in free] + [0.0])
-    pick = _PICK[objective]
+    pick = aim.pick
     measures = [{"type": "ineq", "fun": inequalities, "jac": inequalities_jac}, bounded(pick, None)]
     if limit is not None:
-        measures.append(bounded(_PICK[UNIFORM], limit))
+        measures.append(bounded(*limit))
 
     def equalities(x: np.ndarray) -> np.ndarray:
         """The equalities' rows independent at x: where the targets set one ratio twice (a
@@ -217,7 +217,7 @@ def local_optima(
         near = screen.project(form, key, halton(near_lo, near_hi, lo > 0, SAMPLES), pv, lo, hi)
     points = np.vstack([own, drawn, near])
     pvs = np.array([list(m.filled(design(x)).values()) for x in points])
-    value = screen.rank(m, variant, pvs, objective) if len(points) else np.empty(0)
+    value = aim.rank(pvs) if len(points) else np.empty(0)
     measured = []  # the best ranked of each source that the analysis takes
     ends = np.cumsum([0, len(own), len(drawn), len(near)])
     for j, most in enumerate((STARTS, drawn_starts, drawn_starts)):
@@ -273,16 +273,6 @@ def local_optima(
     return out
 
 
-# the terms ``local_optima`` picks from carry their derivatives (``gradient=True``)
-_PICK: dict[str, Pick] = {
-    UNIFORM: lambda t: (t.middle, cast(np.ndarray, t.middle_dp)),
-    PEAK: lambda t: (
-        np.concatenate([t.working, t.returning]),
-        np.vstack([cast(np.ndarray, t.working_dp), cast(np.ndarray, t.returning_dp)]),
-    ),
-}
-
-
 def motion(
     specs: Sequence[Spec],
     t: Targets,
@@ -325,32 +315,60 @@ def motion(
             if not starts or not v.free:
                 continue
             targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
+            aim, capped = aims.aim(m, v.parts, t, extras, limit, mine)
             optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
-                                  v.problem.explicit, targets, t.objective, starts, limit,
+                                  v.problem.explicit, targets, aim, starts, capped,
                                   t.deadline, bool(spec.fixed))  # fmt: skip
             for d in optima:
                 p = proposal(m, i, whole(spec, scaled(d, t.stroke), v.parts), "slsqp", t)
                 c = None if p is None else candidate(m, p, t, s.variants, extras)
-                if c is not None:
-                    mine.append(_smallest_member(m, i, c, t, s.variants, extras))
-        kept = [c for c in mine if limit is None or fluctuation(c.motion) <= limit * (1 + TOL)]
+                if c is not None:  # its family's smallest member moves the same; links
+                    # that weigh make its torque another: then both are kept, ranked
+                    smallest = _smallest_member(m, i, c, t, s.variants, extras)
+                    mine += [c, smallest] if t.objective == PEAK_TORQUE else [smallest]
+        kept = [c for c in mine if limit is None or _limited(c, t) <= limit * (1 + TOL)]
         if not kept and not mine:
             infeasible.append(diagnose(m, spec, best_t, s))
-        elif not kept:
-            least = min(fluctuation(c.motion) for c in mine)
-            if t.objective != UNIFORM:  # how uniform it can be: that objective's optimum
-                alone = motion([spec], replace(t, objective=UNIFORM), 1, extras, None)[0]
-                least = min([least] + [c.objective_value for c in alone])
-            infeasible.append(Infeasible(
-                m.type, "FLUCTUATION_UNREACHABLE",
-                f"{m.type}'s speed fluctuation over the middle 80% of the working stroke is at "
-                f"least {least:.6g} (the least the search finds) at time ratio "
-                f"{t.time_ratio:g}, stroke {t.stroke:g} and bound {t.bound_deg:g}°, above the "
-                f"limit {limit:g}",
-            ))  # fmt: skip
+        elif not kept:  # the limit left none
+            assert limit is not None
+            infeasible.append(_unreachable(m, spec, t, extras, limit, mine))
         found += _distinct(kept, t.stroke)
     found.sort(key=lambda c: (round(c.objective_value, 12), c.size, c.type))
     return found[:max_candidates], infeasible
+
+
+def _limited(c: Candidate, t: Targets) -> float:
+    """What a request's limit bounds: the peak torque, or the speed's fluctuation."""
+    return c.objective_value if t.objective == PEAK_TORQUE else fluctuation(c.motion)
+
+
+def _unreachable(
+    m: Mechanism,
+    spec: Spec,
+    t: Targets,
+    extras: dict[str, Any],
+    limit: float,
+    mine: list[Candidate],
+) -> Infeasible:
+    """Why no design of the type meets the limit, with the least the search finds."""
+    least = min(_limited(c, t) for c in mine)
+    if t.objective == PEAK_TORQUE:
+        return Infeasible(
+            m.type, "PEAK_TORQUE_UNREACHABLE",
+            f"{m.type}'s peak crank torque under the load is at least {least:.6g} N·m (the "
+            f"least the search finds) at time ratio {t.time_ratio:g}, stroke {t.stroke:g} and "
+            f"bound {t.bound_deg:g}°, above the limit {limit:g} N·m",
+        )  # fmt: skip
+    if t.objective != UNIFORM:  # how uniform it can be: that objective's optimum
+        alone = motion([spec], replace(t, objective=UNIFORM), 1, extras, None)[0]
+        least = min([least] + [c.objective_value for c in alone])
+    return Infeasible(
+        m.type, "FLUCTUATION_UNREACHABLE",
+        f"{m.type}'s speed fluctuation over the middle 80% of the working stroke is at "
+        f"least {least:.6g} (the least the search finds) at time ratio "
+        f"{t.time_ratio:g}, stroke {t.stroke:g} and bound {t.bound_deg:g}°, above the "
+        f"limit {limit:g}",
+    )  # fmt: skip
 
 
 def _smallest_member(

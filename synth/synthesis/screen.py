@@ -12,13 +12,15 @@ ranked in a few batched calls.
 from __future__ import annotations
 
 import threading
+from dataclasses import dataclass
 from typing import cast
 
 import casadi as ca
 import numpy as np
 
-from ..analysis.model import model
+from ..analysis.model import forces, model
 from ..analysis.quality import CUT
+from ..load import Load
 from ..mechanisms import Mechanism
 from ..numerics.native import Mapped
 from ..targets import UNIFORM
@@ -124,6 +126,55 @@ def _held(
 def rank(m: Mechanism, variant: frozenset[str], pvs: np.ndarray, objective: str) -> np.ndarray:
     """Each design's motion measure (``objective``), approximately, from a grid of crank
     angles; inf for a design whose slider does not run one stroke each way on it."""
+    g = _sampled(m, variant, pvs)
+    with np.errstate(all="ignore"):  # a design that does not run: inf below
+        measure = _measure(objective, g.s, g.v, g.a, g.working, g.stroke)
+    return np.where(g.fine & np.isfinite(measure), measure, np.inf)
+
+
+def rank_torque(
+    m: Mechanism, variant: frozenset[str], pvs: np.ndarray, load: Load, metres: float
+) -> np.ndarray:
+    """Each design's peak crank torque under ``load`` (its lengths ``metres`` each),
+    approximately: the Newton–Euler equations solved at a grid of crank angles, the load's
+    force from its profile at the ram's place on the grid; inf where the slider does not run
+    one stroke each way on it."""
+    g = _sampled(m, variant, pvs)
+    profile = np.array(load.profile)
+    with np.errstate(all="ignore"):
+        travel = np.abs(g.s - g.s[:, :1]) / g.stroke[:, None]  # from the working stroke's start
+        inside = g.working & (travel >= profile[0, 0]) & (travel <= profile[-1, 0])
+        force = np.where(inside, np.interp(travel, profile[:, 0], profile[:, 1]), 0.0)
+    push = -force * np.where(g.up, 1.0, -1.0)[:, None]  # against the working stroke's travel
+    k = len(pvs)
+    rows = np.repeat(pvs, ANGLES, axis=0)
+    common = [metres, load.omega, load.slider_mass, load.link_mass_per_length]
+    loads = np.column_stack([rows, np.tile(common, (rows.shape[0], 1)), push.ravel(),
+                             np.zeros(rows.shape[0]), np.tile(load.gravity, (rows.shape[0], 1)),
+                             np.zeros(rows.shape[0])])  # fmt: skip
+    with np.errstate(all="ignore"):
+        torque = forces(m, variant).each(g.angles.ravel(), loads)[:, 0].reshape(k, ANGLES)
+    peak = np.max(torque, axis=1)
+    return np.where(g.fine & np.isfinite(peak), peak, np.inf)
+
+
+@dataclass(frozen=True)
+class _Grid:
+    """Designs sampled at ``ANGLES`` crank angles, from each one's working stroke's start:
+    the angles, s, s′, s″, which samples are in the working stroke, its travel (``stroke``),
+    whether s grows in it (``up``), and which designs run one stroke each way (``fine``)."""
+
+    angles: np.ndarray
+    s: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    working: np.ndarray
+    stroke: np.ndarray
+    up: np.ndarray
+    fine: np.ndarray
+
+
+def _sampled(m: Mechanism, variant: frozenset[str], pvs: np.ndarray) -> _Grid:
     k = len(pvs)
     grid = np.linspace(0.0, 2 * np.pi, ANGLES, endpoint=False)
     out = model(m, variant).fn.each(np.tile(grid, k), np.repeat(pvs, ANGLES, axis=0))
@@ -139,10 +190,8 @@ def rank(m: Mechanism, variant: frozenset[str], pvs: np.ndarray, objective: str)
     s, v, a = s[rows, index], v[rows, index], a[rows, index]  # from the working stroke's start
     working = np.arange(ANGLES)[None, :] < length[:, None]
     stroke = np.abs(s[:, 0] - s[rows[:, 0], length % ANGLES])
-    with np.errstate(all="ignore"):  # a design that does not run: inf below
-        measure = _measure(objective, s, v, a, working, stroke)
-    fine = np.isfinite(measure) & (stroke > 0) & (length > 1) & (length < ANGLES - 1)
-    return np.where(fine, measure, np.inf)
+    fine = (stroke > 0) & (length > 1) & (length < ANGLES - 1)
+    return _Grid(grid[index], s, v, a, working, stroke, slow_up, fine)
 
 
 def _measure(

@@ -21,7 +21,8 @@ import casadi as ca
 import numpy as np
 from scipy.stats import qmc
 
-from ..analysis.kinematics import analyze, worst_transmission
+from ..analysis.kinematics import analyze
+from ..analysis.terms import worst_transmission
 from ..errors import SynthError
 from ..mechanisms import Mechanism
 from .formulation import Formulation, formulate

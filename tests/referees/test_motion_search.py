@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import synth
-from synth.analysis.kinematics import motion_terms
+from synth.analysis.terms import motion_terms
 
 from ..support import motion_referee
 from ..support.assertions import assert_meets

@@ -243,9 +243,10 @@ def test_the_default_answer_is_the_front_with_families(client):
         "min_size",
         "uniform_cutting_speed",
         "min_peak_acceleration",
+        "min_peak_torque",
     }
     assert request["max_working_speed_fluctuation"]["anyOf"][0]["minimum"] == 1
-    assert {"front", "family", "envelope", "motion", "sensitivities"} <= set(
+    assert {"front", "family", "envelope", "motion", "sensitivities", "loads"} <= set(
         schema["Candidate"]["properties"]
     )
 
@@ -297,6 +298,24 @@ def test_an_analysis_takes_a_force_profile(client):
     assert r.status_code == 200, r.text
     work = (0.1 * 1750.0 + 0.8 * 2500.0) * r.json()["stroke"] * 1e-3
     assert r.json()["loads"]["torque"]["mean"] == pytest.approx(work / (2 * math.pi), rel=1e-9)
+
+
+def test_the_least_peak_torque_answers_with_each_candidates_loads(client):
+    body = {
+        "time_ratio": 1.6,
+        "stroke": 300.0,
+        "min_transmission_angle_deg": 20.0,
+        "mechanisms": [{"type": "whitworth"}],
+        "objective": "min_peak_torque",
+        "load": LOAD,
+    }
+    r = client.post("/v1/synthesize", json=body)
+    assert r.status_code == 200, r.text
+    (c, *_) = r.json()["candidates"]
+    assert c["method"] == "slsqp" and c["objective_value"] == c["loads"]["torque"]["max"]
+    refused = client.post("/v1/synthesize", json={**body, "max_peak_torque": 1.0})
+    assert refused.status_code == 200 and not refused.json()["candidates"]
+    assert refused.json()["infeasible"][0]["code"] == "PEAK_TORQUE_UNREACHABLE"
 
 
 def test_synthesize_infeasible_is_200_with_reasons(client):
@@ -404,6 +423,10 @@ BAD = [
                         "objective": "min_peak_acceleration"}, "max_working_speed_fluctuation"),
     ("/v1/synthesize", {**SYNTH, "include": ["colour"]}, "include"),
     ("/v1/synthesize", {**SYNTH, "load": {**LOAD, "length_unit": None}}, "length_unit"),
+    ("/v1/synthesize", {**SYNTH, "objective": "min_peak_torque"}, "load"),
+    ("/v1/synthesize", {**SYNTH, "objective": "min_peak_torque", "load": LOAD,
+                        "max_peak_torque": 0}, "max_peak_torque"),
+    ("/v1/synthesize", {**SYNTH, "load": LOAD, "max_peak_torque": 5.0}, "max_peak_torque"),
     ("/v1/synthesize", {**SYNTH, "load": {**LOAD, "speed_fluctuation": 0.0}},
      "speed_fluctuation"),
     ("/v1/synthesize", {**SYNTH, "include": ["pins"]}, "include"),

@@ -1,12 +1,13 @@
-"""An independent global search for the motion objectives: the referee of synthesize()'s
-``uniform_cutting_speed`` and ``min_peak_acceleration``.
+"""An independent global search for the searched objectives: the referee of synthesize()'s
+``uniform_cutting_speed``, ``min_peak_acceleration`` and ``min_peak_torque``.
 
 It searches the design space through tests/support/globalsearch.py's own families (every design
 meets the time ratio and stroke by construction, sharing no formula with synth; a fixed part is
 an equality that family solves for one of its variables), by differential evolution from several
 seeds per family and branch, polished by Nelder–Mead. The measure of a
-design is the analysis's (synth.analyze, include motion), which tests/referees/test_quality.py
-checks against a brute force to 1e-9 on 200 designs per type; the search is what is independent.
+design is the analysis's (synth.analyze, include motion, or with the load), which
+tests/referees/test_quality.py and test_loads.py check against independent computations on 200
+designs per type; the search is what is independent.
 
 The feasible set is the stated problem's, which keeps a slider driven through a rod from a
 swinging pin ``ONE_WAY`` (in the cosine) away from dwelling at its dead centre (the docs:
@@ -38,20 +39,24 @@ class Best:
     params: dict[str, float] | None
 
 
-def measure(motion, objective: str) -> float:
+def measure(a, objective: str) -> float:
+    if objective == "min_peak_torque":
+        return a.loads.torque.max
     if objective == "uniform_cutting_speed":
-        return motion.working_speed_fluctuation.middle
-    p = motion.peak_acceleration
+        return a.motion.working_speed_fluctuation.middle
+    p = a.motion.peak_acceleration
     return max(p.working_stroke, p.return_stroke)
 
 
 def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1),
            popsize: int = 12, maxiter: int = 60,
-           fixed: Mapping[str, float] | None = None) -> Best:  # fmt: skip
+           fixed: Mapping[str, float] | None = None, load=None) -> Best:  # fmt: skip
     """The least measure over every family and branch of ``mtype`` at time ratio ``tr``,
     stroke 1, minimum transmission ≥ ``bound_deg``, within the default bounds; ``fixed``:
     parts kept at their values (stroke 1), the search space then a request's with them
-    (``globalsearch.Fix``; each fixed part solved for by a variable of the family)."""
+    (``globalsearch.Fix``; each fixed part solved for by a variable of the family); ``load``:
+    the load of ``min_peak_torque`` (its lengths' unit the stroke's)."""
+    asked = {"load": load} if objective == "min_peak_torque" else {"include": ["motion"]}
     fx = gs.Fix(mtype, tuple(sorted((k, float(v)) for k, v in (fixed or {}).items())))
     m = synth.mechanisms.get(mtype)
     best = Best(math.inf, None)
@@ -76,12 +81,12 @@ def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1)
                 if short > 0:
                     return PENALTY + short
                 try:
-                    a = synth.analyze(mtype, params, include=["motion"])
+                    a = synth.analyze(mtype, params, **asked)
                 except synth.SynthError:
                     return 2 * PENALTY
                 if a.reversals != 2:
                     return 2 * PENALTY
-                return measure(a.motion, objective)
+                return measure(a, objective)
 
             if problem.dim == 0:  # the fixed parts leave the family no freedom
                 f, z = value(np.empty(0)), np.empty(0)

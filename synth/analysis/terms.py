@@ -1,0 +1,62 @@
+"""What the synthesis's searches bound, for one design: the terms whose largest is a motion
+measure or the peak crank torque, with their derivatives in the parameters, and where each
+transmission joint is worst. Each from the design's analysis (``kinematics._prepared``)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from ..errors import InvalidDesign
+from ..load import Load
+from ..mechanisms import Mechanism
+from . import loads, quality
+from .kinematics import _ends, _prepared
+from .model import Model
+
+
+def motion_terms(
+    mechanism: str, params: Mapping[str, float], gradient: bool = False
+) -> quality.MotionTerms:
+    """The values whose maxima are the motion measures (``quality.MotionTerms``), with their
+    derivatives in the parameters when ``gradient``, for an optimiser that bounds each;
+    raises SynthError for a design that does not run."""
+    m, variant, f, pv, st = _running(mechanism, params)
+    return quality.motion_terms(m, variant, f, pv, st, gradient)
+
+
+def peak_torque_terms(
+    mechanism: str, params: Mapping[str, float], load: Load, metres: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The values whose largest is the peak crank torque under ``load`` (the lengths
+    ``metres`` each), and their derivatives in the parameters (``loads.peak_terms``), for an
+    optimiser that bounds each; raises SynthError for a design that does not run."""
+    m, variant, f, pv, st = _running(mechanism, params)
+    return loads.peak_terms(m, variant, f, pv, st, load, metres)
+
+
+def _running(
+    mechanism: str, params: Mapping[str, float]
+) -> tuple[Mechanism, frozenset[str], Model, np.ndarray, quality.Strokes]:
+    """A design's type, variant, model, parameters and strokes; raises InvalidDesign where its
+    slider does not run one working and one return stroke."""
+    m, _, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)
+    if np.count_nonzero(rows == 0) != 2:
+        msg = "the slider does not run one working and one return stroke"
+        raise InvalidDesign(msg, (), "stroke")
+    st = quality.Strokes(*_ends(rows, theta, values))
+    if st.stroke == 0:  # a design at the edge of running: its extremes coincide
+        raise InvalidDesign("the slider does not move: its stroke is 0", (), "stroke")
+    return m, variant, f, pv, st
+
+
+def worst_transmission(mechanism: str, params: Mapping[str, float]) -> tuple[float, ...]:
+    """Each transmission joint's crank angle (radians) where its |cos μ| is largest, in the
+    type's order; raises SynthError for a design that does not run."""
+    _, _, _, f, _, (rows, theta, values) = _prepared(mechanism, params)
+    out = []
+    for j in range(1, len(f.names) + 1):
+        k = np.nonzero(rows == j)[0]
+        out.append(float(theta[k[np.argmax(np.abs(values[k]))]]) if k.size else 0.0)
+    return tuple(out)

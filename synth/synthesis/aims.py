@@ -1,0 +1,80 @@
+"""What the search over one structural variant minimises (``motion.local_optima``): a motion
+measure or the peak crank torque, as the terms whose largest it is, with their exact
+derivatives, and as a quick ranking of many designs at once (the starts')."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+from typing import Any, cast
+
+import numpy as np
+
+from ..analysis.terms import motion_terms, peak_torque_terms
+from ..load import Load
+from ..mechanisms import Mechanism
+from ..results import Candidate
+from ..targets import PEAK, PEAK_TORQUE, UNIFORM
+from . import screen
+from .search import Targets
+
+# a measure's terms and their derivatives in the type's parameters, from a design's evaluation
+Pick = Callable[[Any], tuple[np.ndarray, np.ndarray]]
+
+
+@dataclass(frozen=True)
+class Aim:
+    """What a search minimises over one variant: a design's evaluation (``evaluate``, once
+    per design, stroke units; SynthError where it does not run), the terms whose largest is
+    the measure (``pick``, from the evaluation, with their derivatives in the type's
+    parameters), and the measure of many designs at once, approximately (``rank``: the
+    parameter rows of designs -> their measures, inf where one does not run)."""
+
+    evaluate: Callable[[dict[str, float]], Any]
+    pick: Pick
+    rank: Callable[[np.ndarray], np.ndarray]
+
+
+# the terms ``local_optima`` picks from carry their derivatives (``gradient=True``)
+PICK: dict[str, Pick] = {
+    UNIFORM: lambda t: (t.middle, cast(np.ndarray, t.middle_dp)),
+    PEAK: lambda t: (
+        np.concatenate([t.working, t.returning]),
+        np.vstack([cast(np.ndarray, t.working_dp), cast(np.ndarray, t.returning_dp)]),
+    ),
+}
+
+
+def aim(
+    m: Mechanism,
+    variant: frozenset[str],
+    t: Targets,
+    extras: dict[str, Any],
+    limit: float | None,
+    mine: list[Candidate],
+) -> tuple[Aim, tuple[Pick, float] | None]:
+    """The objective's search over one variant, and its limit's terms and cap: for the least
+    peak torque, the torque's terms under the request's load (``extras``), in units of the
+    best verified start's peak (the search's numbers near 1), the limit the same terms'; for
+    a motion objective, its motion terms, the limit the fluctuation's."""
+    if t.objective != PEAK_TORQUE:
+
+        def rank(pvs: np.ndarray) -> np.ndarray:
+            return screen.rank(m, variant, pvs, t.objective)
+
+        motion = partial(motion_terms, m.type, gradient=True)
+        capped = None if limit is None else (PICK[UNIFORM], limit)
+        return Aim(motion, PICK[t.objective], rank), capped
+    load: Load = extras["load"]
+    metres = load.metres * t.stroke  # the search's lengths are in strokes
+    unit = min((abs(c.objective_value) for c in mine), default=1.0) or 1.0
+
+    def pick(got: tuple[np.ndarray, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+        return got[0] / unit, got[1] / unit
+
+    def torque(pvs: np.ndarray) -> np.ndarray:
+        return screen.rank_torque(m, variant, pvs, load, metres) / unit
+
+    peak = partial(peak_torque_terms, m.type, load=load, metres=metres)
+    return Aim(peak, pick, torque), None if limit is None else (pick, limit / unit)
