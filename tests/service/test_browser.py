@@ -258,6 +258,12 @@ def test_the_synthesis_takes_a_load(page):
     cells = pg.locator("#candidates tbody tr").first.locator("td")
     assert float(cells.nth(5).inner_text()) > 0 and float(cells.nth(6).inner_text()) > 0
     pg.wait_for_selector("#plot-torque polyline.series", state="attached")
+    # the least peak torque: the objective the load makes possible
+    only(pg, "whitworth")
+    pg.select_option("#objective", "min_peak_torque")
+    pg.click("#run")
+    pg.wait_for_function("document.querySelector('#candidates tbody tr td:nth-child(5)')"
+                         "?.textContent === 'slsqp'")  # fmt: skip
 
 
 def test_a_sweep_out_of_budget_says_where_it_ended(page):
