@@ -226,7 +226,7 @@ class _Span:
     """A span [lo, hi] of the turn (radians) where the resisting force is one linear function
     of the ram's position: between two points of the load's profile (``segment``: their
     fractions and forces), or the rest of the turn (None, no force); ``pv``: the design's
-    parameters and the load's but the friction (``kinetics.LOAD``)."""
+    parameters and the load's but the friction, the last (``kinetics.LOAD``)."""
 
     lo: float
     hi: float
@@ -246,19 +246,29 @@ def _spans(f: Model, pv: np.ndarray, st: Strokes, load: Load, metres: float) -> 
     at = np.where(fractions == 0, st.start, st.start + st.working)
     at[inner] = reached(f, pv, st, fractions[inner])
     sign = math.copysign(1.0, st.s1 - st.s0)
-    common = np.concatenate([pv, [metres, load.omega, load.slider_mass,
-                                  load.link_mass_per_length]])  # fmt: skip
     travel = (st.s1 - st.s0) * metres  # the working stroke, m, signed
     out = []
     for (u0, f0), (u1, f1), lo, hi in zip(profile[:-1], profile[1:], at[:-1], at[1:], strict=True):
         slope = (f1 - f0) / ((u1 - u0) * travel)  # N per metre of s
         level = (st.s0 * metres) + u0 * travel  # s at the segment's start, m
-        force = [-sign * (f0 - slope * level), -sign * slope]
-        pv_span = np.concatenate([common, force, load.gravity])
-        out.append(_Span(float(lo), float(hi), pv_span, (u0, f0, u1, f1)))
-    rest = np.concatenate([common, [0.0, 0.0], load.gravity])
+        w = numbers(load, metres, -sign * (f0 - slope * level), -sign * slope)
+        out.append(_Span(float(lo), float(hi), np.concatenate([pv, w[:-1]]), (u0, f0, u1, f1)))
+    rest = np.concatenate([pv, numbers(load, metres)[:-1]])
     out.append(_Span(float(at[-1]), float(at[0]) + TWO_PI, rest, None))
     return out
+
+
+def numbers(
+    load: Load, metres: float, force: float = 0.0, slope: float = 0.0, friction: float = 0.0
+) -> np.ndarray:
+    """A load's numbers as a compiled model takes them after the type's parameters
+    (``kinetics.LOAD``): the lengths ``metres`` each, the force on the ram ``force`` +
+    ``slope`` × s, the guide's friction per unit of its force ``friction``."""
+    gx, gy = load.gravity
+    w = {"unit": metres, "omega": load.omega, "slider_mass": load.slider_mass,
+         "mass_per_length": load.link_mass_per_length, "force": force, "force_slope": slope,
+         "gx": gx, "gy": gy, "friction": friction}  # fmt: skip
+    return np.array([w[k] for k in kinetics.LOAD])
 
 
 def peak_terms(

@@ -280,9 +280,10 @@ def motion(
     extras: dict[str, Any],
     limit: float | None,
 ) -> tuple[list[Candidate], list[Infeasible]]:
-    """A motion objective: per type and variant, SLSQP (``local_optima``) from the designs the
-    exact solvers give for the request (best-transmitting and smallest), the most promising
-    first; the optima and those designs, verified, ranked by the measure (the limit met)."""
+    """A searched objective (a motion measure, or the peak torque): per type and variant,
+    SLSQP (``local_optima``) from the designs the exact solvers give for the request
+    (best-transmitting and smallest), the most promising first; the optima and those designs,
+    verified, ranked by the measure (the ``limit`` met: the fluctuation's, or the torque's)."""
     found: list[Candidate] = []
     infeasible = []
     for i, spec in enumerate(specs):

@@ -6,7 +6,8 @@ ranked in a few batched calls.
   points), kept where every other constraint holds too;
 - ``rank``: the motion measure of each, from the slider's s, s′ and s″ on a grid of crank
   angles (one compiled call for every design): a ranking of starts to ~1e-3, never an answer
-  (the answers' measures are the analysis's, by root finding).
+  (the answers' measures are the analysis's, by root finding); ``rank_torque``: the peak
+  crank torque of each under a load, from the Newton–Euler equations solved on that grid.
 """
 
 from __future__ import annotations
@@ -18,10 +19,11 @@ from typing import cast
 import casadi as ca
 import numpy as np
 
+from ..analysis.loads import numbers
 from ..analysis.model import forces, model
 from ..analysis.quality import CUT
 from ..load import Load
-from ..mechanisms import Mechanism
+from ..mechanisms import Mechanism, kinetics
 from ..numerics.native import Mapped
 from ..targets import UNIFORM
 from .formulation import Formulation
@@ -147,13 +149,11 @@ def rank_torque(
         force = np.where(inside, np.interp(travel, profile[:, 0], profile[:, 1]), 0.0)
     push = -force * np.where(g.up, 1.0, -1.0)[:, None]  # against the working stroke's travel
     k = len(pvs)
-    rows = np.repeat(pvs, ANGLES, axis=0)
-    common = [metres, load.omega, load.slider_mass, load.link_mass_per_length]
-    loads = np.column_stack([rows, np.tile(common, (rows.shape[0], 1)), push.ravel(),
-                             np.zeros(rows.shape[0]), np.tile(load.gravity, (rows.shape[0], 1)),
-                             np.zeros(rows.shape[0])])  # fmt: skip
+    rows = np.column_stack([np.repeat(pvs, ANGLES, axis=0),
+                            np.tile(numbers(load, metres), (k * ANGLES, 1))])  # fmt: skip
+    rows[:, pvs.shape[1] + kinetics.LOAD.index("force")] = push.ravel()
     with np.errstate(all="ignore"):
-        torque = forces(m, variant).each(g.angles.ravel(), loads)[:, 0].reshape(k, ANGLES)
+        torque = forces(m, variant).each(g.angles.ravel(), rows)[:, 0].reshape(k, ANGLES)
     peak = np.max(torque, axis=1)
     return np.where(g.fine & np.isfinite(peak), peak, np.inf)
 
