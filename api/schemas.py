@@ -384,7 +384,7 @@ class SynthesizeRequest(Extras):
     load: LoadSpec | None = Field(
         None,
         description="what the design drives: adds each candidate's loads; the objective "
-        "min_peak_torque minimises its peak crank torque (a load without guide friction)",
+        "min_peak_torque minimises its peak crank torque",
     )
     max_peak_torque: float | None = Field(
         None, gt=0.0, le=1e15, description="N·m: a limit on the peak crank torque, with "

@@ -283,13 +283,12 @@ def peak_terms(
     """The values whose largest is the peak torque (N·m): the torque at each of its maxima on
     each span and at each span's ends (from its side), for a design whose lengths are
     ``metres`` each; and their derivatives in the type's parameters (rows: terms): at a
-    maximum the partial derivative (the envelope theorem), at a span's end the torque's
-    change with its angle too (the implicit function theorem on s − level, or on s′ at a dead
-    centre); a segment's force depends on the stroke's dead centres' positions. Without the
-    guide's friction (a load with it is not taken)."""
-    assert load.guide_friction == 0
+    maximum the partial derivative (the envelope theorem), at a piece's end the torque's
+    change with its angle too (the implicit function theorem on s − level at a profile's
+    point, on s′ at a dead centre, on the guide's force N where friction's sign changes);
+    a segment's force depends on the stroke's dead centres' positions."""
     sys = forces(m, variant)
-    k = len(m.parameters)
+    k, guide = len(m.parameters), sys.n - 1
     dead = np.array([st.start, st.start + st.working])
     kd = f.dp(dead, pv)  # (angle, [rows; θ-derivatives], parameter)
     nr = kd.shape[1] // 2
@@ -299,32 +298,44 @@ def peak_terms(
     force_at = k + kinetics.LOAD.index("force")
     values, grads = [], []
     for span in _spans(f, pv, st, load, metres):
-        piece = Piece(sys, span.lo, span.hi, np.append(span.pv, 0.0))
-        (x,) = piece.roots([_torque], 1, falling=1)
-        x = np.concatenate([x, [span.lo, span.hi]])
-        z = sys(x, piece.pv, order=1)
-        dz = sys.dp(x, piece.pv)[:, 0]  # ∂T/∂pv at each angle
-        grad = dz[:, :k].copy()
+        d_force, d_slope = np.zeros(k), np.zeros(k)
         if span.segment is not None:  # the force's parameters move with the dead centres
             u0, f0, u1, f1 = span.segment
             travel = (st.s1 - st.s0) * metres
             slope = (f1 - f0) / ((u1 - u0) * travel)
             level = st.s0 * metres + u0 * travel
             d_travel = metres * (ds1 - ds0)
-            d_slope = -slope * d_travel / travel
-            d_level = metres * ds0 + u0 * d_travel
-            d_force = sign * (d_slope * level + slope * d_level)
-            grad += np.outer(dz[:, force_at], d_force)
-            grad -= np.outer(dz[:, force_at + 1], sign * d_slope)
-        for j, u in zip((-2, -1), _end_fractions(span, load), strict=True):
-            if u in (0.0, 1.0):
-                dt = dt_dead[int(u)]
-            else:  # s(θ, p) = s0 + u (s1 − s0)
-                s1 = f(x[[j]], pv)[1][0][0]
-                dt = (ds0 + u * (ds1 - ds0) - f.dp(x[[j]], pv)[0, 0]) / s1
-            grad[j] += z[1, j, 0] * dt
-        values.append(z[0, :, 0])
-        grads.append(grad)
+            d_raw = -slope * d_travel / travel
+            d_force = sign * (d_raw * level + slope * (metres * ds0 + u0 * d_travel))
+            d_slope = -sign * d_raw
+        mu = load.guide_friction
+        parts = ([Piece(sys, span.lo, span.hi, np.append(span.pv, 0.0))] if mu == 0
+                 else _rubbing(sys, span.lo, span.hi, span.pv, st, mu))  # fmt: skip
+        for piece in parts:
+            (x,) = piece.roots([_torque], 1, falling=1)
+            x = np.concatenate([x, [piece.lo, piece.hi]])
+            z = sys(x, piece.pv, order=1)
+            # d(T, N)/dp at fixed angles, the force's parameters moving too
+            dz = sys.dp(x, piece.pv)[:, [0, guide]]  # (angle, T and N, pv)
+            both = (dz[..., :k] + dz[..., force_at, None] * d_force
+                    + dz[..., force_at + 1, None] * d_slope)  # fmt: skip
+            grad, d_guide = both[:, 0], both[:, 1]
+            for j, end in ((-2, piece.lo), (-1, piece.hi)):
+                turn = (end - st.start) % TWO_PI
+                if end in (span.lo, span.hi):  # a profile's point
+                    u = _end_fractions(span, load)[0 if end == span.lo else 1]
+                    if u in (0.0, 1.0):
+                        dt = dt_dead[int(u)]
+                    else:  # s(θ, p) = s0 + u (s1 − s0)
+                        s1 = f(x[[j]], pv)[1][0][0]
+                        dt = (ds0 + u * (ds1 - ds0) - f.dp(x[[j]], pv)[0, 0]) / s1
+                elif min(turn, TWO_PI - turn, abs(turn - st.working)) < 1e-9:  # a dead centre
+                    dt = dt_dead[int(abs(turn - st.working) < 1e-9)]
+                else:  # where the guide's force changes sign: N(θ, p) = 0
+                    dt = -d_guide[j] / z[1, j, guide]
+                grad[j] += z[1, j, 0] * dt
+            values.append(z[0, :, 0])
+            grads.append(grad)
     return np.concatenate(values), np.vstack(grads)
 
 

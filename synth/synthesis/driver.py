@@ -62,10 +62,10 @@ def synthesize(
     ``uniform_cutting_speed`` (the least speed fluctuation over the middle 80% of the working
     stroke, where a tool cuts) or ``min_peak_acceleration`` (the least peak acceleration over
     both strokes, in ω²·stroke); or ``min_peak_torque``, the least peak crank torque under the
-    request's ``load`` (the same search, its measure the loads' ``torque.max``; a load without
-    the guide's friction). ``max_working_speed_fluctuation`` (≥ 1) limits that fluctuation
-    (with the motion objectives), ``max_peak_torque`` (N·m) the peak torque (with
-    ``min_peak_torque``). ``max_candidates`` counts in all; by default it is
+    request's ``load`` (the same search, its measure the loads' ``torque.max``).
+    ``max_working_speed_fluctuation`` (≥ 1) limits that fluctuation (with the motion
+    objectives), ``max_peak_torque`` (N·m) the peak torque (with ``min_peak_torque``).
+    ``max_candidates`` counts in all; by default it is
     ``PER_TYPE`` (pareto: per type of the request, at most ``MAX_CANDIDATES``).
     ``solver`` says how (``Solver``): ``Solver(accelerators=False)`` solves every type as one
     without a reduced solver would be, by cold multistart IPOPT on the formulation: the
@@ -294,14 +294,10 @@ def _check_limit(limit: float | None, objective: str) -> None:
 
 
 def _check_torque(objective: str, load: Load | None, limit: float | None) -> None:
-    """The least peak torque needs a load its search takes (no friction at the guide); a
-    limit on the peak torque goes with it."""
+    """The least peak torque needs a load; a limit on the peak torque goes with it."""
     if objective == PEAK_TORQUE and load is None:
         msg = f"objective {PEAK_TORQUE} needs a load (the torque it minimises is the load's)"
         raise InvalidParameters(msg, ("load",))
-    if objective == PEAK_TORQUE and load is not None and load.guide_friction:
-        msg = f"objective {PEAK_TORQUE} takes a load without the guide's friction (for now)"
-        raise InvalidParameters(msg, ("load", "guide_friction"))
     if limit is None:
         return
     if not (math.isfinite(limit) and limit > 0):
