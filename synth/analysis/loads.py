@@ -17,6 +17,10 @@ the guide's force changes sign (``_rubbing``). On each piece everything is smoot
 - the flywheel: the crank's energy E(θ) = ∫ (T − T_mean) dθ is extreme where T crosses its
   mean (roots, polished alike) or jumps across it at a piece's end; its largest swing ΔE
   over a turn gives the inertia I = ΔE / (Cs ω²).
+
+For the least peak torque's search, ``peak_terms`` gives the torque's maxima and the pieces'
+ends with their derivatives in the lengths (A ∂z/∂p = ∂b/∂p − ∂A/∂p z, and each end's
+angle moving with the design).
 """
 
 from __future__ import annotations
