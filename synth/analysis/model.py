@@ -219,41 +219,47 @@ class Forces:
     def each(self, theta: np.ndarray, pvs: np.ndarray) -> np.ndarray:
         """z at each θ with its own numbers (``pvs``: one row each), ``EACH`` angles a call:
         shape (len(θ), unknowns)."""
-        n = self.n
         out = np.hstack([self._values.each(theta[i : i + EACH], pvs[i : i + EACH])
                          for i in range(0, len(theta), EACH)]).T  # fmt: skip
-        a = out[:, : n * n].reshape(-1, n, n).transpose(0, 2, 1)
-        return cast(np.ndarray, np.linalg.solve(a, out[:, n * n :, None])[..., 0])
+        a, b = _system(out, self.n)
+        return cast(np.ndarray, np.linalg.solve(a, b)[..., 0])
 
     def dp(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
         """∂z/∂pv at each θ (every number of ``pv``: the type's parameters, then the load's):
         A ∂z/∂pv = ∂b/∂pv − ∂A/∂pv z; shape (len(θ), unknowns, len(pv))."""
-        n, k = self.n, len(theta)
-        z = self(theta, pv, order=0)[0][..., None]
-        out = self._dp(theta, pv).T.reshape(k, len(pv), n * n + n)
-        da = out[:, :, : n * n].reshape(k, len(pv), n, n).transpose(0, 1, 3, 2)  # by columns
-        db = out[:, :, n * n :, None]
-        a = self.fn(theta, pv).T[:, : n * n].reshape(k, n, n).transpose(0, 2, 1)
+        k = len(theta)
+        a, b = _system(self._at(theta, pv)[0], self.n)
+        z = np.linalg.solve(a, b)
+        da, db = _system(self._dp(theta, pv).T.reshape(k, len(pv), -1), self.n)
         rhs = db - da @ z[:, None]
         return cast(np.ndarray, np.linalg.solve(a[:, None], rhs)[..., 0].transpose(0, 2, 1))
 
     def __call__(self, theta: np.ndarray, pv: np.ndarray, order: int = 2) -> np.ndarray:
         """z and its derivatives up to ``order`` (at most 2) at each θ: shape
         (order + 1, len(θ), unknowns)."""
-        n, k = self.n, len(theta)
-        if k == 0:
-            return np.empty((order + 1, 0, n))
-        # GRID angles a call: through the compiled slots, not CasADi's conversions
-        out = np.hstack([self.fn(theta[i : i + GRID], pv) for i in range(0, k, GRID)])
-        out = out.reshape(3, n * n + n, k)[: order + 1]
-        a = out[:, : n * n].reshape(order + 1, n, n, k).transpose(0, 3, 2, 1)  # vec: by columns
-        b = out[:, n * n :].transpose(0, 2, 1)[..., None]
+        if len(theta) == 0:
+            return np.empty((order + 1, 0, self.n))
+        a, b = _system(self._at(theta, pv)[: order + 1], self.n)
         z = [np.linalg.solve(a[0], b[0])]
         if order > 0:
             z.append(np.linalg.solve(a[0], b[1] - a[1] @ z[0]))
         if order > 1:
             z.append(np.linalg.solve(a[0], b[2] - 2 * a[1] @ z[1] - a[2] @ z[0]))
         return np.stack(z)[..., 0]
+
+    def _at(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
+        """vec(A), b and their first two θ-derivatives at each θ: shape (3, len(θ), n² + n),
+        ``GRID`` angles a call (through the compiled slots, not CasADi's conversions)."""
+        k = len(theta)
+        out = np.hstack([self.fn(theta[i : i + GRID], pv) for i in range(0, k, GRID)])
+        return cast(np.ndarray, out.reshape(3, -1, k).transpose(0, 2, 1))
+
+
+def _system(rows: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """A (n × n, from its columns stacked: CasADi's vec) and b (a column) of rows of
+    vec(A), b."""
+    a = rows[..., : n * n].reshape(*rows.shape[:-1], n, n).swapaxes(-1, -2)
+    return a, rows[..., n * n :, None]
 
 
 def forces(m: Mechanism, variant: frozenset[str]) -> Forces:
