@@ -8,7 +8,7 @@ automatic differentiation. The resisting force is linear in the ram's position b
 points of the load's profile (a cutting force over its zone: two points), and steps where the
 working stroke passes them (``quality.reached``): the turn is a piece between each two and a
 piece for the rest; with the guide's friction, split further where the ram turns and where
-the guide's force changes sign (``_rubbing``). On each piece everything is smooth:
+the guide's force changes sign (``_pieces``). On each piece everything is smooth:
 
 - extremes: the stationary points of each quantity on each piece (bracketed on a grid,
   polished by the safeguarded Newton iteration that finds the dead centres, ``roots``), and
@@ -185,12 +185,8 @@ def loads(
     """The loads of a design (``pv``: its parameters; ``st``: its strokes) under ``load``, and
     its torque and forces as functions of crank angles (radians), for curves."""
     sys = forces(m, variant)
-    pieces = []
-    for span in _spans(f, pv, st, load, load.metres):
-        if load.guide_friction == 0:
-            pieces.append(Piece(sys, span.lo, span.hi, np.append(span.pv, 0.0)))
-        else:
-            pieces += _rubbing(sys, span.lo, span.hi, span.pv, st, load.guide_friction)
+    spans = _spans(f, pv, st, load, load.metres)
+    pieces = [p for span in spans for p in _pieces(sys, span, st, load.guide_friction)]
     lay = sys.layout
     pushes = [_magnitude([lay.pin(j), lay.pin(j) + 1]) for j in range(len(lay.pins))]
     pushes += [_magnitude([lay.slot(j)]) for j in range(len(lay.slots))]
@@ -312,10 +308,7 @@ def peak_terms(
             d_raw = -slope * d_travel / travel
             d_force = sign * (d_raw * level + slope * (metres * ds0 + u0 * d_travel))
             d_slope = -sign * d_raw
-        mu = load.guide_friction
-        parts = ([Piece(sys, span.lo, span.hi, np.append(span.pv, 0.0))] if mu == 0
-                 else _rubbing(sys, span.lo, span.hi, span.pv, st, mu))  # fmt: skip
-        for piece in parts:
+        for piece in _pieces(sys, span, st, load.guide_friction):
             (x,) = piece.roots([_torque], 1, falling=1)
             x = np.concatenate([x, [piece.lo, piece.hi]])
             z = sys(x, piece.pv, order=1)
@@ -352,13 +345,15 @@ def _end_fractions(span: _Span, load: Load) -> tuple[float, float]:
     return profile[-1][0], profile[0][0]
 
 
-def _rubbing(
-    sys: Forces, lo: float, hi: float, pv: np.ndarray, st: Strokes, mu: float
-) -> list[Piece]:
-    """[lo, hi] as pieces on which the guide's friction, −μ |N| sign(v), is one multiple of
+def _pieces(sys: Forces, span: _Span, st: Strokes, mu: float) -> list[Piece]:
+    """A span as pieces on which everything is smooth: itself, without the guide's friction
+    (``mu`` 0); with it, its parts on which the friction, −μ |N| sign(v), is one multiple of
     N (``kinetics``): split at the dead centres, where the ram turns, and where N changes
     sign (there N = 0 whichever sign is assumed, so the roots of N with one assumed sign are
-    the changes); each part takes the sign of N that its middle is consistent with."""
+    the changes), each part taking the sign of N that its middle is consistent with."""
+    lo, hi, pv = span.lo, span.hi, span.pv
+    if mu == 0:
+        return [Piece(sys, lo, hi, np.append(pv, 0.0))]
     turns = TWO_PI * np.arange(-1, 3)
     dead = np.concatenate([st.start + turns, st.start + st.working + turns])
     cuts = np.sort(np.concatenate([[lo, hi], dead[(dead > lo) & (dead < hi)]]))
