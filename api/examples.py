@@ -11,6 +11,9 @@ DRAG_LINK = {
     "connecting_rod": 0.3,
 }
 
+# the textbook chapter's Example 3 (a rod longer than the lever)
+WHITWORTH = {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200}
+
 ANALYZE = {
     "podhorodeski": Example(
         summary="Podhorodeski et al. (2005): the drag-link project at θ2 = 60°, ω2 = 10 rad/s",
@@ -33,19 +36,13 @@ ANALYZE = {
     "textbook": Example(
         summary="the textbook chapter, Example 3: Whitworth (with a rod longer than the lever)",
         value={
-            "mechanism": {
-                "type": "whitworth",
-                "params": {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200},
-            }
+            "mechanism": {"type": "whitworth", "params": WHITWORTH},
         },
     ),
     "loads": Example(
         summary="the same Whitworth driving a shaper's ram: a 2 kN cut at 40 strokes a minute",
         value={
-            "mechanism": {
-                "type": "whitworth",
-                "params": {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200},
-            },
+            "mechanism": {"type": "whitworth", "params": WHITWORTH},
             "load": {
                 "length_unit": "mm",
                 "crank_rpm": 40,

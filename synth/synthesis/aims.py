@@ -28,12 +28,15 @@ class Aim:
     """What a search minimises over one variant: a design's evaluation (``evaluate``, once
     per design, stroke units; SynthError where it does not run), the terms whose largest is
     the measure (``pick``, from the evaluation, with their derivatives in the type's
-    parameters), and the measure of many designs at once, approximately (``rank``: the
-    parameter rows of designs -> their measures, inf where one does not run)."""
+    parameters), the measure of many designs at once, approximately (``rank``: the
+    parameter rows of designs -> their measures, inf where one does not run), and whether the
+    measure stays the same over a candidate's family (``scale_free``: the family's members
+    move alike, but links that weigh load the drive differently)."""
 
     evaluate: Callable[[dict[str, float]], Any]
     pick: Pick
     rank: Callable[[np.ndarray], np.ndarray]
+    scale_free: bool
 
 
 # the terms ``local_optima`` picks from carry their derivatives (``gradient=True``)
@@ -65,7 +68,7 @@ def aim(
 
         motion = partial(motion_terms, m.type, gradient=True)
         capped = None if limit is None else (PICK[UNIFORM], limit)
-        return Aim(motion, PICK[t.objective], rank), capped
+        return Aim(motion, PICK[t.objective], rank, scale_free=True), capped
     load: Load = extras["load"]
     metres = load.metres * t.stroke  # the search's lengths are in strokes
     unit = min((abs(c.objective_value) for c in mine), default=1.0) or 1.0
@@ -77,4 +80,5 @@ def aim(
         return screen.rank_torque(m, variant, pvs, load, metres) / unit
 
     peak = partial(peak_torque_terms, m.type, load=load, metres=metres)
-    return Aim(peak, pick, torque), None if limit is None else (pick, limit / unit)
+    capped = None if limit is None else (pick, limit / unit)
+    return Aim(peak, pick, torque, scale_free=False), capped

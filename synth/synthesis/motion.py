@@ -323,10 +323,9 @@ def motion(
             for d in optima:
                 p = proposal(m, i, whole(spec, scaled(d, t.stroke), v.parts), "slsqp", t)
                 c = None if p is None else candidate(m, p, t, s.variants, extras)
-                if c is not None:  # its family's smallest member moves the same; links
-                    # that weigh make its torque another: then both are kept, ranked
+                if c is not None:  # its family's smallest member, and it where that differs
                     smallest = _smallest_member(m, i, c, t, s.variants, extras)
-                    mine += [c, smallest] if t.objective == PEAK_TORQUE else [smallest]
+                    mine += [smallest] if aim.scale_free else [c, smallest]
         kept = [c for c in mine if limit is None or _limited(c, t) <= limit * (1 + TOL)]
         if not kept and not mine:
             infeasible.append(diagnose(m, spec, best_t, s))
