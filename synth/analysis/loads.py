@@ -41,7 +41,7 @@ from .model import GRID, Forces, Model, forces
 from .quality import Strokes, reached
 from .roots import TWO_PI, _rtsafe
 
-PANEL = math.pi / 64  # the widest panel of the quadrature (π/16: 1e-7 off on a sharp Whitworth)
+PANEL = math.pi / 64  # the widest panel of the quadrature (π/32: a sharp drag-link mean 5e-8 off)
 NODES, WEIGHTS = np.polynomial.legendre.leggauss(16)  # per panel
 
 
@@ -67,35 +67,68 @@ def _magnitude(cols: list[int]) -> Quantity:
     return q
 
 
+@dataclass(frozen=True)
 class Piece:
-    """A span of the turn [lo, hi] (radians) where the load is one (``pv``), smooth, and its
-    quantities on a grid (``GRID`` cells a turn, at least 8)."""
+    """A part [lo, hi] of the turn (radians) where the load is one (``pv``: the design's and
+    the load's numbers, ``kinetics.LOAD``) and everything is smooth; ``span``: which of the
+    turn's spans (``_Span``) it lies in."""
 
-    def __init__(self, sys: Forces, lo: float, hi: float, pv: np.ndarray) -> None:
-        self.sys, self.lo, self.hi, self.pv = sys, lo, hi, pv
-        self.grid = np.linspace(lo, hi, max(8, math.ceil(GRID * (hi - lo) / TWO_PI)) + 1)
-        self.z = sys(self.grid, pv)
-        self._integrals: tuple[np.ndarray, np.ndarray] | None = None
+    lo: float
+    hi: float
+    pv: np.ndarray
+    span: int
 
-    def roots(self, fs: list[Quantity], k: int, falling: int = 0) -> list[np.ndarray]:
-        """Each quantity's roots of its row k (0: value, 1: derivative) in the piece: sign
-        changes on the grid, polished together (``roots._rtsafe`` on rows k and k + 1); only
-        the falling ones for the first ``falling`` quantities (their derivative's: maxima)."""
-        which, lo, hi, f_lo, f_hi, scale = [], [], [], [], [], []
+
+class Pieces:
+    """Pieces evaluated together, each angle with its piece's numbers: their quantities on a
+    grid (``GRID`` cells a turn, at least 8 a piece), their roots, their integrals."""
+
+    def __init__(self, sys: Forces, pieces: list[Piece]) -> None:
+        self.sys, self.pieces = sys, pieces
+        self.lo = np.array([p.lo for p in pieces])
+        self.hi = np.array([p.hi for p in pieces])
+        self.pv = np.array([p.pv for p in pieces])
+        cells = np.maximum(8, np.ceil(GRID * (self.hi - self.lo) / TWO_PI).astype(int))
+        spans = zip(self.lo, self.hi, cells, strict=True)
+        self.grid = np.concatenate([np.linspace(a, b, c + 1) for a, b, c in spans])
+        self.owner = np.repeat(np.arange(len(pieces)), cells + 1)
+        self.starts = np.concatenate([[0], np.cumsum(cells + 1)[:-1]])  # each piece's first
+        self.cells = np.nonzero(self.owner[:-1] == self.owner[1:])[0]  # grid[i] to grid[i + 1]
+        self.z = sys(self.grid, self.pv[self.owner])
+        self._integrals: tuple[list[np.ndarray], np.ndarray] | None = None
+
+    def __call__(self, x: np.ndarray, owner: np.ndarray, order: int = 2) -> np.ndarray:
+        """z and its θ-derivatives at angles ``x`` of the pieces ``owner``."""
+        return self.sys(x, self.pv[owner], order)
+
+    def largest(self, g: np.ndarray) -> np.ndarray:
+        """Each piece's largest finite |g| over its grid (g: a row per grid angle)."""
+        a = np.abs(np.where(np.isfinite(g), g, 0.0))
+        return np.maximum.reduceat(a.reshape(a.shape[0], -1).max(axis=1), self.starts)
+
+    def roots(
+        self, fs: list[Quantity], k: int, falling: int = 0
+    ) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Each quantity's roots of its row k (0: value, 1: derivative) in the pieces, and the
+        piece of each: sign changes on the grid, polished together (``roots._rtsafe`` on rows
+        k and k + 1); only the falling ones for the first ``falling`` quantities (their
+        derivative's: maxima)."""
+        c = self.cells
+        which, at, f_lo, f_hi, scale = [], [], [], [], []
         for i, f in enumerate(fs):
             g = f(self.z)[k]
-            down = (g[:-1] > 0) & (g[1:] < 0)
-            c = np.nonzero(down if i < falling else down | (g[:-1] < 0) & (g[1:] > 0))[0]
-            which.append(np.full(c.size, i))
-            lo.append(self.grid[c])
-            hi.append(self.grid[c + 1])
-            f_lo.append(g[c])
-            f_hi.append(g[c + 1])
-            scale.append(np.full(c.size, np.max(np.abs(g[np.isfinite(g)]), initial=0.0)))
-        w = np.concatenate(which)
+            down = (g[c] > 0) & (g[c + 1] < 0)
+            cc = c[down if i < falling else down | (g[c] < 0) & (g[c + 1] > 0)]
+            which.append(np.full(cc.size, i))
+            at.append(cc)
+            f_lo.append(g[cc])
+            f_hi.append(g[cc + 1])
+            scale.append(self.largest(g)[self.owner[cc]])
+        w, cc = np.concatenate(which), np.concatenate(at)
+        owner = self.owner[cc]
 
         def fd(x: np.ndarray) -> np.ndarray:
-            z = self.sys(x, self.pv)
+            z = self(x, owner)
             out = np.empty((2, x.size))
             for i, f in enumerate(fs):
                 mine = w == i
@@ -103,46 +136,45 @@ class Piece:
                     out[:, mine] = f(z[:, mine])[k : k + 2]
             return out
 
-        cat = [np.concatenate(c) for c in (lo, hi, f_lo, f_hi, scale)]
-        x = _rtsafe(fd, *cat)
-        return [x[w == i] for i in range(len(fs))]
+        ends = (self.grid[cc], self.grid[cc + 1], *map(np.concatenate, (f_lo, f_hi, scale)))
+        x = _rtsafe(fd, *ends)
+        return [(x[w == i], owner[w == i]) for i in range(len(fs))]
 
-    def integrals(self) -> tuple[np.ndarray, np.ndarray]:
-        """The panels' edges (each at most ``PANEL`` wide) and ∫ T dθ and ∫ T² dθ over each:
-        Gauss–Legendre, in one evaluation; once per piece."""
+    def integrals(self) -> tuple[list[np.ndarray], np.ndarray]:
+        """Each piece's panels' edges (each panel at most ``PANEL`` wide), and ∫ T dθ and
+        ∫ T² dθ over every panel (shape (2, panels), the pieces' in turn): Gauss–Legendre, in
+        one evaluation; once."""
         if self._integrals is None:
-            edges = np.linspace(self.lo, self.hi, math.ceil((self.hi - self.lo) / PANEL) + 1)
-            self._integrals = edges, _gauss(self, edges[:-1], edges[1:], 2)
+            edges = [np.linspace(a, b, math.ceil((b - a) / PANEL) + 1)
+                     for a, b in zip(self.lo, self.hi, strict=True)]  # fmt: skip
+            owner = np.repeat(np.arange(len(edges)), [e.size - 1 for e in edges])
+            lo = np.concatenate([e[:-1] for e in edges])
+            hi = np.concatenate([e[1:] for e in edges])
+            self._integrals = edges, self.gauss(lo, hi, owner, 2)
         return self._integrals
 
-    def at(self, x: np.ndarray, f: Quantity) -> np.ndarray:
-        return cast(np.ndarray, f(self.sys(x, self.pv))[0])
+    def gauss(self, lo: np.ndarray, hi: np.ndarray, owner: np.ndarray, powers: int) -> np.ndarray:
+        """∫ T^k dθ over each [lo, hi] of the pieces ``owner`` (16-point Gauss–Legendre), for
+        k = 1 … powers: shape (powers, spans)."""
+        mid, half = (lo + hi) / 2, (hi - lo) / 2
+        x = (mid[:, None] + half[:, None] * NODES[None, :]).ravel()
+        t = self(x, np.repeat(owner, NODES.size), 0)[0, :, 0].reshape(lo.size, NODES.size)
+        return np.array([(t**k @ WEIGHTS) * half for k in range(1, powers + 1)])
 
 
-def _gauss(piece: Piece, lo: np.ndarray, hi: np.ndarray, powers: int) -> np.ndarray:
-    """∫ T^k dθ over each [lo, hi] (16-point Gauss–Legendre), for k = 1 … powers: shape
-    (powers, spans)."""
-    mid, half = (lo + hi) / 2, (hi - lo) / 2
-    x = (mid[:, None] + half[:, None] * NODES[None, :]).ravel()
-    t = piece.sys(x, piece.pv, order=0)[0, :, 0].reshape(lo.size, NODES.size)
-    return np.array([(t**k @ WEIGHTS) * half for k in range(1, powers + 1)])
-
-
-def _extremes(
-    pieces: list[Piece], fs: list[Quantity], largest: int
-) -> list[tuple[np.ndarray, np.ndarray]]:
+def _extremes(pieces: Pieces, fs: list[Quantity], largest: int) -> list[tuple[np.ndarray, ...]]:
     """Where each quantity may be extreme (radians) and its values there: its stationary
     points on each piece (only its maxima for the first ``largest``) and the pieces' ends
-    (the value from each side)."""
-    xs: list[list[np.ndarray]] = [[] for _ in fs]
-    vs: list[list[np.ndarray]] = [[] for _ in fs]
-    for piece in pieces:
-        found = piece.roots(fs, 1, largest)
-        for i, f in enumerate(fs):
-            x = np.concatenate([found[i], [piece.lo, piece.hi]])
-            xs[i].append(x)
-            vs[i].append(piece.at(x, f))
-    return [(np.concatenate(x), np.concatenate(v)) for x, v in zip(xs, vs, strict=True)]
+    (the value from each side); in one evaluation."""
+    n = len(pieces.pieces)
+    ends = np.concatenate([pieces.lo, pieces.hi]), np.tile(np.arange(n), 2)
+    found = [(np.concatenate([x, ends[0]]), np.concatenate([o, ends[1]]))
+             for x, o in pieces.roots(fs, 1, largest)]  # fmt: skip
+    x, owner = (np.concatenate(c) for c in zip(*found, strict=True))
+    z = pieces(x, owner)
+    cut = np.cumsum([f[0].size for f in found])[:-1]
+    return [(xs, f(zs)[0]) for (xs, _), zs, f
+            in zip(found, np.split(z, cut, axis=1), fs, strict=True)]  # fmt: skip
 
 
 def speed(
@@ -185,14 +217,13 @@ def loads(
     """The loads of a design (``pv``: its parameters; ``st``: its strokes) under ``load``, and
     its torque and forces as functions of crank angles (radians), for curves."""
     sys = forces(m, variant)
-    spans = _spans(f, pv, st, load, load.metres)
-    pieces = [p for span in spans for p in _pieces(sys, span, st, load.guide_friction)]
+    pieces = _pieces(sys, _spans(f, pv, st, load, load.metres), st, load.guide_friction)
     lay = sys.layout
     pushes = [_magnitude([lay.pin(j), lay.pin(j) + 1]) for j in range(len(lay.pins))]
     pushes += [_magnitude([lay.slot(j)]) for j in range(len(lay.slots))]
     pushes.append(_magnitude([lay.size - 1]))
     *found_all, (x, v) = _extremes(pieces, [*pushes, _torque], len(pushes))  # forces: maxima
-    total, squares = np.sum([piece.integrals()[1].sum(axis=1) for piece in pieces], axis=0)
+    total, squares = pieces.integrals()[1].sum(axis=1)
     mean = float(total / TWO_PI)
     k_hi, k_lo = int(np.argmax(v)), int(np.argmin(v))
     t = Torque(float(v[k_hi]), _deg(x[k_hi]), float(v[k_lo]), _deg(x[k_lo]), mean,
@@ -208,14 +239,11 @@ def loads(
     def curves(theta: np.ndarray) -> dict[str, np.ndarray]:
         """The torque and each force (``Loads``' names, the guide's last) at each crank angle,
         from the piece it lies in (the earlier piece's at a piece's end)."""
-        out = np.empty((len(quantities), theta.size))
-        left = np.ones(theta.size, dtype=bool)
-        for piece in pieces:
-            mine = left & ((theta - piece.lo) % TWO_PI <= piece.hi - piece.lo)
-            if mine.any():
-                z = piece.sys(theta[mine], piece.pv)
-                out[:, mine] = [q(z)[0] for q in quantities]
-            left &= ~mine
+        owner = np.full(theta.size, -1)
+        for i, (lo, hi) in enumerate(zip(pieces.lo, pieces.hi, strict=True)):
+            owner[(owner < 0) & ((theta - lo) % TWO_PI <= hi - lo)] = i
+        z = pieces(theta, owner)
+        out = [q(z)[0] for q in quantities]
         return dict(zip(("torque", *joints, "guide"), out, strict=True))
 
     return Loads(t, power, flywheel, joints, largest[-1]), curves
@@ -296,44 +324,46 @@ def peak_terms(
     dt_dead = -kd[:, nr] / f(dead, pv)[2][0][:, None]  # s′(θ, p) = 0 there
     sign = math.copysign(1.0, st.s1 - st.s0)
     force_at = k + kinetics.LOAD.index("force")
-    values, grads = [], []
-    for span in _spans(f, pv, st, load, metres):
-        d_force, d_slope = np.zeros(k), np.zeros(k)
-        if span.segment is not None:  # the force's parameters move with the dead centres
+    spans = _spans(f, pv, st, load, metres)
+    moving = np.zeros((len(spans), 2, k))  # d(force, slope)/dp: moving with the dead centres
+    for i, span in enumerate(spans):
+        if span.segment is not None:
             u0, f0, u1, f1 = span.segment
             travel = (st.s1 - st.s0) * metres
             slope = (f1 - f0) / ((u1 - u0) * travel)
             level = st.s0 * metres + u0 * travel
             d_travel = metres * (ds1 - ds0)
             d_raw = -slope * d_travel / travel
-            d_force = sign * (d_raw * level + slope * (metres * ds0 + u0 * d_travel))
-            d_slope = -sign * d_raw
-        for piece in _pieces(sys, span, st, load.guide_friction):
-            (x,) = piece.roots([_torque], 1, falling=1)
-            x = np.concatenate([x, [piece.lo, piece.hi]])
-            z = sys(x, piece.pv, order=1)
-            # d(T, N)/dp at fixed angles, the force's parameters moving too
-            dz = sys.dp(x, piece.pv)[:, [0, guide]]  # (angle, T and N, pv)
-            both = (dz[..., :k] + dz[..., force_at, None] * d_force
-                    + dz[..., force_at + 1, None] * d_slope)  # fmt: skip
-            grad, d_guide = both[:, 0], both[:, 1]
-            for j, end in ((-2, piece.lo), (-1, piece.hi)):
-                turn = (end - st.start) % TWO_PI
-                if end in (span.lo, span.hi):  # a profile's point
-                    u = _end_fractions(span, load)[0 if end == span.lo else 1]
-                    if u in (0.0, 1.0):
-                        dt = dt_dead[int(u)]
-                    else:  # s(θ, p) = s0 + u (s1 − s0)
-                        s1 = f(x[[j]], pv)[1][0][0]
-                        dt = (ds0 + u * (ds1 - ds0) - f.dp(x[[j]], pv)[0, 0]) / s1
-                elif min(turn, TWO_PI - turn, abs(turn - st.working)) < 1e-9:  # a dead centre
-                    dt = dt_dead[int(abs(turn - st.working) < 1e-9)]
-                else:  # where the guide's force changes sign: N(θ, p) = 0
-                    dt = -d_guide[j] / z[1, j, guide]
-                grad[j] += z[1, j, 0] * dt
-            values.append(z[0, :, 0])
-            grads.append(grad)
-    return np.concatenate(values), np.vstack(grads)
+            moving[i, 0] = sign * (d_raw * level + slope * (metres * ds0 + u0 * d_travel))
+            moving[i, 1] = -sign * d_raw
+    pieces = _pieces(sys, spans, st, load.guide_friction)
+    ((x, owner),) = pieces.roots([_torque], 1, falling=1)
+    n, found = len(pieces.pieces), x.size
+    x = np.concatenate([x, pieces.lo, pieces.hi])
+    owner = np.concatenate([owner, np.arange(n), np.arange(n)])
+    z = pieces(x, owner, order=1)
+    # d(T, N)/dp at fixed angles, the force's parameters moving too
+    dz = sys.dp(x, pieces.pv[owner])[:, [0, guide]]  # (angle, T and N, pv)
+    d_load = moving[[pieces.pieces[o].span for o in owner]]
+    both = (dz[..., :k] + dz[..., force_at, None] * d_load[:, None, 0]
+            + dz[..., force_at + 1, None] * d_load[:, None, 1])  # fmt: skip
+    grad, d_guide = both[:, 0], both[:, 1]
+    for j in range(found, x.size):
+        end, span = x[j], spans[pieces.pieces[owner[j]].span]
+        turn = (end - st.start) % TWO_PI
+        if end in (span.lo, span.hi):  # a profile's point
+            u = _end_fractions(span, load)[0 if end == span.lo else 1]
+            if u in (0.0, 1.0):
+                dt = dt_dead[int(u)]
+            else:  # s(θ, p) = s0 + u (s1 − s0)
+                s1 = f(x[[j]], pv)[1][0][0]
+                dt = (ds0 + u * (ds1 - ds0) - f.dp(x[[j]], pv)[0, 0]) / s1
+        elif min(turn, TWO_PI - turn, abs(turn - st.working)) < 1e-9:  # a dead centre
+            dt = dt_dead[int(abs(turn - st.working) < 1e-9)]
+        else:  # where the guide's force changes sign: N(θ, p) = 0
+            dt = -d_guide[j] / z[1, j, guide]
+        grad[j] += z[1, j, 0] * dt
+    return z[0, :, 0], grad
 
 
 def _end_fractions(span: _Span, load: Load) -> tuple[float, float]:
@@ -345,47 +375,57 @@ def _end_fractions(span: _Span, load: Load) -> tuple[float, float]:
     return profile[-1][0], profile[0][0]
 
 
-def _pieces(sys: Forces, span: _Span, st: Strokes, mu: float) -> list[Piece]:
-    """A span as pieces on which everything is smooth: itself, without the guide's friction
-    (``mu`` 0); with it, its parts on which the friction, −μ |N| sign(v), is one multiple of
-    N (``kinetics``): split at the dead centres, where the ram turns, and where N changes
-    sign (there N = 0 whichever sign is assumed, so the roots of N with one assumed sign are
-    the changes), each part taking the sign of N that its middle is consistent with."""
-    lo, hi, pv = span.lo, span.hi, span.pv
+def _pieces(sys: Forces, spans: list[_Span], st: Strokes, mu: float) -> Pieces:
+    """The spans as pieces on which everything is smooth: themselves, without the guide's
+    friction (``mu`` 0); with it, their parts on which the friction, −μ |N| sign(v), is one
+    multiple of N (``kinetics``): split at the dead centres, where the ram turns, and where
+    N changes sign (there N = 0 whichever sign is assumed, so the roots of N with one
+    assumed sign are the changes), each part taking the sign of N that its middle is
+    consistent with."""
     if mu == 0:
-        return [Piece(sys, lo, hi, np.append(pv, 0.0))]
+        whole = [Piece(s.lo, s.hi, np.append(s.pv, 0.0), i) for i, s in enumerate(spans)]
+        return Pieces(sys, whole)
     turns = TWO_PI * np.arange(-1, 3)
     dead = np.concatenate([st.start + turns, st.start + st.working + turns])
-    cuts = np.sort(np.concatenate([[lo, hi], dead[(dead > lo) & (dead < hi)]]))
     up = math.copysign(1.0, st.s1 - st.s0)  # sign(v) in the working stroke
-    out = []
-    for a, b in itertools.pairwise(cuts):
-        working = (0.5 * (a + b) - st.start) % TWO_PI < st.working
-        v = up if working else -up
-        pushing = Piece(sys, a, b, np.append(pv, -mu * v))  # N > 0 assumed
-        (changes,) = pushing.roots([_guide], 0)
-        tiny = 1e-12 * np.abs(pushing.z[0]).max()  # a guide force 0 to rounding
-        for c, d in itertools.pairwise(np.concatenate([[a], np.sort(changes), [b]])):
-            mid = np.array([0.5 * (c + d)])
-            if pushing.at(mid, _guide)[0] >= -tiny:
-                piece = pushing if (c, d) == (a, b) else Piece(sys, c, d, pushing.pv)
-            else:
-                piece = Piece(sys, c, d, np.append(pv, mu * v))  # N < 0
-                if piece.at(mid, _guide)[0] > tiny:
-                    raise InvalidDesign(
-                        f"the guide's friction {mu:g} locks the ram at crank angle "
-                        f"{_deg(float(mid[0])):.6g}°: no guide force is consistent with it",
-                        (), "friction",
-                    )  # fmt: skip
-            out.append(piece)
-    return out
+    parts, signs = [], []  # N > 0 assumed
+    for i, span in enumerate(spans):
+        inner = dead[(dead > span.lo) & (dead < span.hi)]
+        for a, b in itertools.pairwise(np.sort(np.concatenate([[span.lo, span.hi], inner]))):
+            working = (0.5 * (a + b) - st.start) % TWO_PI < st.working
+            v = up if working else -up
+            parts.append(Piece(a, b, np.append(span.pv, -mu * v), i))
+            signs.append(v)
+    pushing = Pieces(sys, parts)
+    ((changes, at),) = pushing.roots([_guide], 0)
+    tiny = 1e-12 * pushing.largest(pushing.z[0])  # a guide force 0 to rounding
+    cut = [(j, c, d) for j, p in enumerate(parts)
+           for c, d in itertools.pairwise([p.lo, *np.sort(changes[at == j]), p.hi])]  # fmt: skip
+    mid = np.array([0.5 * (c + d) for _, c, d in cut])
+    owner = np.array([j for j, _, _ in cut])
+    pulled = _guide(pushing(mid, owner, 0))[0] < -tiny[owner]
+    if not pulled.any() and len(cut) == len(parts):
+        return pushing
+    out = [Piece(c, d, parts[j].pv, parts[j].span) for j, c, d in cut]
+    for j in np.nonzero(pulled)[0]:  # N < 0
+        p = out[j]
+        out[j] = Piece(p.lo, p.hi, np.append(p.pv[:-1], mu * signs[owner[j]]), p.span)
+    pieces = Pieces(sys, out)
+    held = _guide(pieces(mid, np.arange(len(out)), 0))[0] > tiny[owner]
+    for j in np.nonzero(pulled & held)[0]:
+        raise InvalidDesign(
+            f"the guide's friction {mu:g} locks the ram at crank angle "
+            f"{_deg(float(mid[j])):.6g}°: no guide force is consistent with it",
+            (), "friction",
+        )  # fmt: skip
+    return pieces
 
 
 def _guide(z: np.ndarray) -> np.ndarray:
     return z[:, :, -1]
 
 
-def _energy(pieces: list[Piece], mean: float) -> float:
+def _energy(pieces: Pieces, mean: float) -> float:
     """The largest swing of E(θ) = ∫ (T − mean) dθ over a turn (J): its extremes lie where T
     crosses its mean, or steps across it at a piece's end. E at the panels' edges from the
     pieces' integrals, and on from an edge to each crossing by a short quadrature."""
@@ -393,16 +433,17 @@ def _energy(pieces: list[Piece], mean: float) -> float:
     def excess(z: np.ndarray) -> np.ndarray:
         return cast(np.ndarray, _torque(z) - np.array([mean, 0.0, 0.0])[:, None])
 
-    values, start = [0.0], 0.0
-    for piece in pieces:
-        edges, sums = piece.integrals()
-        at_edges = start + np.concatenate([[0.0], np.cumsum(sums[0] - mean * np.diff(edges))])
-        (crossings,) = piece.roots([excess], 0)
-        k = np.clip(np.searchsorted(edges, crossings) - 1, 0, edges.size - 2)
-        partial = _gauss(piece, edges[k], crossings, 1)[0] - mean * (crossings - edges[k])
-        values += [*(at_edges[k] + partial), at_edges[-1]]
-        start = at_edges[-1]
-    return float(max(values) - min(values))
+    all_edges, sums = pieces.integrals()
+    ((crossings, owner),) = pieces.roots([excess], 0)
+    widths = np.concatenate([np.diff(e) for e in all_edges])
+    at_edges = np.concatenate([[0.0], np.cumsum(sums[0] - mean * widths)])
+    first = np.cumsum([0] + [e.size - 1 for e in all_edges])  # each piece's first panel
+    edges = np.concatenate([e[:-1] for e in all_edges])
+    k = np.array([first[o] + np.clip(np.searchsorted(all_edges[o], x) - 1, 0, all_edges[o].size - 2)
+                  for x, o in zip(crossings, owner, strict=True)], dtype=int)  # fmt: skip
+    partial = pieces.gauss(edges[k], crossings, owner, 1)[0] - mean * (crossings - edges[k])
+    values = np.concatenate([at_edges, at_edges[k] + partial])
+    return float(values.max() - values.min())
 
 
 def _deg(x: float) -> float:

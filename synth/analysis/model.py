@@ -212,34 +212,36 @@ class Forces:
         return _Batched(f"{self.name}_dp", th, pv, ca.vec(ca.jacobian(g, pv)))
 
     @functools.cached_property
-    def _values(self) -> _Batched:  # A and b alone: the screen's many designs
+    def _values(self) -> _Batched:  # A and b alone: z without its derivatives
         th, pv, g = self._rows
         return _Batched(f"{self.name}_values", th, pv, g)
 
     def each(self, theta: np.ndarray, pvs: np.ndarray) -> np.ndarray:
-        """z at each θ with its own numbers (``pvs``: one row each), ``EACH`` angles a call:
-        shape (len(θ), unknowns)."""
-        out = np.hstack([self._values.each(theta[i : i + EACH], pvs[i : i + EACH])
-                         for i in range(0, len(theta), EACH)]).T  # fmt: skip
-        a, b = _system(out, self.n)
+        """z at each θ with its own numbers (``pvs``: one row each): shape (len(θ), unknowns)."""
+        a, b = _system(_evaluate(self._values, theta, pvs), self.n)
         return cast(np.ndarray, np.linalg.solve(a, b)[..., 0])
 
     def dp(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
-        """∂z/∂pv at each θ (every number of ``pv``: the type's parameters, then the load's):
-        A ∂z/∂pv = ∂b/∂pv − ∂A/∂pv z; shape (len(θ), unknowns, len(pv))."""
-        k = len(theta)
-        a, b = _system(self._at(theta, pv)[0], self.n)
+        """∂z/∂pv at each θ (every number of ``pv``: the type's parameters, then the load's;
+        shared, or one row per angle): A ∂z/∂pv = ∂b/∂pv − ∂A/∂pv z; shape (len(θ),
+        unknowns, numbers)."""
+        k, p = len(theta), pv.shape[-1]
+        a, b = _system(_evaluate(self._values, theta, pv), self.n)
         z = np.linalg.solve(a, b)
-        da, db = _system(self._dp(theta, pv).T.reshape(k, len(pv), -1), self.n)
+        da, db = _system(_evaluate(self._dp, theta, pv).reshape(k, p, -1), self.n)
         rhs = db - da @ z[:, None]
         return cast(np.ndarray, np.linalg.solve(a[:, None], rhs)[..., 0].transpose(0, 2, 1))
 
     def __call__(self, theta: np.ndarray, pv: np.ndarray, order: int = 2) -> np.ndarray:
-        """z and its derivatives up to ``order`` (at most 2) at each θ: shape
-        (order + 1, len(θ), unknowns)."""
+        """z and its derivatives up to ``order`` (at most 2) at each θ (``pv``: the numbers,
+        shared, or one row per angle): shape (order + 1, len(θ), unknowns)."""
         if len(theta) == 0:
             return np.empty((order + 1, 0, self.n))
-        a, b = _system(self._at(theta, pv)[: order + 1], self.n)
+        if order == 0:
+            rows = _evaluate(self._values, theta, pv)[None]
+        else:  # vec(A), b and their θ-derivatives
+            rows = _evaluate(self.fn, theta, pv).reshape(len(theta), 3, -1).transpose(1, 0, 2)
+        a, b = _system(rows[: order + 1], self.n)
         z = [np.linalg.solve(a[0], b[0])]
         if order > 0:
             z.append(np.linalg.solve(a[0], b[1] - a[1] @ z[0]))
@@ -247,12 +249,17 @@ class Forces:
             z.append(np.linalg.solve(a[0], b[2] - 2 * a[1] @ z[1] - a[2] @ z[0]))
         return np.stack(z)[..., 0]
 
-    def _at(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
-        """vec(A), b and their first two θ-derivatives at each θ: shape (3, len(θ), n² + n),
-        ``GRID`` angles a call (through the compiled slots, not CasADi's conversions)."""
-        k = len(theta)
-        out = np.hstack([self.fn(theta[i : i + GRID], pv) for i in range(0, k, GRID)])
-        return cast(np.ndarray, out.reshape(3, -1, k).transpose(0, 2, 1))
+
+def _evaluate(fn: _Batched, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
+    """fn at each θ, one row per angle, for shared numbers ``pv`` (``GRID`` angles a call) or
+    each angle's (a row of ``pv`` each, ``EACH`` a call): through the compiled slots, not
+    CasADi's conversions."""
+    if pv.ndim == 1:
+        parts = [fn(theta[i : i + GRID], pv) for i in range(0, len(theta), GRID)]
+    else:
+        parts = [fn.each(theta[i : i + EACH], pv[i : i + EACH])
+                 for i in range(0, len(theta), EACH)]  # fmt: skip
+    return (parts[0] if len(parts) == 1 else np.hstack(parts)).T
 
 
 def _system(rows: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -292,7 +299,8 @@ def compile_all() -> None:
                 fns = [f.fn.fn, f._dp.fn, f.polish.fn, f.dead.fn if f.dead else None,
                        f.dead_polish.fn if f.dead_polish else None]  # fmt: skip
                 if m.frame is not None and kind == KINDS[0]:  # the loads', once a variant
-                    fns.append(Forces(m, frozenset(parts)).fn.fn)
+                    sys = Forces(m, frozenset(parts))
+                    fns += [sys.fn.fn, sys._values.fn]
                 for fn in fns:
                     if fn is not None and fn.class_name() != "External":
                         raise RuntimeError(
