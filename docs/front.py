@@ -38,7 +38,7 @@ def draw_ends(result: synth.SynthesisResult, axes, mtype: str = "whitworth") -> 
     points = [c for c in result.candidates if c.type == mtype]
     for ax, c in zip(axes, (points[-1], points[0]), strict=True):
         a = synth.analyze(mtype, c.params)
-        at = a.extremes["min"].crank_angle_deg + a.working_stroke.crank_angle_deg / 2
+        at = a.extremes.min.crank_angle_deg + a.working_stroke.crank_angle_deg / 2
         j = synth.joints(mtype, c.params, [at])
         for p, q in WHITWORTH_LINKS:
             ax.plot(*zip(j[p][0], j[q][0], strict=True), "-o", ms=3, color="C0")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Generic, TypeVar
 
 import numpy as np
 
@@ -17,6 +17,23 @@ TOL = 1e-9  # relative: how exactly a design must meet the targets (verification
 class Extreme:
     position: float
     crank_angle_deg: float
+
+
+E = TypeVar("E")
+
+
+@dataclass(frozen=True)
+class MinMax(Generic[E]):
+    """The least and the greatest of something (the slider's dead centres, a sweep's time
+    ratio): as attributes, or by name (``["min"]``) as a mapping of the two."""
+
+    min: E
+    max: E
+
+    def __getitem__(self, key: str) -> E:
+        if key not in ("min", "max"):
+            raise KeyError(key)
+        return getattr(self, key)  # type: ignore[no-any-return]
 
 
 @dataclass(frozen=True)
@@ -221,7 +238,7 @@ class Analysis:
     params: dict[str, float]
     time_ratio: float
     stroke: float
-    extremes: dict[str, Extreme]  # "min", "max"
+    extremes: MinMax[Extreme]  # the dead centres
     working_stroke: Stroke
     return_stroke: Stroke
     transmission: Transmission
@@ -355,7 +372,7 @@ class SweepResult:
     min_transmission_angle_deg: list[float | None]
     valid: list[bool]
     valid_interval: list[tuple[float, float]]  # exact, within [start, stop]
-    time_ratio_range: dict[str, Extremum] | None  # "min", "max" over the valid part
+    time_ratio_range: MinMax[Extremum] | None  # over the valid part
     # False: the budget ended the sweep before stop (values, and all above, end where it did)
     complete: bool = True
 

@@ -27,6 +27,7 @@ from ..results import (
     Curves,
     Extreme,
     Joint,
+    MinMax,
     PinPath,
     Stroke,
     Tolerance,
@@ -328,10 +329,10 @@ def _summary(
         "params": p,
         "time_ratio": max(up, down) / min(up, down),
         "stroke": s_max - s_min,
-        "extremes": {
-            "min": Extreme(s_min, math.degrees(t_min)),
-            "max": Extreme(s_max, math.degrees(t_max)),
-        },
+        "extremes": MinMax(
+            Extreme(s_min, math.degrees(t_min)),
+            Extreme(s_max, math.degrees(t_max)),
+        ),
         "working_stroke": Stroke(math.degrees(max(up, down)), 1 if slow_up else -1),
         "return_stroke": Stroke(math.degrees(min(up, down)), -1 if slow_up else 1),
         "transmission": Transmission(

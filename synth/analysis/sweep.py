@@ -20,7 +20,7 @@ from scipy.optimize import minimize_scalar
 from ..errors import InvalidParameters, SynthError
 from ..mechanisms import get
 from ..numerics.dense import bisect
-from ..results import Analysis, Extremum, SweepResult
+from ..results import Analysis, Extremum, MinMax, SweepResult
 from .kinematics import analyze, analyze_many
 
 MAX_POINTS = 10_000
@@ -138,7 +138,7 @@ def _tr_range(
     values: np.ndarray,
     runs: Sequence[Analysis | None],
     intervals: list[tuple[float, float]],
-) -> dict[str, Extremum] | None:
+) -> MinMax[Extremum] | None:
     if not intervals:
         return None
     found: list[tuple[float, float]] = []
@@ -164,4 +164,4 @@ def _tr_range(
                 )
                 if math.isfinite(r.fun):
                     found.append((sign * float(r.fun), float(r.x)))
-    return {"min": Extremum(*min(found)), "max": Extremum(*max(found))}
+    return MinMax(Extremum(*min(found)), Extremum(*max(found)))

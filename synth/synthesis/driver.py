@@ -34,6 +34,9 @@ MAX_CANDIDATES = 50
 # the solvers work in the stroke's unit: a stroke within STROKES and bounds within SCALE of it
 # either way keep their ratios and squares finite and non-zero (_check_scale)
 STROKES, SCALE = (1e-100, 1e100), 1e24
+SPEC_KEYS = ("type", "fixed", "bounds")  # what a mechanisms entry given as a mapping takes
+# the types to search: each a Spec, a mapping of SPEC_KEYS, or a type's name; one name alone
+Specs = Sequence[Spec | Mapping[str, Any] | str] | str | None
 PER_TYPE = 5  # candidates per type when max_candidates is not given (pareto: per type's front)
 
 
@@ -41,7 +44,7 @@ def synthesize(
     time_ratio: float,
     stroke: float,
     min_transmission_angle_deg: float = 0.0,
-    mechanisms: Sequence[Spec | Mapping[str, Any]] | None = None,
+    mechanisms: Specs = None,
     objective: str = PARETO,
     max_candidates: int | None = None,
     time_budget_ms: float = 2000.0,
@@ -54,6 +57,11 @@ def synthesize(
     solver: Solver = DEFAULT,
 ) -> SynthesisResult:
     """Every good design for the targets, verified and ranked (POST /v1/synthesize).
+
+    ``mechanisms``: the types to search, each a type's name, a ``Spec`` or a mapping with the
+    keys ``type``, ``fixed`` (lengths kept, by parameter name) and ``bounds`` (parameter name
+    → (low, high)); a key it does not know is refused. By default every quick-return type.
+    The types, the objectives and their names are listed at the end.
 
     ``objective``: ``pareto`` (each type's trade-off front between its smallest design that
     meets the bound and its best-transmitting one: ``synth.synthesis.front``), or one criterion:
@@ -156,11 +164,22 @@ def _verified(
     return found, left
 
 
+def _catalogue() -> str:
+    """The types (their parameters) and the objectives, for ``synthesize``'s help."""
+    types = [f"    {t} ({get(t).title}): {', '.join(q.name for q in get(t).parameters)}"
+             for t in all_types() if get(t).quick_return]  # fmt: skip
+    objectives = [f"    {k}: {words}" for k, words in OBJECTIVES.items()]
+    return "\n".join(["", "    Types (parameters):", *types, "", "    Objectives:", *objectives])
+
+
+synthesize.__doc__ = (synthesize.__doc__ or "") + _catalogue()
+
+
 def check(
     time_ratio: float,
     stroke: float,
     min_transmission_angle_deg: float = 0.0,
-    mechanisms: Sequence[Spec | Mapping[str, Any]] | None = None,
+    mechanisms: Specs = None,
     objective: str = PARETO,
     max_candidates: int | None = None,
     time_budget_ms: float = 2000.0,
@@ -193,15 +212,18 @@ def check(
     return specs
 
 
-def _specs(mechanisms: Sequence[Spec | Mapping[str, Any]] | None) -> list[Spec]:
-    """The request's specs, checked; every quick-return type's when ``mechanisms`` is None."""
+def _specs(mechanisms: Specs) -> list[Spec]:
+    """The request's specs, checked; every quick-return type's when ``mechanisms`` is None; a
+    type's name alone is that type with nothing fixed or bounded."""
     if mechanisms is None:
         return [Spec(t) for t in all_types() if get(t).quick_return]
+    if isinstance(mechanisms, str):
+        mechanisms = [mechanisms]
     return [checked_spec(s, i) for i, s in enumerate(mechanisms)]
 
 
 def short(
-    mechanisms: Sequence[Spec | Mapping[str, Any]] | None = None,
+    mechanisms: Specs = None,
     objective: str = PARETO,
     *,
     include: Collection[str] = (),
@@ -308,10 +330,21 @@ def _check_torque(objective: str, load: Load | None, limit: float | None) -> Non
         raise InvalidParameters(msg, ("max_peak_torque",))
 
 
-def checked_spec(s: Spec | Mapping[str, Any], i: int) -> Spec:
+def checked_spec(s: Spec | Mapping[str, Any] | str, i: int) -> Spec:
     """``s`` (the request's ``mechanisms[i]``) as a ``Spec``, its fixed parts and bounds
     checked; raises ``InvalidParameters`` located in ``("mechanisms", i, ...)``."""
-    if not isinstance(s, Spec):
+    if isinstance(s, str):
+        s = Spec(s)
+    elif not isinstance(s, Spec):
+        if not isinstance(s, Mapping):
+            msg = (f"mechanisms[{i}] must be a type's name, a Spec or a mapping with keys "
+                   f"{', '.join(SPEC_KEYS)}; got {type(s).__name__}")  # fmt: skip
+            raise InvalidParameters(msg, ("mechanisms", i))
+        unknown = sorted(set(s) - set(SPEC_KEYS), key=str)
+        if unknown or "type" not in s:
+            what = f"unknown key {unknown[0]!r}" if unknown else "no type"
+            msg = f"mechanisms[{i}]: {what}; a spec takes {', '.join(SPEC_KEYS)} (type required)"
+            raise InvalidParameters(msg, ("mechanisms", i, unknown[0] if unknown else "type"))
         s = Spec(s["type"], dict(s.get("fixed") or {}), dict(s.get("bounds") or {}))
     m = get(s.type)
     both = set(s.fixed) & set(s.bounds)

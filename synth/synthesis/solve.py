@@ -156,7 +156,7 @@ def _extra_start(form: Formulation, fixed: np.ndarray, x0: np.ndarray) -> np.nda
     if form.angles.size:
         try:
             a = analyze(form.mtype, _design(form, fixed, x0))
-            lo, hi = (math.radians(a.extremes[k].crank_angle_deg) for k in ("min", "max"))
+            lo, hi = (math.radians(e.crank_angle_deg) for e in (a.extremes.min, a.extremes.max))
             out[:2] = [lo, (hi - lo) % (2 * math.pi)]
         except SynthError:
             out[:2] = [0.0, math.pi]
