@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Mapping
 from dataclasses import asdict, dataclass
-from typing import Any, Generic, TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -23,9 +24,9 @@ E = TypeVar("E")
 
 
 @dataclass(frozen=True)
-class MinMax(Generic[E]):
+class MinMax(Mapping[str, E]):
     """The least and the greatest of something (the slider's dead centres, a sweep's time
-    ratio): as attributes, or by name (``["min"]``) as a mapping of the two."""
+    ratio): as attributes, or as the mapping {"min": …, "max": …}."""
 
     min: E
     max: E
@@ -34,6 +35,12 @@ class MinMax(Generic[E]):
         if key not in ("min", "max"):
             raise KeyError(key)
         return getattr(self, key)  # type: ignore[no-any-return]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(("min", "max"))
+
+    def __len__(self) -> int:
+        return 2
 
 
 @dataclass(frozen=True)
