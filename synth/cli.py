@@ -1,0 +1,370 @@
+"""``quickreturn`` (and ``python -m synth``): the library from a shell, for people and for build
+scripts.
+
+    quickreturn synthesize --time-ratio 1.8 --stroke 250 --bound 40 --type crank_shaper \\
+        --fix crank=60
+    quickreturn analyze whitworth -p crank=75 -p pivot_distance=50 -p lever=150 \\
+        -p connecting_rod=200 --include motion
+    quickreturn sweep crank_shaper -p crank=120 -p pivot_distance=240 -p lever=450 \\
+        --vary crank --start 100 --stop 200
+    quickreturn atlas --out atlas        quickreturn serve --port 8000
+
+The flags are the API's names (the README, *Over HTTP*) with dashes. Each command prints a
+table, or with ``--json`` the API's JSON reply and with ``--csv`` rows for a spreadsheet. Exit
+status: 0 with an answer, 1 when every type refuses (each reason printed), 2 on bad input (the
+library's message, naming the field).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import sys
+from collections.abc import Callable, Iterable, Sequence
+from typing import Any, NoReturn
+
+import click
+
+from .analysis.kinematics import analyze as _analyze
+from .analysis.sweep import sweep as _sweep
+from .errors import InvalidParameters, SynthError
+from .load import Load
+from .mechanisms import all_types, get
+from .results import Analysis, SweepResult, SynthesisResult
+from .synthesis import synthesize as _synthesize
+from .targets import OBJECTIVES, PARETO
+
+FORMATS = ("table", "json", "csv")
+INCLUDE = ("motion", "sensitivities", "envelope", "pins", "forces")
+CURVES = ("crank_angle_deg", "position", "velocity", "acceleration", "transmission_deg", "torque")
+
+
+def _fail(e: SynthError) -> NoReturn:
+    """Bad input: the library's message (and the field, as the API's 422 locates it), exit
+    status 2."""
+    where = ".".join(map(str, e.loc)) if isinstance(e, InvalidParameters) else ""
+    click.echo(f"error: {where + ': ' if where else ''}{e.msg}", err=True)
+    sys.exit(2)
+
+
+def _pairs(values: Iterable[str], flag: str) -> dict[str, str]:
+    """``name=value`` flags as a mapping."""
+    out = {}
+    for v in values:
+        name, eq, value = v.partition("=")
+        if not eq or not name:
+            raise click.BadParameter(f"{v!r}: expected name=value", param_hint=flag)
+        out[name.strip()] = value.strip()
+    return out
+
+
+def _numbers(values: Iterable[str], flag: str) -> dict[str, float]:
+    out = {}
+    for k, v in _pairs(values, flag).items():
+        try:
+            out[k] = float(v)
+        except ValueError:
+            raise click.BadParameter(f"{k}={v!r}: not a number", param_hint=flag) from None
+    return out
+
+
+def _ranges(values: Iterable[str]) -> dict[str, tuple[float, float]]:
+    out = {}
+    for k, v in _pairs(values, "--bounds").items():
+        lo, colon, hi = v.partition(":")
+        try:
+            out[k] = (float(lo), float(hi))
+        except ValueError:
+            msg = f"{k}={v!r}: expected low:high"
+            raise click.BadParameter(msg, param_hint="--bounds") from None
+        if not colon:
+            raise click.BadParameter(f"{k}={v!r}: expected low:high", param_hint="--bounds")
+    return out
+
+
+def _load(text: str | None) -> Load | None:
+    """``--load``: the API's load object as JSON (``length_unit``, ``crank_rpm``, …)."""
+    if text is None:
+        return None
+    try:
+        fields = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise click.BadParameter(f"not JSON: {e.msg}", param_hint="--load") from None
+    if not isinstance(fields, dict):
+        raise click.BadParameter("a JSON object, e.g. '{\"length_unit\": \"mm\", ...}'",
+                                 param_hint="--load")  # fmt: skip
+    fields = {k: tuple(map(tuple, v)) if k == "force_profile" else v for k, v in fields.items()}
+    try:
+        return Load(**fields)
+    except TypeError as e:
+        raise click.BadParameter(str(e), param_hint="--load") from None
+
+
+def _emit(fmt: str, reply: dict[str, Any], rows: list[dict[str, Any]], text: str) -> None:
+    if fmt == "json":
+        click.echo(json.dumps(_plain(reply), indent=2, allow_nan=False))
+    elif fmt == "csv":
+        out = io.StringIO()
+        if rows:
+            w = csv.DictWriter(out, fieldnames=list(rows[0]), lineterminator="\n")
+            w.writeheader()
+            w.writerows(rows)
+        click.echo(out.getvalue(), nl=False)
+    else:
+        click.echo(text)
+
+
+def _plain(x: Any) -> Any:
+    """``x`` as JSON takes it, as the API gives it: arrays as lists, a non-finite number as
+    null."""
+    if hasattr(x, "tolist"):
+        x = x.tolist()
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_plain(v) for v in x]
+    return None if isinstance(x, float) and not math.isfinite(x) else x
+
+
+def _table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """Left-aligned text columns; numbers to 6 significant digits."""
+    cells = [[_cell(v) for v in r] for r in rows]
+    widths = [max(len(h), *(len(r[i]) for r in cells)) for i, h in enumerate(header)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
+    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in cells]
+    return "\n".join(line.rstrip() for line in lines)
+
+
+def _cell(v: Any) -> str:
+    if isinstance(v, float):
+        return "" if not math.isfinite(v) else f"{v:.6g}"
+    return "" if v is None else str(v)
+
+
+def _formats(f: Callable[..., Any]) -> Callable[..., Any]:
+    """``--json`` and ``--csv`` (the table by default)."""
+    f = click.option("--json", "fmt", flag_value="json", help="the reply the API gives, as JSON")(f)
+    f = click.option("--csv", "fmt", flag_value="csv", help="rows for a spreadsheet")(f)
+    return click.option("--table", "fmt", flag_value="table", default=True, hidden=True)(f)
+
+
+def _params(f: Callable[..., Any]) -> Callable[..., Any]:
+    f = click.argument("mechanism", type=click.Choice(all_types()))(f)
+    return click.option("-p", "--param", "params", multiple=True, metavar="NAME=LENGTH",
+                        help="a parameter of the design (repeat for each)")(f)  # fmt: skip
+
+
+@click.group(
+    help="Quick-return mechanisms from the shell: link lengths for a time ratio, stroke and "
+    "transmission bound (synthesize), a design's motion and loads (analyze), a parameter's "
+    "effect (sweep), which type reaches which targets (atlas), the service (serve). Each "
+    "command prints a table, --json the API's reply, --csv rows. Exit status: 0 with an "
+    "answer, 1 when every type refuses, 2 on bad input."
+)
+@click.version_option(package_name="quickreturn-synth")
+def main() -> None:
+    pass
+
+
+@main.command(help="Link lengths for the targets, verified, best first (POST /v1/synthesize).")
+@click.option("--time-ratio", type=float, required=True, help="slow stroke / quick stroke")
+@click.option("--stroke", type=float, required=True, help="in your length unit")
+@click.option(
+    "--bound",
+    "--min-transmission-angle-deg",
+    "bound",
+    type=float,
+    default=0.0,
+    show_default=True,
+    help="the least transmission angle allowed, degrees",
+)
+@click.option(
+    "--type",
+    "types",
+    multiple=True,
+    type=click.Choice(all_types()),
+    help="a type to search (repeat; default: every quick-return type)",
+)
+@click.option(
+    "--fix",
+    multiple=True,
+    metavar="NAME=LENGTH",
+    help="a part kept at its length, in each type given",
+)
+@click.option(
+    "--bounds",
+    multiple=True,
+    metavar="NAME=LOW:HIGH",
+    help="a free part's range, in each type given",
+)
+@click.option("--objective", type=click.Choice(list(OBJECTIVES)), default=PARETO, show_default=True)
+@click.option("--max-candidates", type=int, help="at most this many in all")
+@click.option("--time-budget-ms", type=float, default=2000.0, show_default=True)
+@click.option(
+    "--include",
+    multiple=True,
+    type=click.Choice(INCLUDE[:3]),
+    help="add to each candidate (repeat)",
+)
+@click.option("--load", "load_json", metavar="JSON", help="the API's load object")
+@click.option("--max-peak-torque", type=float, help="N·m, with min_peak_torque")
+@click.option("--max-working-speed-fluctuation", type=float, help="with the motion objectives")
+@_formats
+def synthesize(time_ratio: float, stroke: float, bound: float, types: tuple[str, ...],
+               fix: tuple[str, ...], bounds: tuple[str, ...], objective: str,
+               max_candidates: int | None, time_budget_ms: float, include: tuple[str, ...],
+               load_json: str | None, max_peak_torque: float | None,
+               max_working_speed_fluctuation: float | None, fmt: str) -> None:  # fmt: skip
+    fixed, ranges = _numbers(fix, "--fix"), _ranges(bounds)
+    names = types or [t for t in all_types() if get(t).quick_return]
+    specs = [{"type": t, "fixed": fixed, "bounds": ranges} for t in names]
+    try:
+        r = _synthesize(time_ratio, stroke, bound, specs, objective, max_candidates,
+                        time_budget_ms, include=include, load=_load(load_json),
+                        max_peak_torque=max_peak_torque,
+                        max_working_speed_fluctuation=max_working_speed_fluctuation)  # fmt: skip
+    except SynthError as e:
+        _fail(e)
+    _emit(fmt, r.to_dict(), _candidate_rows(r), _candidate_text(r, objective))
+    if not r.candidates:
+        sys.exit(1)
+
+
+def _candidate_rows(r: SynthesisResult) -> list[dict[str, Any]]:
+    names = list(dict.fromkeys(k for c in r.candidates for k in c.params))
+    return [{"rank": i + 1, "type": c.type, **{k: c.params.get(k) for k in names},
+             "min_transmission_angle_deg": c.min_transmission_angle_deg,
+             "objective_value": c.objective_value, "size": c.size, "method": c.method,
+             "active": " ".join(c.active)}
+            for i, c in enumerate(r.candidates)]  # fmt: skip
+
+
+def _candidate_text(r: SynthesisResult, objective: str) -> str:
+    out = []
+    if r.candidates:
+        rows = [(i + 1, c.type, ", ".join(f"{k} {v:.6g}" for k, v in c.params.items()),
+                 c.min_transmission_angle_deg, c.objective_value, " ".join(c.active) or "-")
+                for i, c in enumerate(r.candidates)]  # fmt: skip
+        measure = "size" if objective == PARETO else objective  # a front's candidates: their size
+        out.append(_table(("#", "type", "lengths", "μ min °", measure, "at limit"), rows))
+        out += dict.fromkeys(f"{c.type}: {c.family.relation}"
+                             for c in r.candidates if c.family)  # fmt: skip
+    for why in r.infeasible:
+        out.append(f"{why.type}: no design ({why.code}): {why.reason}")
+    if not r.complete:
+        out.append(f"(the time budget ended the search after {r.elapsed_ms:.0f} ms)")
+    return "\n".join(out)
+
+
+@main.command(help="One design over a crank revolution (POST /v1/analyze).")
+@_params
+@click.option("--samples", type=int, help="curves at this many evenly spaced angles")
+@click.option(
+    "--crank-angle",
+    "angles",
+    multiple=True,
+    type=float,
+    help="curves at this crank angle, degrees (repeat)",
+)
+@click.option("--include", multiple=True, type=click.Choice(INCLUDE), help="repeat")
+@click.option("--crank-speed", type=float, help="rad/s for the curves (default 1)")
+@click.option("--load", "load_json", metavar="JSON", help="the API's load object")
+@_formats
+def analyze(mechanism: str, params: tuple[str, ...], samples: int | None,
+            angles: tuple[float, ...], include: tuple[str, ...], crank_speed: float | None,
+            load_json: str | None, fmt: str) -> None:  # fmt: skip
+    try:
+        a = _analyze(mechanism, _numbers(params, "--param"), crank_speed=crank_speed,
+                     crank_angles_deg=list(angles) or None, samples=samples, include=include,
+                     load=_load(load_json))  # fmt: skip
+    except SynthError as e:
+        _fail(e)
+    _emit(fmt, a.to_dict(), _analysis_rows(a), _analysis_text(a))
+
+
+def _analysis_rows(a: Analysis) -> list[dict[str, Any]]:
+    """The curves, a row per angle; without curves, the summary in one row."""
+    if a.curves is None:
+        return [{"type": a.type, **a.params, "time_ratio": a.time_ratio, "stroke": a.stroke,
+                 "min_transmission_angle_deg": a.transmission.min_deg}]  # fmt: skip
+    c = a.curves
+    cols = {k: getattr(c, k) for k in CURVES if getattr(c, k) is not None}
+    for name, pin in (c.pins or {}).items():
+        cols |= {f"{name}_x": pin.x, f"{name}_y": pin.y}
+    cols |= {f"force_{name}": v for name, v in (c.forces or {}).items()}
+    n = len(a.curves.crank_angle_deg)
+    return [{k: float(v[i]) for k, v in cols.items()} for i in range(n)]
+
+
+def _analysis_text(a: Analysis) -> str:
+    t = a.transmission
+    lines = [
+        f"{a.type}: " + ", ".join(f"{k} {v:.6g}" for k, v in a.params.items()),
+        f"time ratio {a.time_ratio:.9g}, stroke {a.stroke:.9g}",
+        f"working stroke {a.working_stroke.crank_angle_deg:.6g}°, "
+        f"return {a.return_stroke.crank_angle_deg:.6g}°",
+        f"dead centres at {a.extremes.min.crank_angle_deg:.6g}° and "
+        f"{a.extremes.max.crank_angle_deg:.6g}°",
+        f"transmission angle {t.min_deg:.6g}° to {t.max_deg:.6g}°"
+        + "".join(f"; {j.joint} {j.min_deg:.6g}°" for j in t.joints if len(t.joints) > 1),
+    ]
+    if a.motion is not None:
+        m = a.motion
+        lines.append(f"cutting-speed fluctuation {m.working_speed_fluctuation.middle:.6g}, "
+                     f"peak acceleration {m.peak_acceleration.working_stroke:.6g} (working) "
+                     f"{m.peak_acceleration.return_stroke:.6g} (return), ×ω²")  # fmt: skip
+    if a.loads is not None:
+        q = a.loads
+        lines.append(f"crank torque {q.torque.min:.6g} to {q.torque.max:.6g} N·m (mean "
+                     f"{q.torque.mean:.6g}), motor {q.power.rated:.6g} W, flywheel "
+                     f"{q.flywheel.inertia:.6g} kg·m²")  # fmt: skip
+    if a.curves is not None:
+        lines.append(f"curves at {len(a.curves.crank_angle_deg)} angles: --csv or --json")
+    return "\n".join(lines)
+
+
+@main.command(help="One parameter varied, the rest held (POST /v1/sweep).")
+@_params
+@click.option("--vary", required=True, help="the parameter to vary")
+@click.option("--start", type=float, required=True)
+@click.option("--stop", type=float, required=True)
+@click.option("--points", type=int, default=101, show_default=True)
+@_formats
+def sweep(mechanism: str, params: tuple[str, ...], vary: str, start: float, stop: float,
+          points: int, fmt: str) -> None:  # fmt: skip
+    try:
+        s = _sweep(mechanism, _numbers(params, "--param"), vary, start, stop, points)
+    except SynthError as e:
+        _fail(e)
+    cols = ("values", "time_ratio", "stroke", "min_transmission_angle_deg", "valid")
+    rows = [dict(zip((vary, *cols[1:]), r, strict=True))
+            for r in zip(*(getattr(s, k) for k in cols), strict=True)]  # fmt: skip
+    _emit(fmt, s.to_dict(), rows, _sweep_text(s, rows))
+
+
+def _sweep_text(s: SweepResult, rows: list[dict[str, Any]]) -> str:
+    text = _table(list(rows[0]), [list(r.values()) for r in rows]) if rows else ""
+    valid = ", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in s.valid_interval) or "none"
+    return f"{text}\nvalid {s.vary}: {valid}"
+
+
+@main.command(
+    context_settings={"ignore_unknown_options": True, "help_option_names": []},
+    help="Which type reaches which targets (python -m synth.atlas; --help there).",
+)
+@click.argument("args", nargs=-1, type=click.UNPROCESSED)
+def atlas(args: tuple[str, ...]) -> None:
+    from .atlas.__main__ import main as atlas_main
+
+    atlas_main(list(args))
+
+
+@main.command(help="The REST service and its playground (the README, *Service*).")
+@click.option("--host", help="default: HOST, else 127.0.0.1")
+@click.option("--port", type=int, help="default: PORT, else 8000")
+def serve(host: str | None, port: int | None) -> None:
+    from api.serve import main as serve_main  # the service: installed beside the library
+
+    serve_main([*(["--host", host] if host else []), *(["--port", str(port)] if port else [])])

@@ -1,0 +1,178 @@
+"""The command line, end to end: ``quickreturn`` (the installed console script) and ``python -m
+synth`` in a subprocess, each subcommand; its JSON checked by the brute-force simulation, its
+exit status (0 an answer, 1 every type refuses, 2 bad input) and its messages."""
+
+import csv
+import io
+import json
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+import synth
+
+from ..support import bruteforce
+from ..support.assertions import assert_meets
+
+CLI = shutil.which("quickreturn", path=str(Path(sys.executable).parent)) or "quickreturn"
+WHITWORTH = ["-p", "crank=75", "-p", "pivot_distance=50", "-p", "lever=150",
+             "-p", "connecting_rod=200"]  # fmt: skip
+
+
+def run(*args, module=False, timeout=120):
+    cmd = [sys.executable, "-m", "synth", *args] if module else [CLI, *args]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+
+
+def test_synthesize_json_meets_the_targets_by_brute_force():
+    r = run("synthesize", "--time-ratio", "1.8", "--stroke", "250", "--bound", "40", "--json",
+            "--type", "crank_shaper", "--type", "whitworth", "--fix", "crank=60")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    reply = json.loads(r.stdout)
+    assert reply["candidates"]
+    for c in reply["candidates"]:
+        assert c["params"]["crank"] == 60.0
+        assert_meets(SimpleNamespace(**c), 1.8, 250.0, 40.0)
+
+
+def test_synthesize_table_and_csv():
+    args = ("synthesize", "--time-ratio", "2", "--stroke", "450", "--type", "crank_shaper",
+            "--objective", "max_transmission_angle")  # fmt: skip
+    table = run(*args)
+    assert table.returncode == 0 and "crank_shaper" in table.stdout and "lever 450" in table.stdout
+    rows = list(csv.DictReader(io.StringIO(run(*args, "--csv").stdout)))
+    assert rows and all(row["type"] == "crank_shaper" for row in rows)
+    for row in rows:
+        params = {k: float(row[k]) for k in ("crank", "pivot_distance", "lever", "ram_link",
+                                              "ram_height")}  # fmt: skip
+        b = bruteforce.simulate("crank_shaper", params)
+        assert b["time_ratio"] == pytest.approx(2.0, rel=1e-9)
+        assert b["stroke"] == pytest.approx(450.0, rel=1e-9)
+
+
+def test_every_type_refusing_exits_1_with_the_reasons():
+    r = run("synthesize", "--time-ratio", "1.8", "--stroke", "250", "--bound", "89",
+            "--type", "whitworth", "--type", "offset_slider_crank")  # fmt: skip
+    assert r.returncode == 1
+    assert "whitworth: no design (TRANSMISSION_UNREACHABLE)" in r.stdout
+    assert "offset_slider_crank: no design" in r.stdout
+
+
+@pytest.mark.parametrize(
+    ("args", "library"),
+    [
+        (("synthesize", "--time-ratio", "1.8", "--stroke", "-250"),
+         lambda: synth.synthesize(1.8, -250.0)),
+        (("synthesize", "--time-ratio", "1.8", "--stroke", "250", "--type", "crank_shaper",
+          "--fix", "rocker=3"),
+         lambda: synth.synthesize(1.8, 250.0, mechanisms=[{"type": "crank_shaper",
+                                                           "fixed": {"rocker": 3.0}}])),
+        (("analyze", "whitworth", "-p", "crank=75", "-p", "pivot_distance=50",
+          "-p", "lever=150", "-p", "connecting_rod=20"),
+         lambda: synth.analyze("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
+                                             "connecting_rod": 20})),
+    ],
+)  # fmt: skip
+def test_bad_input_exits_2_with_the_librarys_message(args, library):
+    with pytest.raises(synth.SynthError) as e:
+        library()
+    r = run(*args)
+    assert r.returncode == 2 and not r.stdout
+    assert r.stderr.startswith("error: ") and e.value.msg in r.stderr
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (("synthesize", "--time-ratio", "x", "--stroke", "250"), ["--time-ratio", "'x'"]),
+        (("synthesize", "--stroke", "250"), ["--time-ratio"]),
+        (("analyze", "whitworth", "-p", "crank"), ["--param", "name=value"]),
+        (("analyze", "whitworth", "-p", "crank=1", "--load", "{"), ["--load", "not JSON"]),
+        (("analyze", "whitworth", "--frobnicate"), ["--frobnicate"]),
+        (("analyze", "whitworthh"), ["whitworthh"]),
+    ],
+)
+def test_a_bad_flag_exits_2_naming_it(args, words):
+    r = run(*args)
+    assert r.returncode == 2
+    assert all(w in r.stderr for w in words), r.stderr
+
+
+def test_analyze_json_csv_and_table_agree_with_the_simulation():
+    reply = json.loads(run("analyze", "whitworth", *WHITWORTH, "--json").stdout)
+    b = bruteforce.simulate("whitworth", reply["params"])
+    assert reply["time_ratio"] == pytest.approx(b["time_ratio"], rel=1e-9)
+    assert reply["stroke"] == pytest.approx(b["stroke"], rel=1e-9)
+    assert "curves" not in reply  # none asked
+    r = run("analyze", "whitworth", *WHITWORTH, "--samples", "8", "--include", "pins", "--csv")
+    rows = list(csv.DictReader(io.StringIO(r.stdout)))
+    assert [float(row["crank_angle_deg"]) for row in rows] == [45.0 * k for k in range(8)]
+    for row in rows:  # the ram's pin is where the position says
+        assert float(row["R_y"]) == pytest.approx(float(row["position"]), rel=1e-12)
+    text = run("analyze", "whitworth", *WHITWORTH).stdout
+    assert f"time ratio {reply['time_ratio']:.9g}" in text
+
+
+def test_analyze_with_a_load_gives_the_loads():
+    load = {"length_unit": "mm", "crank_rpm": 40, "cutting_force": 2000, "slider_mass": 60}
+    reply = json.loads(run("analyze", "whitworth", *WHITWORTH, "--load", json.dumps(load),
+                           "--json").stdout)  # fmt: skip
+    direct = synth.analyze("whitworth", reply["params"], load=synth.Load(**load))
+    assert reply["loads"]["torque"]["max"] == direct.loads.torque.max
+
+
+def test_sweep_csv_and_json():
+    args = ("sweep", "crank_shaper", "-p", "crank=120", "-p", "pivot_distance=240",
+            "-p", "lever=450", "--vary", "crank", "--start", "100", "--stop", "300",
+            "--points", "5")  # fmt: skip
+    rows = list(csv.DictReader(io.StringIO(run(*args, "--csv").stdout)))
+    assert [row["valid"] for row in rows] == ["True"] * 3 + ["False"] * 2
+    for row in rows[:3]:
+        p = {"crank": float(row["crank"]), "pivot_distance": 240.0, "lever": 450.0}
+        assert float(row["time_ratio"]) == pytest.approx(
+            bruteforce.simulate("crank_shaper", p)["time_ratio"], rel=1e-9
+        )
+    reply = json.loads(run(*args, "--json").stdout)
+    assert reply["time_ratio"][3] is None  # an invalid design: null, as the API says
+    assert "valid crank: [100, 210]" in run(*args).stdout
+
+
+def test_atlas_writes_its_tables(tmp_path):
+    r = run("atlas", "--types", "crank_shaper", "--ratios", "1.5:2:2", "--bounds", "20",
+            "--out", str(tmp_path), "--inline")  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "frontier.csv").exists() and "2 points" in r.stdout
+
+
+def test_python_m_synth_is_the_same_command():
+    r = run("--version", module=True)
+    assert r.returncode == 0 and synth.__version__ in r.stdout
+    assert "synthesize" in run("--help", module=True).stdout
+
+
+def test_serve_answers_on_its_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    server = subprocess.Popen([CLI, "serve", "--port", str(port)], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)  # fmt: skip
+    try:
+        for _ in range(300):
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{port}/health", timeout=1) as r:
+                    assert r.status == 200
+                    break
+            except OSError:
+                time.sleep(0.1)
+        else:
+            pytest.fail("the service did not answer")
+    finally:
+        server.terminate()
+        server.wait(timeout=30)
