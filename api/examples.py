@@ -101,3 +101,16 @@ SWEEP = {
         },
     ),
 }
+
+EXPORT = {
+    "whitworth_dxf": Example(
+        summary="The Whitworth drive of the textbook's Example 3, in mm, for CAD",
+        value={
+            "mechanism": {"type": "whitworth", "params": WHITWORTH},
+            "format": "dxf",
+            "crank_angle_deg": 30.0,
+            "length_unit": "mm",
+            "paths": True,
+        },
+    ),
+}

@@ -9,6 +9,7 @@ from typing import Any
 import synth
 from synth.analysis.kinematics import check as check_analysis
 from synth.analysis.sweep import check as check_sweep
+from synth.drawing.export import check as check_export
 from synth.synthesis.driver import check as check_synthesis
 from synth.synthesis.driver import short as short_synthesis
 
@@ -29,4 +30,5 @@ OPERATIONS: dict[str, Operation] = {
     "analyze": Operation(synth.analyze, check_analysis),
     "synthesize": Operation(synth.synthesize, check_synthesis, short_synthesis),
     "sweep": Operation(synth.sweep, check_sweep),
+    "export": Operation(synth.export, check_export),
 }

@@ -26,6 +26,7 @@ from synth import results
 from synth.analysis.kinematics import ANALYSIS_INCLUDE, INCLUDE, MAX_CURVE_POINTS
 from synth.analysis.quality import CUT
 from synth.analysis.sweep import MAX_POINTS
+from synth.drawing import FORMATS
 from synth.load import LENGTH_UNITS
 from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.synthesis.driver import MAX_CANDIDATES, PER_TYPE
@@ -399,6 +400,18 @@ class SweepRequest(Strict):
     stop: float = Field(..., ge=-LENGTH_MAX, le=LENGTH_MAX)
     points: int = Field(101, ge=1, le=MAX_POINTS)
     time_budget_ms: float | None = BUDGET
+
+
+class ExportRequest(Strict):
+    mechanism: Design
+    format: Literal[FORMATS] = Field(  # type: ignore[valid-type]
+        "svg", description="svg: true size; dxf: each link on its own layer"
+    )
+    crank_angle_deg: float = Field(0.0, ge=-1e6, le=1e6, description="where the crank is drawn")
+    length_unit: Literal[tuple(LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
+        "mm", description="the unit of the design's lengths: the SVG's size, the DXF's units"
+    )
+    paths: bool = Field(False, description="each moving pin's path over a turn")
 
 
 # --- responses ---------------------------------------------------------------------------

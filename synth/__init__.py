@@ -16,6 +16,8 @@ import os
 from . import atlas, mechanisms
 from .analysis.kinematics import analyze, analyze_many, joints
 from .analysis.sweep import sweep
+from .drawing.export import export
+from .drawing.figure import draw
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
 from .load import Load
 from .mechanisms import register
@@ -43,6 +45,8 @@ __all__ = [
     "analyze",
     "analyze_many",
     "atlas",
+    "draw",
+    "export",
     "joints",
     "mechanisms",
     "register",

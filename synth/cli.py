@@ -7,6 +7,8 @@ scripts.
         -p connecting_rod=200 --include motion
     quickreturn sweep crank_shaper -p crank=120 -p pivot_distance=240 -p lever=450 \\
         --vary crank --start 100 --stop 200
+    quickreturn export crank_shaper -p crank=120 -p pivot_distance=240 -p lever=450 \\
+        --format dxf --crank-angle 30 -o shaper.dxf
     quickreturn atlas --out atlas        quickreturn serve --port 8000
 
 The flags are the API's names (the README, *Over HTTP*) with dashes. Each command prints a
@@ -29,8 +31,10 @@ import click
 
 from .analysis.kinematics import analyze as _analyze
 from .analysis.sweep import sweep as _sweep
+from .drawing import FORMATS as FORMATS_OUT
+from .drawing.export import export as _export
 from .errors import InvalidParameters, SynthError
-from .load import Load
+from .load import LENGTH_UNITS, Load
 from .mechanisms import all_types, get
 from .results import Analysis, SweepResult, SynthesisResult
 from .synthesis import synthesize as _synthesize
@@ -159,7 +163,8 @@ def _params(f: Callable[..., Any]) -> Callable[..., Any]:
 @click.group(
     help="Quick-return mechanisms from the shell: link lengths for a time ratio, stroke and "
     "transmission bound (synthesize), a design's motion and loads (analyze), a parameter's "
-    "effect (sweep), which type reaches which targets (atlas), the service (serve). Each "
+    "effect (sweep), a drawing for CAD (export), which type reaches which targets (atlas), "
+    "the service (serve). Each "
     "command prints a table, --json the API's reply, --csv rows. Exit status: 0 with an "
     "answer, 1 when every type refuses, 2 on bad input."
 )
@@ -348,6 +353,29 @@ def _sweep_text(s: SweepResult, rows: list[dict[str, Any]]) -> str:
     text = _table(list(rows[0]), [list(r.values()) for r in rows]) if rows else ""
     valid = ", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in s.valid_interval) or "none"
     return f"{text}\nvalid {s.vary}: {valid}"
+
+
+@main.command(help="A design's drawing for CAD or a document (POST /v1/export).")
+@_params
+@click.option("--format", "fmt", type=click.Choice(FORMATS_OUT), default="svg", show_default=True,
+              help="svg: true size; dxf: each link on its own layer")  # fmt: skip
+@click.option("--crank-angle", type=float, default=0.0, show_default=True, help="degrees")
+@click.option("--length-unit", type=click.Choice(list(LENGTH_UNITS)), default="mm",
+              show_default=True, help="the unit of the design's lengths")  # fmt: skip
+@click.option("--paths", is_flag=True, help="each moving pin's path over a turn")
+@click.option("-o", "--out", type=click.Path(dir_okay=False, writable=True),
+              help="the file (default: standard output)")  # fmt: skip
+def export(mechanism: str, params: tuple[str, ...], fmt: str, crank_angle: float,
+           length_unit: str, paths: bool, out: str | None) -> None:  # fmt: skip
+    try:
+        doc = _export(mechanism, _numbers(params, "--param"), fmt, crank_angle, length_unit, paths)
+    except SynthError as e:
+        _fail(e)
+    if out is None:
+        sys.stdout.buffer.write(doc)
+    else:
+        with open(out, "wb") as f:
+            f.write(doc)
 
 
 @main.command(

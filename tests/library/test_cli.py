@@ -14,6 +14,7 @@ import urllib.request
 from pathlib import Path
 from types import SimpleNamespace
 
+import ezdxf
 import pytest
 
 import synth
@@ -142,6 +143,18 @@ def test_sweep_csv_and_json():
     reply = json.loads(run(*args, "--json").stdout)
     assert reply["time_ratio"][3] is None  # an invalid design: null, as the API says
     assert "valid crank: [100, 210]" in run(*args).stdout
+
+
+def test_export_writes_a_drawing_cad_reads(tmp_path):
+    out = tmp_path / "shaper.dxf"
+    r = run("export", "crank_shaper", "-p", "crank=120", "-p", "pivot_distance=240", "-p",
+            "lever=450", "--format", "dxf", "--crank-angle", "30", "-o", str(out))  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    lines = {e.dxf.layer: e for e in ezdxf.readfile(out).modelspace().query("LINE")}
+    assert (lines["lever"].dxf.end - lines["lever"].dxf.start).magnitude == pytest.approx(450.0)
+    svg = run("export", "crank_shaper", "-p", "crank=120", "-p", "pivot_distance=240",
+              "-p", "lever=450").stdout  # fmt: skip
+    assert svg.startswith("<?xml") and 'width="' in svg
 
 
 def test_atlas_writes_its_tables(tmp_path):

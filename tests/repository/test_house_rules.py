@@ -140,7 +140,7 @@ LAYERS = (
     ("synth.results", "synth.load"),
     ("synth.mechanisms",),
     ("synth.analysis",),
-    ("synth.synthesis",),
+    ("synth.drawing", "synth.synthesis"),
     ("synth.atlas",),
     ("synth",),
 )

@@ -1,0 +1,44 @@
+"""POST /v1/export: a design's drawing as a file a CAD program or a document takes."""
+
+from typing import Annotated
+
+from fastapi import APIRouter, Body, Request
+from fastapi.responses import Response
+
+from ..examples import EXPORT
+from ..json_route import Route
+from ..schemas import REFUSALS, ExportRequest
+from .common import EngineDep, run_design
+
+router = APIRouter(tags=["analysis"], route_class=Route)
+MEDIA = {"svg": "image/svg+xml", "dxf": "image/vnd.dxf"}
+
+
+@router.post(
+    "/v1/export",
+    response_class=Response,
+    responses={**REFUSALS, 200: {"content": {m: {} for m in MEDIA.values()},
+                                 "description": "the drawing, as a file"}},
+)  # fmt: skip
+async def export(
+    request: Request,
+    engine: EngineDep,
+    body: Annotated[ExportRequest, Body(openapi_examples=EXPORT)],
+) -> Response:
+    """The design drawn at ``crank_angle_deg``: ``svg`` in true size (its width and height in
+    millimetres for the lengths' ``length_unit``), or ``dxf`` for CAD (each link a centre line
+    on its own layer, as long as the design says; the pins, the fixed pivots, the ram's guide
+    and block, the stroke as a dimension; each moving pin's path with ``paths``)."""
+    doc: bytes = await run_design(
+        request,
+        engine,
+        "export",
+        body.mechanism,
+        format=body.format,
+        crank_angle_deg=body.crank_angle_deg,
+        length_unit=body.length_unit,
+        paths=body.paths,
+    )
+    name = f"{body.mechanism.type}.{body.format}"
+    return Response(doc, media_type=MEDIA[body.format],
+                    headers={"Content-Disposition": f'attachment; filename="{name}"'})  # fmt: skip

@@ -1,0 +1,176 @@
+"""One drawing of a design at a crank angle, for every face that shows one: the playground's
+SVG, notebooks' figures (``draw``), and the exports a CAD program reads (``svg``, ``dxf``).
+
+A ``Drawing`` holds what an engineering sketch of a linkage shows, in the design's lengths:
+each link as a centre line between its pins (``drawing``'s members, their lengths the
+design's), every pin named, the pivots fixed to the frame, the ram's guide along its path and
+its stroke between the dead centres, and, when asked, each moving pin's path over a turn.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..analysis.kinematics import analyze, joints
+from ..errors import InvalidParameters
+from ..load import LENGTH_UNITS
+from ..mechanisms import get
+from ..mechanisms.registry import GROUND
+
+FORMATS = ("svg", "dxf")
+PATH_SAMPLES = 181  # angles a pin's path is drawn through (2° apart)
+GUIDE_OVERRUN = 0.15  # the guide runs past each end of the stroke by this share of it
+
+
+@dataclass(frozen=True)
+class Link:
+    """A straight member between two pins: its name (the parameter it is as long as)."""
+
+    name: str
+    a: str
+    b: str
+    length: float
+
+
+@dataclass(frozen=True)
+class Drawing:
+    """A design drawn at ``crank_angle_deg``, its coordinates in the design's unit: the frame
+    of the type's equations (``synth.joints``), the crank pivot at the origin.
+
+    ``pins``: every pin's (x, y); ``links``: the members (zero-length ones left out);
+    ``ground``: the pins fixed to the frame; ``ram``: the ram's pin, on its ``path`` (a unit
+    vector); ``stroke``: the ram pin at its two dead centres; ``guide``: the guide's ends, the
+    stroke and ``GUIDE_OVERRUN`` of it each side; ``paths``: each moving pin's path over a
+    turn (asked only)."""
+
+    type: str
+    params: dict[str, float]
+    crank_angle_deg: float
+    pins: dict[str, tuple[float, float]]
+    links: tuple[Link, ...]
+    ground: tuple[str, ...]
+    ram: str
+    path: tuple[float, float]
+    stroke: tuple[tuple[float, float], tuple[float, float]]
+    guide: tuple[tuple[float, float], tuple[float, float]]
+    paths: dict[str, np.ndarray] | None = None
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        """(x min, y min, x max, y max) of everything drawn."""
+        pts = [*self.pins.values(), *self.guide, *self.stroke]
+        for xy in (self.paths or {}).values():
+            pts += [tuple(xy.min(axis=0)), tuple(xy.max(axis=0))]
+        a = np.array(pts, dtype=float)
+        x0, y0 = a.min(axis=0)
+        x1, y1 = a.max(axis=0)
+        return float(x0), float(y0), float(x1), float(y1)
+
+
+def drawing(
+    mechanism: str, params: Mapping[str, float], crank_angle_deg: float = 0.0, paths: bool = False
+) -> Drawing:
+    """The drawing of a design at a crank angle (degrees); with ``paths``, each moving pin's
+    path over a turn. Raises what ``synth.analyze`` raises for a design that cannot run."""
+    check_angle(crank_angle_deg)
+    a = analyze(mechanism, params)  # checks the design, and finds its dead centres
+    m = get(mechanism)
+    p = m.complete(a.params)
+    assert m.frame is not None
+    frame = m.frame(m.variant(p))
+    angles = [crank_angle_deg, a.extremes.min.crank_angle_deg, a.extremes.max.crank_angle_deg]
+    at = joints(mechanism, a.params, angles)
+    pins = {k: (float(v[0, 0]), float(v[0, 1])) for k, v in at.items()}
+    ram = list(at)[-1]  # each type names its ram's pin last
+    (x0, y0), (x1, y1) = ends = ((float(at[ram][1, 0]), float(at[ram][1, 1])),
+                                 (float(at[ram][2, 0]), float(at[ram][2, 1])))  # fmt: skip
+    tx, ty = (float(c) for c in frame.path(p))
+    run = np.hypot(x1 - x0, y1 - y0) * GUIDE_OVERRUN
+    sign = 1.0 if (x1 - x0) * tx + (y1 - y0) * ty > 0 else -1.0
+    guide = ((x0 - sign * run * tx, y0 - sign * run * ty),
+             (x1 + sign * run * tx, y1 + sign * run * ty))  # fmt: skip
+    links = tuple(Link(name, u, v, float(a.params[name])) for name, u, v in m.drawing
+                  if a.params.get(name, 0.0) > 0)  # fmt: skip
+    ground = tuple(pin for pin, b1, b2 in frame.pins if GROUND in (b1, b2))
+    traced = None
+    if paths:
+        turn = joints(mechanism, a.params, np.linspace(0.0, 360.0, PATH_SAMPLES).tolist())
+        traced = {k: v for k, v in turn.items() if np.ptp(v, axis=0).max() > 0}
+    return Drawing(mechanism, dict(a.params), float(crank_angle_deg), pins, links, ground, ram,
+                   (tx, ty), ends, guide, traced)  # fmt: skip
+
+
+Segment = tuple[tuple[float, float], tuple[float, float]]
+
+
+@dataclass(frozen=True)
+class Sketch:
+    """A drawing's symbols as plain shapes, which every renderer draws as they are: sizes in
+    the design's unit, in proportion to the drawing's extent (``size``).
+
+    ``guide``: the guide's two rails, either side of the path; ``block``: the ram's block, a
+    polygon around its pin; ``ground``: a triangle under each fixed pivot, ``hatch`` the
+    strokes under it; ``dimension``: the stroke's dimension line beside the guide, its
+    ``label`` and where the label goes (``label_at``)."""
+
+    size: float
+    pin_radius: float
+    text_height: float
+    line_width: float
+    guide: tuple[Segment, Segment]
+    block: tuple[tuple[float, float], ...]
+    ground: tuple[tuple[tuple[float, float], ...], ...]
+    hatch: tuple[Segment, ...]
+    dimension: Segment
+    label: str
+    label_at: tuple[float, float]
+
+
+def sketch(d: Drawing) -> Sketch:
+    """The symbols of ``d`` (``Sketch``)."""
+    x0, y0, x1, y1 = d.bounds()
+    size = max(x1 - x0, y1 - y0)
+    h = 0.035 * size  # the block's half height across the path
+    tx, ty = d.path
+    nx, ny = -ty, tx  # the path's normal
+    (ax, ay), (bx, by) = d.guide
+    rails = tuple(((ax + k * h * nx, ay + k * h * ny), (bx + k * h * nx, by + k * h * ny))
+                  for k in (-1.0, 1.0))  # fmt: skip
+    rx, ry = d.pins[d.ram]
+    corners = ((-1.6, -0.8), (1.6, -0.8), (1.6, 0.8), (-1.6, 0.8))  # along, across, × h
+    block = tuple((rx + h * (u * tx + v * nx), ry + h * (u * ty + v * ny)) for u, v in corners)
+    tri, hatch = [], []
+    for pin in d.ground:
+        px, py = d.pins[pin]
+        w = 0.9 * h
+        base = py - 1.6 * w
+        tri.append(((px, py), (px - w, base), (px + w, base)))
+        hatch.append(((px - 1.4 * w, base), (px + 1.4 * w, base)))
+        hatch += [((px + k * w * 0.7, base), (px + k * w * 0.7 - 0.5 * w, base - 0.6 * w))
+                  for k in (-1.5, -0.5, 0.5, 1.5)]  # fmt: skip
+    (sx, sy), (ex, ey) = d.stroke
+    off = 3.0 * h
+    dim = ((sx - off * nx, sy - off * ny), (ex - off * nx, ey - off * ny))
+    label_at = (
+        (dim[0][0] + dim[1][0]) / 2 - 1.2 * h * nx,
+        (dim[0][1] + dim[1][1]) / 2 - 1.2 * h * ny,
+    )
+    label = f"stroke {np.hypot(ex - sx, ey - sy):.6g}"
+    return Sketch(size, 0.012 * size, 0.03 * size, 0.006 * size, (rails[0], rails[1]), block,
+                  tuple(tri), tuple(hatch), dim, label, label_at)  # fmt: skip
+
+
+def unit_mm(length_unit: str) -> float:
+    """Millimetres per ``length_unit`` (one of ``synth.load.LENGTH_UNITS``)."""
+    if length_unit not in LENGTH_UNITS:
+        msg = f"length_unit must be one of {', '.join(LENGTH_UNITS)}, got {length_unit!r}"
+        raise InvalidParameters(msg, ("length_unit",))
+    return LENGTH_UNITS[length_unit] * 1e3
+
+
+def check_angle(crank_angle_deg: float) -> None:
+    if not np.isfinite(crank_angle_deg):
+        msg = f"crank_angle_deg must be finite, got {crank_angle_deg!r}"
+        raise InvalidParameters(msg, ("crank_angle_deg",))

@@ -1,0 +1,56 @@
+"""A drawing as DXF, for CAD (ezdxf): each link a centre line on its own layer (named as the
+link, as long as the design says), the pins as circles, the fixed pivots, the ram's guide and
+block, the stroke as a dimension, the pins' paths when asked; the drawing's unit set."""
+
+from __future__ import annotations
+
+import io
+
+from ezdxf import units
+from ezdxf.document import Drawing as Document
+from ezdxf.filemanagement import new
+
+from . import Drawing, sketch, unit_mm
+
+UNITS = {"mm": units.MM, "m": units.M, "in": units.IN}
+# the symbols' layers (none a parameter's name: layer names ignore case) and their colours
+# (AutoCAD's colour index); the links' take 1, 2, 3, …
+LAYERS = {"PINS": 7, "PIVOTS": 8, "GUIDE": 8, "RAM": 8, "STROKE": 7, "PATHS": 9}
+
+
+def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
+    """``d`` as a DXF document (R2010), its lengths in ``length_unit`` (mm, m or in)."""
+    unit_mm(length_unit)  # checks the unit
+    doc: Document = new("R2010", setup=True)
+    doc.units = UNITS[length_unit]
+    msp = doc.modelspace()
+    sk = sketch(d)
+    for name, colour in LAYERS.items():
+        doc.layers.add(name, color=colour)
+    for i, link in enumerate(d.links):
+        doc.layers.add(link.name, color=i % 6 + 1)
+        msp.add_line(d.pins[link.a], d.pins[link.b], dxfattribs={"layer": link.name})
+    for name, p in d.pins.items():
+        msp.add_circle(p, sk.pin_radius, dxfattribs={"layer": "PINS"})
+        label = msp.add_text(name, height=sk.text_height, dxfattribs={"layer": "PINS"})
+        label.set_placement((p[0] + 1.5 * sk.pin_radius, p[1] + 1.5 * sk.pin_radius))
+    for tri in sk.ground:
+        msp.add_lwpolyline(tri, close=True, dxfattribs={"layer": "PIVOTS"})
+    for a, b in sk.hatch:
+        msp.add_line(a, b, dxfattribs={"layer": "PIVOTS"})
+    for a, b in sk.guide:
+        msp.add_line(a, b, dxfattribs={"layer": "GUIDE"})
+    msp.add_lwpolyline(sk.block, close=True, dxfattribs={"layer": "RAM"})
+    (sx, sy), (ex, ey) = d.stroke
+    (dx, dy), _ = sk.dimension
+    run = ((ex - sx) ** 2 + (ey - sy) ** 2) ** 0.5
+    offset = ((dx - sx) * (sy - ey) + (dy - sy) * (ex - sx)) / run  # to the left of the run
+    size = {"dimtxt": sk.text_height, "dimasz": sk.text_height}
+    dim = msp.add_aligned_dim(p1=d.stroke[0], p2=d.stroke[1], distance=offset,
+                              dxfattribs={"layer": "STROKE"}, override=size)  # fmt: skip
+    dim.render()
+    for xy in (d.paths or {}).values():
+        msp.add_lwpolyline([tuple(p) for p in xy], dxfattribs={"layer": "PATHS"})
+    out = io.StringIO()
+    doc.write(out)
+    return out.getvalue().encode()

@@ -1,0 +1,52 @@
+"""A design's drawing in a file format (``synth.export``, ``POST /v1/export``)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from ..errors import InvalidParameters
+from ..mechanisms import get
+from . import FORMATS, check_angle, drawing, unit_mm
+from .dxf import dxf
+from .svg import svg
+
+
+def export(
+    mechanism: str,
+    params: Mapping[str, float],
+    format: str = "svg",
+    crank_angle_deg: float = 0.0,
+    length_unit: str = "mm",
+    paths: bool = False,
+) -> bytes:
+    """The design drawn at ``crank_angle_deg``: ``format`` ``svg`` (true size, the lengths in
+    ``length_unit``) or ``dxf`` (each link on its own layer, the unit set); with ``paths``,
+    each moving pin's path over a turn.
+
+    >>> doc = export("crank_shaper", {"crank": 120, "pivot_distance": 240, "lever": 450})
+    >>> doc.startswith(b"<?xml") and b'width="' in doc
+    True
+    """
+    check(mechanism, params, format, crank_angle_deg, length_unit)
+    d = drawing(mechanism, params, crank_angle_deg, paths)
+    return svg(d, length_unit).encode() if format == "svg" else dxf(d, length_unit)
+
+
+def check(
+    mechanism: str,
+    params: Mapping[str, float],
+    format: str = "svg",
+    crank_angle_deg: float = 0.0,
+    length_unit: str = "mm",
+    **_: Any,
+) -> None:
+    """What ``export`` checks before it draws (its arguments' meaning)."""
+    m = get(mechanism)
+    for k in params:
+        m.parameter(k)
+    if format not in FORMATS:
+        msg = f"format must be one of {', '.join(FORMATS)}, got {format!r}"
+        raise InvalidParameters(msg, ("format",))
+    unit_mm(length_unit)
+    check_angle(crank_angle_deg)

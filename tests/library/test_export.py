@@ -1,0 +1,145 @@
+"""Drawings that go to CAD and documents: every type in both formats, read back as a CAD
+program and a browser would (ezdxf, an XML parser); the links as long as the design, the
+stroke as the brute-force simulation's, the SVG in true size, the pins named; bad input
+refused naming the field."""
+
+import io
+import math
+import xml.etree.ElementTree as ET
+
+import ezdxf
+import matplotlib
+import numpy as np
+import pytest
+
+import synth
+from synth.load import LENGTH_UNITS
+
+from ..support import bruteforce
+from ..support.designs import random_designs
+
+matplotlib.use("Agg")
+TYPES = synth.mechanisms.all_types()
+SVG = "{http://www.w3.org/2000/svg}"
+
+
+def designs(mtype):
+    return random_designs(mtype, 3, seed=31)
+
+
+def read_dxf(doc: bytes):
+    return ezdxf.read(io.StringIO(doc.decode()))
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_a_dxf_reads_back_with_the_designs_lengths_and_stroke(mtype):
+    for i, p in enumerate(designs(mtype)):
+        angle = 37.0 * i
+        doc = read_dxf(synth.export(mtype, p, "dxf", angle, "mm", paths=i == 0))
+        assert doc.units == ezdxf.units.MM
+        msp = doc.modelspace()
+        lines = {e.dxf.layer: e for e in msp.query("LINE") if e.dxf.layer in p}
+        drawn = {name for name, *_ in synth.mechanisms.get(mtype).drawing if p.get(name, 0) > 0}
+        assert set(lines) == drawn
+        for name, e in lines.items():
+            length = (e.dxf.end - e.dxf.start).magnitude
+            assert length == pytest.approx(p[name], rel=1e-9), name
+        pins = synth.joints(mtype, p, [angle])
+        circles = msp.query('CIRCLE[layer=="PINS"]')
+        assert len(circles) == len(pins)
+        near = 1e-9 * (1 + max(abs(v) for v in p.values()))
+        for e in circles:  # each at its pin
+            c = (e.dxf.center.x, e.dxf.center.y)
+            assert min(math.dist(c, xy[0]) for xy in pins.values()) < near
+        labels = {e.dxf.text for e in msp.query('TEXT[layer=="PINS"]')}
+        assert labels == set(pins)
+        (dim,) = msp.query("DIMENSION")
+        stroke = bruteforce.simulate(mtype, p)["stroke"]
+        assert dim.get_measurement() == pytest.approx(stroke, rel=1e-9)
+        assert len(msp.query('*[layer=="PIVOTS"]')) > 0 and len(msp.query('*[layer=="GUIDE"]')) == 2
+        fixed = [k for k, xy in synth.joints(mtype, p, [0.0, 90.0, 200.0]).items()
+                 if np.ptp(xy, axis=0).max() == 0]  # fmt: skip
+        paths = msp.query('LWPOLYLINE[layer=="PATHS"]')
+        assert len(paths) == (len(pins) - len(fixed) if i == 0 else 0)
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("unit", list(LENGTH_UNITS))
+def test_an_svg_is_true_size_with_the_links_and_pins(mtype, unit):
+    p = designs(mtype)[0]
+    root = ET.fromstring(synth.export(mtype, p, "svg", 10.0, unit))
+    _, _, w, h = map(float, root.get("viewBox").split())
+    width, height = root.get("width"), root.get("height")
+    assert width.endswith("mm") and height.endswith("mm")
+    mm = LENGTH_UNITS[unit] * 1e3  # one unit of the design drawn this long
+    assert float(width[:-2]) == pytest.approx(w * mm, rel=1e-5)
+    assert float(height[:-2]) == pytest.approx(h * mm, rel=1e-5)
+    for e in root.iter(f"{SVG}line"):
+        if "link" in e.get("class", "").split():
+            name = e.get("class").split("link-")[1]
+            x1, y1, x2, y2 = (float(e.get(k)) for k in ("x1", "y1", "x2", "y2"))
+            assert math.hypot(x2 - x1, y2 - y1) == pytest.approx(p[name], rel=1e-9), name
+    pins = synth.joints(mtype, p, [10.0])
+    assert {e.get("data-pin") for e in root.iter(f"{SVG}circle")} == set(pins)
+    assert {e.text for e in root.iter(f"{SVG}text") if e.get("class") == "pin-label"} == set(pins)
+    (label,) = [e.text for e in root.iter(f"{SVG}text") if e.get("class") == "dimension"]
+    assert label == f"stroke {bruteforce.simulate(mtype, p)['stroke']:.6g}"
+
+
+def test_the_drawing_puts_the_ram_on_its_guide_between_the_dead_centres():
+    from synth.drawing import drawing
+
+    for mtype in TYPES:
+        for p in designs(mtype):
+            d = drawing(mtype, p, 123.0)
+            (ax, ay), (bx, by) = d.guide
+            rx, ry = d.pins[d.ram]
+            cross = (bx - ax) * (ry - ay) - (by - ay) * (rx - ax)
+            assert abs(cross) <= 1e-9 * math.hypot(bx - ax, by - ay) ** 2  # on the guide's line
+            (sx, sy), (ex, ey) = d.stroke
+            run = math.hypot(ex - sx, ey - sy)
+            assert math.hypot(rx - sx, ry - sy) + math.hypot(rx - ex, ry - ey) == pytest.approx(
+                run, rel=1e-9
+            )  # between the dead centres
+            assert "O2" in d.ground
+
+
+def test_draw_gives_a_figure_with_each_link():
+    p = {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0}
+    fig = synth.draw("crank_shaper", p, crank_angle_deg=30.0)
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels == ["pivot_distance 240", "crank 120", "lever 450"]
+    assert fig.axes[0].get_aspect() == 1.0
+
+
+@pytest.mark.parametrize(
+    ("kw", "field"),
+    [
+        ({"format": "pdf"}, "format"),
+        ({"length_unit": "ft"}, "length_unit"),
+        ({"crank_angle_deg": math.nan}, "crank_angle_deg"),
+        ({"params": {"crank": 120.0, "pivot_distance": 240.0, "levr": 450.0}}, "levr"),
+    ],
+)
+def test_bad_export_arguments_name_the_field(kw, field):
+    args = {"mechanism": "crank_shaper",
+            "params": {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0}} | kw  # fmt: skip
+    with pytest.raises(synth.InvalidParameters) as e:
+        synth.export(**args)
+    assert field in e.value.loc
+
+
+def test_a_design_that_cannot_run_is_not_drawn():
+    with pytest.raises(synth.InvalidDesign):
+        synth.export("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
+                                   "connecting_rod": 20})  # fmt: skip
+
+
+def test_paths_close_over_a_turn():
+    from synth.drawing import drawing
+
+    d = drawing("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
+                              "connecting_rod": 200}, paths=True)  # fmt: skip
+    assert d.paths is not None and "O2" not in d.paths and "O4" not in d.paths
+    for xy in d.paths.values():
+        assert np.allclose(xy[0], xy[-1], atol=1e-9)
