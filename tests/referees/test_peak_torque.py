@@ -3,9 +3,8 @@
 Checked from outside: its optimum against the independent global search of
 tests/support/motion_referee.py (its own families of designs, its measure the analysis's
 loads, which tests/referees/test_loads.py holds to independent computations) on a sample in
-`make test` and 10 targets per type in `make stress` (the types the referee can judge:
-``REFEREED``); its peak never above the best-transmitting design's for the same request; and
-the requests it refuses.
+`make test` and 10 targets per type in `make stress`; its peak never above the
+best-transmitting design's for the same request; and the requests it refuses.
 """
 
 import itertools
@@ -25,7 +24,12 @@ OBJECTIVE = "min_peak_torque"
 TYPES = ["offset_slider_crank", "whitworth", "crank_shaper", "crank_rocker_slider",
          "drag_link_slider"]  # fmt: skip
 STRESS = os.environ.get("HYPOTHESIS_PROFILE") == "stress"
-QUICK = ["offset_slider_crank", "whitworth"]  # the referee's quick ones (5 s, 30 s)
+# the referee's quick ones (5 s, 30 s; the drag-link's four-bar scale too, 4 s at this target)
+QUICK = [
+    ("offset_slider_crank", 1.6, 20.0),
+    ("whitworth", 1.6, 20.0),
+    ("drag_link_slider", 2.5, 30.0),
+]
 # the referee's designs are at stroke 1: in metres, a load whose torques are about 1 N·m
 LOAD = Load("m", 40.0, cutting_force=2.0, slider_mass=0.05, link_mass_per_length=0.01)
 BEATEN = 1e-6  # relative: the referee may beat ours by this much, no more
@@ -34,9 +38,9 @@ SPREAD = [(1.3, 0.0), (1.3, 30.0), (1.6, 10.0), (1.6, 20.0), (1.6, 40.0), (2.0, 
           (2.0, 20.0), (2.5, 10.0), (2.5, 30.0), (2.5, 40.0)]  # fmt: skip
 
 
-# the types the referee can judge: on the four-bars it falls short of ours (the drag-link's by
-# 3% at time ratio 1.6, 20°, with three seeds of population 20; the crank-rocker's by 0.7%)
-REFEREED = ["offset_slider_crank", "whitworth", "crank_shaper"]
+# the crank-rocker's many local optima need a referee of more effort (as for the motion
+# objectives: with the defaults it stops 4e-4 short of ours)
+EFFORT = {"crank_rocker_slider": {"seeds": (0, 1, 2), "popsize": 20, "maxiter": 120}}
 
 
 def least(mtype, tr=1.6, bound=20.0, load=LOAD, **kw):
@@ -46,18 +50,22 @@ def least(mtype, tr=1.6, bound=20.0, load=LOAD, **kw):
     return r
 
 
+def referee(mtype, tr, bound, load):
+    return motion_referee.search(mtype, OBJECTIVE, tr, bound, load=load, **EFFORT.get(mtype, {}))
+
+
 def against_the_referee(mtype, tr, bound, load=LOAD):
     r = least(mtype, tr, bound, load)
     # the search keeps every transmission angle ACROSS_DEG from 0° whatever the bound (as the
     # motion objectives' does): the referee's bound where the request has less
     kept = max(bound, ACROSS_DEG)
     if not r.candidates:  # no design: the referee finds none either
-        assert motion_referee.search(mtype, OBJECTIVE, tr, kept, load=load).params is None
+        assert referee(mtype, tr, kept, load).params is None
         return
     c = r.candidates[0]
     assert_meets(c, tr, 1.0, bound)
     assert c.objective_value == c.loads.torque.max
-    ref = motion_referee.search(mtype, OBJECTIVE, tr, kept, load=load)
+    ref = referee(mtype, tr, kept, load)
     assert ref.params is not None
     beat = (c.objective_value - ref.value) / ref.value
     assert beat <= BEATEN, f"ours {c.params} is beaten by {ref.params}"
@@ -68,15 +76,15 @@ def against_the_referee(mtype, tr, bound, load=LOAD):
 RUBBING = Load("m", 40.0, cutting_force=2.0, slider_mass=0.05, guide_friction=0.2)
 
 
-@pytest.mark.parametrize(("mtype", "load"), [(t, LOAD) for t in QUICK]
-                         + [("offset_slider_crank", RUBBING)])  # fmt: skip
-def test_the_least_peak_torque_is_not_beaten_by_a_global_search(mtype, load):
-    against_the_referee(mtype, 1.6, 20.0, load)
+@pytest.mark.parametrize(("mtype", "tr", "bound", "load"), [(*q, LOAD) for q in QUICK]
+                         + [("offset_slider_crank", 1.6, 20.0, RUBBING)])  # fmt: skip
+def test_the_least_peak_torque_is_not_beaten_by_a_global_search(mtype, tr, bound, load):
+    against_the_referee(mtype, tr, bound, load)
 
 
 @pytest.mark.skipif(not STRESS, reason="make stress: 10 targets per type")
 @pytest.mark.parametrize(("tr", "bound"), SPREAD)
-@pytest.mark.parametrize("mtype", REFEREED)
+@pytest.mark.parametrize("mtype", TYPES)
 def test_the_least_peak_torque_over_targets(mtype, tr, bound):
     against_the_referee(mtype, tr, bound)
 

@@ -4,8 +4,10 @@
 It searches the design space through tests/support/globalsearch.py's own families (every design
 meets the time ratio and stroke by construction, sharing no formula with synth; a fixed part is
 an equality that family solves for one of its variables), by differential evolution from several
-seeds per family and branch, polished by Nelder–Mead. The measure of a
-design is the analysis's (synth.analyze, include motion, or with the load), which
+seeds per family and branch, polished by Nelder–Mead. The families set a four-bar's scale
+to its smallest in bounds (the slider's motion does not depend on it); for the least peak
+torque with massive links, which it does change, the scale is one more variable. The measure
+of a design is the analysis's (synth.analyze, include motion, or with the load), which
 tests/referees/test_quality.py and test_loads.py check against independent computations on 200
 designs per type; the search is what is independent.
 
@@ -59,6 +61,13 @@ def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1)
     asked = {"load": load} if objective == "min_peak_torque" else {"include": ["motion"]}
     fx = gs.Fix(mtype, tuple(sorted((k, float(v)) for k, v in (fixed or {}).items())))
     m = synth.mechanisms.get(mtype)
+    # a four-bar's scale leaves the slider's motion alone, so the families take the smallest;
+    # with massive links it changes the torque: searched too (one more variable), unless a
+    # fixed link sets it
+    links = gs.LINKS.get(mtype, ())
+    scaled = bool(links) and load is not None and load.link_mass_per_length > 0
+    scaled = scaled and not set(links) & set(fx.fixed)
+    top = {k: hi for k, (_, hi) in gs._bounds(mtype, fx).items()}
     best = Best(math.inf, None)
     for fam in gs.FAMILIES[mtype]:
         # the family's designs at the time ratio with the fixed parts, the bound a margin
@@ -68,9 +77,14 @@ def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1)
 
             def design(z, problem=problem, branch=branch):
                 """The design at the free variables z, and its violation."""
+                z = np.clip(z, 0.0, 1.0)
                 with np.errstate(all="ignore"):
-                    _, viol, d = problem.evaluate(np.clip(z, 0.0, 1.0)[None, :], branch)
-                return {k: float(v[0]) for k, v in d.params.items()}, float(viol[0])
+                    _, viol, d = problem.evaluate(z[None, : problem.dim], branch)
+                params = {k: float(v[0]) for k, v in d.params.items()}
+                if scaled and np.isfinite(viol[0]):  # from the smallest to the largest in bounds
+                    grow = min(top[k] / params[k] for k in links)
+                    params |= {k: params[k] * grow ** float(z[-1]) for k in links}
+                return params, float(viol[0])
 
             def value(z, design=design):
                 params, violation = design(z)
@@ -88,13 +102,14 @@ def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1)
                     return 2 * PENALTY
                 return measure(a, objective)
 
-            if problem.dim == 0:  # the fixed parts leave the family no freedom
+            dim = problem.dim + scaled
+            if dim == 0:  # the fixed parts leave the family no freedom
                 f, z = value(np.empty(0)), np.empty(0)
                 if f < min(best.value, PENALTY):
                     best = Best(f, design(z)[0])
                 continue
             for seed in seeds:
-                res = differential_evolution(value, [(0.0, 1.0)] * problem.dim, seed=seed,
+                res = differential_evolution(value, [(0.0, 1.0)] * dim, seed=seed,
                                              popsize=popsize, maxiter=maxiter, tol=1e-12,
                                              init="sobol", polish=False)  # fmt: skip
                 if res.fun >= PENALTY:
