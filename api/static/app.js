@@ -43,12 +43,19 @@ function clearErrors(form) {
   for (const f of form.querySelectorAll("[aria-invalid]")) f.removeAttribute("aria-invalid");
 }
 
-function fieldError(id, msg, formError) {
+function fieldError(id, msg, formError, repeated = false) {
   const field = $(id);
+  if (field && repeated) { // a condition on several fields: marked at each, said at the first
+    field.setAttribute("aria-invalid", "true");
+    return;
+  }
   let box = $(`${id}-error`);
-  if (field && !box) { // a field without its own box (advanced bounds): one next to it
+  if (field && !box) { // a field without its own box (advanced bounds): one after its row,
+    // which keeps the grid's later rows under their labels
+    let end = field;
+    while (end.nextElementSibling && end.nextElementSibling.tagName !== "SPAN") end = end.nextElementSibling;
     box = el("p", { class: "error", id: `${id}-error`, role: "alert" });
-    field.insertAdjacentElement("afterend", box);
+    end.insertAdjacentElement("afterend", box);
   }
   if (!field || !box) {
     $(formError).textContent += (($(formError).textContent ? " " : "") + msg);
@@ -60,7 +67,19 @@ function fieldError(id, msg, formError) {
 }
 
 function showErrors(detail, idOf, formError) {
-  for (const e of detail || []) fieldError(idOf(e.loc || []) || "", e.msg, formError);
+  const said = new Set(); // a design's condition comes once per length it involves
+  for (const e of detail || []) {
+    fieldError(idOf(e.loc || []) || "", e.msg, formError, e.type === "invalid_design" && said.has(e.msg));
+    said.add(e.msg);
+  }
+}
+
+async function busy(form, run) {
+  // the form's button disabled and the form marked busy while its request runs
+  const button = form.querySelector("button[type=submit]");
+  form.setAttribute("aria-busy", "true");
+  button.disabled = true;
+  try { return await run(); } finally { form.removeAttribute("aria-busy"); button.disabled = false; }
 }
 
 // ---- the synthesis view -------------------------------------------------------------------
@@ -134,8 +153,10 @@ function synthFieldId(loc) {
   if (where[0] === "mechanisms" && typeof where[1] === "number") {
     const t = document.querySelectorAll("input[name=type]:checked")[where[1]]?.value;
     const kind = where.find((x) => x === "fixed" || x === "bounds");
-    const name = where[where.length - 1];
-    if (t && kind && typeof name === "string") return `${t}-${name}-${kind === "fixed" ? "fixed" : "min"}`;
+    // [..., kind, name] or, for one end of a bound, [..., "bounds", name, 0 | 1]
+    const [name, end] = where.slice(where.indexOf(kind) + 1);
+    const field = kind === "fixed" ? "fixed" : end === 1 ? "max" : "min";
+    if (t && kind && typeof name === "string") return `${t}-${name}-${field}`;
   }
   return null;
 }
@@ -146,14 +167,17 @@ async function synthesize(choose = 0) {
   const body = synthRequest();
   saveState("synthesize", synthState());
   $("synth-status").textContent = "Synthesising…";
-  const r = await api("v1/synthesize", body);
+  const r = await busy(form, () => api("v1/synthesize", body));
   $("synth-status").textContent = r.ok && !r.data.complete
     ? "The time budget ran out: these are the designs found by then." : "";
   const tbody = $("candidates").querySelector("tbody");
   tbody.replaceChildren();
   $("refusals").replaceChildren();
-  if (!r.ok) {
+  if (!r.ok) { // nothing of the last answer stays beside the errors
     showErrors(r.data.detail, synthFieldId, "form-error");
+    $("front-plot").replaceChildren();
+    $("detail").hidden = true;
+    shown++;
     return;
   }
   const cands = r.data.candidates;
@@ -210,11 +234,13 @@ function loadSynthState(q) {
 // ---- the analysis and sweep views ---------------------------------------------------------
 
 async function exampleDesign(t) {
-  // a valid design of the type, from the synthesis itself (no list of types here)
+  // a valid design of the type, from the synthesis itself (no list of types here): a stroke
+  // of 100, its lengths to 6 digits as a person would type them
   const tr = TYPES[t].quick_return ? 1.6 : 1.0;
-  const r = await api("v1/synthesize", { time_ratio: tr, stroke: 1, mechanisms: [{ type: t }],
+  const r = await api("v1/synthesize", { time_ratio: tr, stroke: 100, mechanisms: [{ type: t }],
     objective: "max_transmission_angle" });
-  return r.ok && r.data.candidates.length ? r.data.candidates[0].params : {};
+  const p = r.ok && r.data.candidates.length ? r.data.candidates[0].params : {};
+  return Object.fromEntries(Object.entries(p).map(([k, v]) => [k, Number(v.toPrecision(6))]));
 }
 
 async function paramInputs(prefix, t, values) {
@@ -305,8 +331,8 @@ async function analyzeView() {
   clearErrors(form);
   const d = designOf("a");
   saveState("analyze", { type: d.type, ...d.params });
-  await showDesign(d.type, d.params, 0, (detail) => showErrors(detail, analysisFieldId, "a-form-error"),
-    loadOf("a"));
+  await busy(form, () => showDesign(d.type, d.params, 0,
+    (detail) => showErrors(detail, analysisFieldId, "a-form-error"), loadOf("a")));
 }
 
 function setSweepRange() {
@@ -325,7 +351,7 @@ async function sweepView() {
     points: num("s-points") };
   saveState("sweep", { type: d.type, ...d.params, __vary: body.vary, __start: $("s-start").value,
     __stop: $("s-stop").value, __points: $("s-points").value });
-  const r = await api("v1/sweep", body);
+  const r = await busy(form, () => api("v1/sweep", body));
   const svg = $("sweep-plot");
   svg.replaceChildren();
   $("s-status").textContent = "";
@@ -363,7 +389,7 @@ async function showDesign(type, params, bound, onError, load = null) {
   const r = await api("v1/analyze", { mechanism: { type, params }, crank_angles_deg: angles,
     include: TYPES[type].drawing.length ? ["pins"] : [], ...loaded });
   if (mine !== shown) return;
-  if (!r.ok) { if (onError) onError(r.data.detail); return; }
+  if (!r.ok) { if (onError) onError(r.data.detail); $("detail").hidden = true; return; }
   current = { type, params: a.params, analysis: a, curves: r.data.curves, bound, load };
   $("detail").hidden = false;
   $("detail-title").textContent = `${TYPES[type].title}`;
@@ -591,6 +617,16 @@ function download(name, type, text) {
   document.body.append(a); a.click(); a.remove();
 }
 
+async function exportDrawing(format) {
+  // the service's drawing at the frame shown: SVG in true size, DXF for CAD
+  if (!current) return;
+  const body = { mechanism: { type: current.type, params: current.params }, format,
+    crank_angle_deg: (frame * 360) / FRAMES, length_unit: $("export-unit").value, paths: true };
+  const r = await fetch(new URL("v1/export", BASE), { method: "POST",
+    headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
+  if (r.ok) download(`${current.type}.${format}`, r.headers.get("Content-Type"), await r.blob());
+}
+
 // ---- state in the address --------------------------------------------------------------------
 
 function saveState(view, state) {
@@ -650,8 +686,8 @@ async function init() {
   $("angle").addEventListener("input", () => { play(false); setFrame(Number($("angle").value)); });
   $("export-json").addEventListener("click", () => current && download(`${current.type}.json`,
     "application/json", JSON.stringify({ type: current.type, params: current.params, analysis: current.analysis }, null, 2)));
-  $("export-svg").addEventListener("click", () => current && download(`${current.type}.svg`,
-    "image/svg+xml", new XMLSerializer().serializeToString($("linkage"))));
+  $("export-svg").addEventListener("click", () => exportDrawing("svg"));
+  $("export-dxf").addEventListener("click", () => exportDrawing("dxf"));
   window.addEventListener("hashchange", () => route(false));
   await route(true);
   document.body.dataset.ready = "true";

@@ -13,8 +13,10 @@ import math
 import os
 import re
 import shutil
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
+import ezdxf
 import pytest
 
 from ..support.server import ROOT, serving
@@ -205,8 +207,9 @@ def test_analysis_and_sweep_views(page):
     pg.wait_for_selector("#a-param-coupler")
     pg.fill("#a-param-coupler", "0.01")  # shorter than the crank: no drag-link
     pg.click("#a-run")
-    pg.wait_for_selector("#a-param-coupler-error:not(:empty)")
-    assert "coupler" in pg.inner_text("#a-param-coupler-error")
+    pg.wait_for_selector("#a-params .error:not(:empty)")  # said once, at its first length
+    assert "coupler" in pg.inner_text("#a-params")
+    assert pg.get_attribute("#a-param-coupler", "aria-invalid") == "true"
     pg.click("#tab-analyze")
     pg.wait_for_function("+document.querySelector('#a-param-coupler')?.value > 0.02")
     pg.click("#a-run")
@@ -324,8 +327,124 @@ def test_every_field_has_a_label_and_the_design_exports(page):
         pg.click("#export-json")
     exported = json.loads(Path(d.value.path()).read_text())
     assert exported["type"] == "drag_link_slider"
-    assert exported["params"] == pg.evaluate("current.params")
+    params = pg.evaluate("current.params")
+    assert exported["params"] == params
+    # the drawings for documents and CAD, the service's: SVG in true size, DXF by layer
     with pg.expect_download() as d:
         pg.click("#export-svg")
-    svg = Path(d.value.path()).read_text()
-    assert svg.startswith("<svg") and svg.count('class="member"') == 6
+    svg = ET.fromstring(Path(d.value.path()).read_bytes())
+    assert svg.get("width").endswith("mm") and svg.get("data-length-unit") == "mm"
+    pg.select_option("#export-unit", "m")
+    with pg.expect_download() as d:
+        pg.click("#export-dxf")
+    assert d.value.suggested_filename == "drag_link_slider.dxf"
+    doc = ezdxf.readfile(d.value.path())
+    assert doc.units == ezdxf.units.M
+    lines = {e.dxf.layer: e for e in doc.modelspace().query("LINE") if e.dxf.layer in params}
+    assert set(lines) == set(PROJECT) | {"coupler", "follower_arm"}
+    for name, e in lines.items():
+        assert (e.dxf.end - e.dxf.start).magnitude == pytest.approx(params[name], rel=1e-9)
+
+
+def test_a_422_clears_the_last_answer(page):
+    pg = page.page
+    project(pg)
+    pg.wait_for_selector("#front-plot circle", state="attached")
+    pg.wait_for_selector("#detail:not([hidden])")
+    pg.fill("#time_ratio", "0.5")
+    pg.click("#run")
+    pg.wait_for_selector("#time_ratio-error:not(:empty)")
+    assert pg.locator("#candidates tbody tr").count() == 0
+    assert pg.locator("#front-plot > *").count() == 0
+    assert pg.locator("#detail").is_hidden()
+
+
+def test_a_request_shows_that_it_runs(page):
+    """The form's button is disabled, and the form busy, until its answer is in."""
+    pg = page.page
+    pg.select_option("#objective", "uniform_cutting_speed")  # every type's search: ~1 s
+    pg.click("#run")
+    assert pg.evaluate("document.querySelector('#run').disabled")
+    assert pg.get_attribute("#synth-form", "aria-busy") == "true"
+    pg.wait_for_selector("#candidates tbody tr")
+    pg.wait_for_function("!document.querySelector('#run').disabled")
+    assert pg.get_attribute("#synth-form", "aria-busy") is None
+
+
+def test_an_example_design_reads_as_a_person_would_type_it(page):
+    pg = page.page
+    pg.click("#tab-analyze")
+    for mtype in ("whitworth", "crank_rocker_slider"):
+        pg.select_option("#a-type", mtype)
+        pg.wait_for_selector("#a-param-crank")
+        pg.wait_for_function("document.querySelector('#a-param-crank').value !== ''")
+        for value in pg.eval_on_selector_all("#a-params input", "fs => fs.map(f => f.value)"):
+            digits = value.replace("-", "").replace(".", "").lstrip("0")
+            assert len(digits.split("e")[0]) <= 6, value
+
+
+def test_no_view_scrolls_sideways_on_a_phone(site):
+    p = Page(site, viewport=PHONE)
+    pg = p.page
+    try:
+        for tab, ready in (("#tab-synthesize", "#run"), ("#tab-analyze", "#a-param-crank"),
+                           ("#tab-sweep", "#s-param-crank")):  # fmt: skip
+            pg.click(tab)
+            pg.wait_for_selector(ready)
+            width = pg.evaluate("document.documentElement.scrollWidth")
+            assert width <= PHONE["width"], (tab, width)
+    finally:
+        p.close()
+
+
+ROWS = """grid => {
+  // each row of a grid: its label's and its fields' boxes (top, bottom, left, right)
+  const box = (e) => {
+    const r = e.getBoundingClientRect();
+    return [r.top, r.bottom, r.left, r.right];
+  };
+  const rows = [];
+  for (const e of grid.children) {
+    if (e.tagName === "SPAN" || e.tagName === "LABEL") rows.push({ label: box(e), fields: [] });
+    else if (e.tagName === "INPUT" || e.tagName === "SELECT") rows.at(-1).fields.push(box(e));
+  }
+  return rows;
+}"""
+
+
+def assert_aligned(rows, width):
+    for row in rows:
+        top, bottom, _, _ = row["label"]
+        for f in row["fields"]:
+            assert f[0] < bottom and f[1] > top, row  # on the label's line
+            assert f[3] <= width and f[2] >= 0, row  # on the screen
+
+
+@pytest.mark.parametrize("viewport", [DESKTOP, PHONE], ids=["desktop", "phone"])
+def test_errors_leave_every_field_beside_its_label(site, viewport):
+    """An invalid bound in the fixed-parts-and-bounds grid, and an invalid design in the
+    analysis view: each message in its own line, every field still on its label's line."""
+    p = Page(site, viewport=viewport)
+    pg = p.page
+    try:
+        pg.click("#adv-crank_shaper summary")
+        pg.fill("#crank_shaper-crank-min", "-1")
+        pg.fill("#crank_shaper-lever-max", "-2")
+        pg.click("#run")
+        pg.wait_for_selector("#crank_shaper-crank-min-error:not(:empty)")
+        pg.wait_for_selector("#crank_shaper-lever-max-error:not(:empty)")
+        grid = pg.locator("#adv-crank_shaper .fields")
+        assert_aligned(grid.evaluate(ROWS), viewport["width"])
+        pg.click("#tab-analyze")
+        pg.wait_for_selector("#a-param-crank")
+        pg.fill("#a-param-coupler", "0.001")
+        pg.click("#a-run")
+        pg.wait_for_selector("#a-params .error:not(:empty)")
+        assert_aligned(pg.locator("#a-params").evaluate(ROWS), viewport["width"])
+        said = pg.eval_on_selector_all(
+            "#a-params .error:not(:empty)", "ps => ps.map(p => p.textContent)"
+        )
+        assert len(said) == len(set(said))  # a condition on several lengths, said once
+        assert pg.locator("#a-params [aria-invalid=true]").count() >= 2  # and marked at each
+    finally:
+        p.close()
