@@ -25,8 +25,9 @@ FROM base
 COPY --from=native /opt/synth /opt/synth
 RUN useradd --create-home --uid 10001 app
 USER app
+# the port: PORT (docker run -e PORT=9000 -p 9000:9000 …), else 8000
 EXPOSE 8000
 HEALTHCHECK --interval=30s --timeout=3s --start-period=10s \
-    CMD python -c "import urllib.request; urllib.request.urlopen('http://127.0.0.1:8000/health', timeout=2)"
-# one server process per core unless WEB_CONCURRENCY says otherwise (api/serve.py)
-CMD ["python", "-m", "api.serve", "--host", "0.0.0.0", "--port", "8000"]
+    CMD python -c "import os, urllib.request; urllib.request.urlopen('http://127.0.0.1:%s/health' % os.environ.get('PORT', '8000'), timeout=2)"
+# one server process per core unless WEB_CONCURRENCY says otherwise; the port PORT's (api/serve.py)
+CMD ["python", "-m", "api.serve", "--host", "0.0.0.0"]

@@ -37,8 +37,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     )
     p.add_argument("--types", nargs="*", help="default: the quick-return types")
     p.add_argument("--ratios", default="1.05:4.0:60", help="start:stop:count (default %(default)s)")
-    p.add_argument("--bounds", nargs="*", type=float, default=list(DEFAULT_BOUNDS))
-    p.add_argument("--chunk", type=int, default=CHUNK)
+    p.add_argument("--bounds", nargs="*", type=float, default=list(DEFAULT_BOUNDS),
+                   help="the transmission bounds, degrees (default %(default)s)")  # fmt: skip
+    p.add_argument("--chunk", type=int, default=CHUNK,
+                   help="grid points (time ratio, bound) per task: the unit of work and of "
+                   "resuming (default %(default)s)")  # fmt: skip
     p.add_argument("--out", default="atlas", help="the folder (resumed if it holds a run)")
     p.add_argument("--workers", type=int, help="local processes (default: the cores)")
     p.add_argument("--scheduler", default=os.environ.get("DASK_SCHEDULER_ADDRESS"),

@@ -448,3 +448,23 @@ def test_errors_leave_every_field_beside_its_label(site, viewport):
         assert pg.locator("#a-params [aria-invalid=true]").count() >= 2  # and marked at each
     finally:
         p.close()
+
+
+@pytest.mark.parametrize("at", ["/docs", "/redoc", "/app/"])
+def test_the_docs_and_the_playground_ask_nothing_of_another_origin(site, at):
+    """Each page's every request stays on this service and is answered, its icon too."""
+    browser, base = site
+    context = browser.new_context()
+    pg = context.new_page()
+    asked, blocked, failed = [], [], []
+    pg.on("request", lambda r: asked.append(r.url))
+    # a request the page's policy stops never leaves the browser
+    pg.on("requestfailed", lambda r: blocked.append(r.url) if r.failure == "csp" else None)
+    pg.on("response", lambda r: failed.append(r.url) if r.status >= 400 else None)
+    pg.goto(base + at)
+    pg.wait_for_load_state("networkidle")
+    pg.wait_for_timeout(500)
+    context.close()
+    sent = [u for u in asked if u not in blocked]
+    assert sent and all(u.startswith((base + "/", "blob:" + base)) for u in sent), sent
+    assert not failed, failed
