@@ -100,3 +100,41 @@ def capped(items: Collection[Any], item: Callable[[Any], dict[str, Any]]) -> lis
 
 def _size(x: Any) -> int:
     return len(json.dumps(x, ensure_ascii=False))
+
+
+# pydantic's bound errors: the context key holding the bound, and its sign
+BOUNDS = {"greater_than_equal": ("ge", "≥"), "greater_than": ("gt", ">"),
+          "less_than_equal": ("le", "≤"), "less_than": ("lt", "<")}  # fmt: skip
+NUMBERS = {
+    "float_type",
+    "float_parsing",
+    "int_type",
+    "int_parsing",
+    "finite_number",
+    "int_from_float",
+}
+
+
+def worded(e: dict[str, Any]) -> str:
+    """A schema's refusal worded as the library words its own: the field, the rule with its
+    numbers, and what was given ("stroke must be ≥ 1e-09, got -250"), not pydantic's
+    "Input should be greater than or equal to 0.000000001"."""
+    loc, kind, ctx = e.get("loc", ()), e.get("type", ""), e.get("ctx") or {}
+    names = [str(k) for k in loc if isinstance(k, str) and k != "body"]
+    field = names[-1] if names else "the body"
+    if loc and isinstance(loc[-1], int):  # an item of a list
+        field += f"[{loc[-1]}]"
+    got = f", got {e['input']!r}" if "input" in e and _size(safe(e["input"])) <= 60 else ""
+    if kind in BOUNDS and BOUNDS[kind][0] in ctx:
+        key, sign = BOUNDS[kind]
+        return f"{field} must be {sign} {ctx[key]:g}{got}"
+    if kind == "missing":
+        return f"{field} is required"
+    if kind == "extra_forbidden":
+        return f"{field}: no such field here"
+    if kind == "literal_error" and "expected" in ctx:
+        return f"{field} must be {ctx['expected']}{got}"
+    if kind in NUMBERS:
+        return f"{field} must be a finite number{got}"
+    msg = str(e.get("msg", ""))
+    return f"{field}: {msg[:1].lower()}{msg[1:]}"

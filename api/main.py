@@ -25,7 +25,7 @@ from synth.errors import UnknownMechanism
 
 from .body_limit import too_large
 from .engine import Busy, Engine
-from .errors import capped, error_item
+from .errors import capped, error_item, worded
 from .gate import Gate
 from .routers import analyze, atlas, export, mechanisms, sweep, synthesize
 from .routers.common import Located
@@ -126,7 +126,7 @@ async def invalid(request: Request, exc: RequestValidationError) -> JSONResponse
             e = {"loc": ["body"], "msg": e["ctx"]["error"], "type": e["type"]}
         more = {"input": e["input"]} if "input" in e else {}
         ctx = {k: v for k, v in (e.get("ctx") or {}).items() if k != "error"}
-        return error_item(e["loc"], e["msg"], e["type"], **more, **({"ctx": ctx} if ctx else {}))
+        return error_item(e["loc"], worded(e), e["type"], **more, **({"ctx": ctx} if ctx else {}))
 
     return JSONResponse({"detail": capped(exc.errors(), item)}, status_code=422)
 

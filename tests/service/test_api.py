@@ -531,3 +531,31 @@ def test_an_analysis_is_encoded_as_its_model_encodes_it(mtype, kwargs):
     a = synth.analyze(mtype, DESIGNS[mtype], **kwargs)
     model = AnalyzeResponse(**a.to_dict())
     assert encoded(a) == TypeAdapter(AnalyzeResponse).dump_json(model, exclude_unset=True)
+
+
+@pytest.mark.parametrize(
+    ("body", "loc", "msg"),
+    [
+        ({"time_ratio": 0.5, "stroke": 250}, ["body", "time_ratio"],
+         "time_ratio must be ≥ 1, got 0.5"),
+        ({"time_ratio": 1.5, "stroke": -250}, ["body", "stroke"],
+         "stroke must be ≥ 1e-09, got -250"),
+        ({"stroke": 250}, ["body", "time_ratio"], "time_ratio is required"),
+        ({"time_ratio": "x", "stroke": 250}, ["body", "time_ratio"],
+         "time_ratio must be a finite number, got 'x'"),
+        ({"time_ratio": 1.5, "stroke": 250, "colour": 1}, ["body", "colour"],
+         "colour: no such field here"),
+        ({"time_ratio": 1.5, "stroke": 250, "objective": "fast"}, ["body", "objective"],
+         "objective must be 'pareto', 'max_transmission_angle', 'min_size', "
+         "'uniform_cutting_speed', 'min_peak_acceleration' or 'min_peak_torque', got 'fast'"),
+    ],
+)  # fmt: skip
+def test_a_schemas_refusal_is_worded_like_the_librarys(client, body, loc, msg):
+    """The field, the rule with its number and what was given, as the library says its own
+    refusals; the machine-readable type and context as pydantic gives them."""
+    r = client.post("/v1/synthesize", json=body)
+    assert r.status_code == 422
+    (e,) = r.json()["detail"]
+    assert e["loc"] == loc and e["msg"] == msg
+    assert e["type"] in {"greater_than_equal", "missing", "float_type", "extra_forbidden",
+                         "literal_error"}  # fmt: skip

@@ -347,7 +347,7 @@ def test_a_trickled_request_is_closed_at_the_deadline_not_kept_by_each_byte(port
 
 
 GET_ROUTES = ["/health", "/v1/mechanisms", "/v1/mechanisms/whitworth", "/v1/atlas",
-              "/openapi.json", "/docs", "/redoc", "/app/"]  # fmt: skip
+              "/openapi.json", "/docs", "/redoc", "/app/", "/favicon.ico"]  # fmt: skip
 POSTS = {
     "/v1/analyze": BODY,
     "/v1/synthesize": b'{"time_ratio":1.5,"stroke":1,"mechanisms":[{"type":"whitworth"}]}',
