@@ -15,7 +15,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 # the project itself, editable, built by the setuptools the lock pinned
 INSTALL_SELF := $(BIN)/python -m pip install -qq --no-deps --no-build-isolation -e .
 
-.PHONY: serve test stress bench atlas lint lock lock-check notebook python clean
+.PHONY: serve test stress bench atlas lint lock lock-check notebook notebooks python clean
 
 python:
 	@test -n "$(PYTHON)" || { echo "make: no Python 3.11, 3.12 or 3.13 found (tried python3.13," \
@@ -77,6 +77,10 @@ lint: $(VENV)/.dev
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy synth
 	$(BIN)/mypy api
+
+# Execute every notebook in place, outputs and all, as the repository carries them
+notebooks: $(VENV)/.dev
+	$(BIN)/python -m tests.support.notebooks
 
 # Regenerate the lock files after changing pyproject.toml (needs uv: pip install uv): one lock
 # for every supported Python (markers where they differ), with the setuptools that builds the

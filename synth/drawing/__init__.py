@@ -9,6 +9,7 @@ its stroke between the dead centres, and, when asked, each moving pin's path ove
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -41,6 +42,8 @@ class Drawing:
     of the type's equations (``synth.joints``), the crank pivot at the origin.
 
     ``pins``: every pin's (x, y); ``links``: the members (zero-length ones left out);
+    ``slots``: the centre line of each slot a block slides in, along its line to the farther
+    of its block and its line's far pin;
     ``ground``: the pins fixed to the frame; ``ram``: the ram's pin, on its ``path`` (a unit
     vector); ``stroke``: the ram pin at its two dead centres; ``guide``: the guide's ends, the
     stroke and ``GUIDE_OVERRUN`` of it each side; ``paths``: each moving pin's path over a
@@ -52,6 +55,7 @@ class Drawing:
     pins: dict[str, tuple[float, float]]
     links: tuple[Link, ...]
     ground: tuple[str, ...]
+    slots: tuple[tuple[tuple[float, float], tuple[float, float]], ...]
     ram: str
     path: tuple[float, float]
     stroke: tuple[tuple[float, float], tuple[float, float]]
@@ -94,12 +98,18 @@ def drawing(
     links = tuple(Link(name, u, v, float(a.params[name])) for name, u, v in m.drawing
                   if a.params.get(name, 0.0) > 0)  # fmt: skip
     ground = tuple(pin for pin, b1, b2 in frame.pins if GROUND in (b1, b2))
+    slots = []
+    for block, _, _, line in frame.slots:
+        if line is not None:
+            start, far = pins[line[0]], pins[line[1]]
+            end = max((pins[block], far), key=lambda q: math.dist(start, q))
+            slots.append((start, end))
     traced = None
     if paths:
         turn = joints(mechanism, a.params, np.linspace(0.0, 360.0, PATH_SAMPLES).tolist())
         traced = {k: v for k, v in turn.items() if np.ptp(v, axis=0).max() > 0}
-    return Drawing(mechanism, dict(a.params), float(crank_angle_deg), pins, links, ground, ram,
-                   (tx, ty), ends, guide, traced)  # fmt: skip
+    return Drawing(mechanism, dict(a.params), float(crank_angle_deg), pins, links, ground,
+                   tuple(slots), ram, (tx, ty), ends, guide, traced)  # fmt: skip
 
 
 Segment = tuple[tuple[float, float], tuple[float, float]]

@@ -15,7 +15,7 @@ from . import Drawing, sketch, unit_mm
 UNITS = {"mm": units.MM, "m": units.M, "in": units.IN}
 # the symbols' layers (none a parameter's name: layer names ignore case) and their colours
 # (AutoCAD's colour index); the links' take 1, 2, 3, …
-LAYERS = {"PINS": 7, "PIVOTS": 8, "GUIDE": 8, "RAM": 8, "STROKE": 7, "PATHS": 9}
+LAYERS = {"PINS": 7, "PIVOTS": 8, "SLOTS": 8, "GUIDE": 8, "RAM": 8, "STROKE": 7, "PATHS": 9}
 
 
 def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
@@ -30,6 +30,8 @@ def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
     for i, link in enumerate(d.links):
         doc.layers.add(link.name, color=i % 6 + 1)
         msp.add_line(d.pins[link.a], d.pins[link.b], dxfattribs={"layer": link.name})
+    for a, b in d.slots:
+        msp.add_line(a, b, dxfattribs={"layer": "SLOTS"})
     for name, p in d.pins.items():
         msp.add_circle(p, sk.pin_radius, dxfattribs={"layer": "PINS"})
         label = msp.add_text(name, height=sk.text_height, dxfattribs={"layer": "PINS"})

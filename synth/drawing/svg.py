@@ -43,6 +43,7 @@ def svg(d: Drawing, length_unit: str = "mm") -> str:
         f"stroke-width:{lw * 0.5:.6g}}}"
         f".link{{stroke-width:{lw * 1.6:.6g}}}"
         f".path{{stroke:#999;stroke-dasharray:{lw * 2:.6g} {lw * 2:.6g}}}"
+        f".slot{{stroke:#777;stroke-width:{lw * 3.2:.6g};stroke-opacity:.35}}"
         f".block{{fill:#ddd}}.ground{{fill:#bbb}}"
         f".pin{{fill:#fff;stroke:#222;stroke-width:{lw * 0.5:.6g}}}"
         f"text{{font-family:sans-serif;font-size:{sk.text_height:.6g}px;fill:#222}}"
@@ -59,6 +60,7 @@ def svg(d: Drawing, length_unit: str = "mm") -> str:
     out += [line(end, pin, "extension") for end, pin in zip(sk.dimension, d.stroke, strict=True)]
     lx, ly = pt(sk.label_at).split(",")
     out.append(f'<text class="dimension" x="{lx}" y="{ly}" text-anchor="middle">{sk.label}</text>')
+    out += [line(a, b, "slot") for a, b in d.slots]
     for i, link in enumerate(d.links):
         colour = COLOURS[i % len(COLOURS)]
         extra = f' style="stroke:{colour}" data-length="{link.length:.17g}"'
