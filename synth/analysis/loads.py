@@ -47,6 +47,7 @@ NODES, WEIGHTS = np.polynomial.legendre.leggauss(16)  # per panel
 
 # a quantity of z, z′, z″ (rows: angles): its value and first two derivatives at each angle
 Quantity = Callable[[np.ndarray], np.ndarray]
+Found = tuple[np.ndarray, np.ndarray]  # roots (radians) and the piece each is in
 
 
 def _torque(z: np.ndarray) -> np.ndarray:
@@ -106,9 +107,7 @@ class Pieces:
         a = np.abs(np.where(np.isfinite(g), g, 0.0))
         return np.maximum.reduceat(a.reshape(a.shape[0], -1).max(axis=1), self.starts)
 
-    def roots(
-        self, fs: list[Quantity], k: int, falling: int = 0
-    ) -> list[tuple[np.ndarray, np.ndarray]]:
+    def roots(self, fs: list[Quantity], k: int, falling: int = 0) -> list[Found]:
         """Each quantity's roots of its row k (0: value, 1: derivative) in the pieces, and the
         piece of each: sign changes on the grid, polished together (``roots._rtsafe`` on rows
         k and k + 1); only the falling ones for the first ``falling`` quantities (their
@@ -412,10 +411,11 @@ def _pieces(sys: Forces, spans: list[_Span], st: Strokes, mu: float) -> Pieces:
         out[j] = Piece(p.lo, p.hi, np.append(p.pv[:-1], mu * signs[owner[j]]), p.span)
     pieces = Pieces(sys, out)
     held = _guide(pieces(mid, np.arange(len(out)), 0))[0] > tiny[owner]
-    for j in np.nonzero(pulled & held)[0]:
+    locked = np.nonzero(pulled & held)[0]  # neither sign of N is consistent there
+    if locked.size:
         raise InvalidDesign(
             f"the guide's friction {mu:g} locks the ram at crank angle "
-            f"{_deg(float(mid[j])):.6g}°: no guide force is consistent with it",
+            f"{_deg(float(mid[locked[0]])):.6g}°: no guide force is consistent with it",
             (), "friction",
         )  # fmt: skip
     return pieces
