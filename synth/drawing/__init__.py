@@ -26,6 +26,9 @@ PATH_SAMPLES = 181  # angles a pin's path is drawn through (2° apart)
 GUIDE_OVERRUN = 0.15  # the guide runs past each end of the stroke by this share of it
 
 
+Segment = tuple[tuple[float, float], tuple[float, float]]  # two points (x, y)
+
+
 @dataclass(frozen=True)
 class Link:
     """A straight member between two pins: its name (the parameter it is as long as)."""
@@ -55,11 +58,11 @@ class Drawing:
     pins: dict[str, tuple[float, float]]
     links: tuple[Link, ...]
     ground: tuple[str, ...]
-    slots: tuple[tuple[tuple[float, float], tuple[float, float]], ...]
+    slots: tuple[Segment, ...]
     ram: str
     path: tuple[float, float]
-    stroke: tuple[tuple[float, float], tuple[float, float]]
-    guide: tuple[tuple[float, float], tuple[float, float]]
+    stroke: Segment
+    guide: Segment
     paths: dict[str, np.ndarray] | None = None
 
     def bounds(self) -> tuple[float, float, float, float]:
@@ -98,7 +101,7 @@ def drawing(
     links = tuple(Link(name, u, v, float(a.params[name])) for name, u, v in m.drawing
                   if a.params.get(name, 0.0) > 0)  # fmt: skip
     ground = tuple(pin for pin, b1, b2 in frame.pins if GROUND in (b1, b2))
-    slots = []
+    slots: list[Segment] = []
     for block, _, _, line in frame.slots:
         if line is not None:
             start, far = pins[line[0]], pins[line[1]]
@@ -110,9 +113,6 @@ def drawing(
         traced = {k: v for k, v in turn.items() if np.ptp(v, axis=0).max() > 0}
     return Drawing(mechanism, dict(a.params), float(crank_angle_deg), pins, links, ground,
                    tuple(slots), ram, (tx, ty), ends, guide, traced)  # fmt: skip
-
-
-Segment = tuple[tuple[float, float], tuple[float, float]]
 
 
 @dataclass(frozen=True)
