@@ -5,11 +5,13 @@
 
 const BASE = new URL("..", location.href); // the service's root: this page is at /app/
 const FRAMES = 72; // drawn frames per crank revolution
+const PLOT_POINTS = 360; // the curves' angles a turn (1° apart), the exact extremes besides
 const COLORS = ["#1f5fbf", "#d9730d", "#2e8b57", "#8e44ad", "#b0131f", "#555", "#008b8b"];
 const SVGNS = "http://www.w3.org/2000/svg";
 // the strokes' and dead centres' colours (literal: an exported drawing carries them)
 const WORKING = "#1f5fbf", RETURN = "#d9730d", DEAD = "#b0131f";
 let TYPES = {}; // type -> /v1/mechanisms record
+const OBJECTIVE_TITLES = {}; // objective -> the words the service's schema gives it
 let current = null; // the design shown: {type, params, analysis, curves, bound}
 let timer = null;
 let frame = 0;
@@ -17,6 +19,8 @@ let shown = 0; // designs asked to be shown: a slower, older answer is dropped
 
 const $ = (id) => document.getElementById(id);
 const fmt = (x, d = 6) => (x === null || x === undefined ? "–" : Number(x).toPrecision(d));
+// a number as a person writes it: to d significant digits, no padding zeros (180, 0.25, 1.2e-5)
+const short = (x, d = 6) => (x === null || x === undefined ? "–" : String(Number(Number(x).toPrecision(d))));
 
 async function api(path, body) {
   const init = body === undefined ? {} : {
@@ -183,13 +187,22 @@ async function synthesize(choose = 0) {
   const cands = r.data.candidates;
   cands.forEach((c, i) => {
     const tr = el("tr", { "data-index": i, "data-type": c.type });
-    const links = Object.entries(c.params).map(([k, v]) => `${k} = ${fmt(v, 7)}`).join(", ");
+    const links = el("td", { class: "lengths" }, Object.entries(c.params).map(([k, v]) => `${k} = ${short(v, 7)}`).join(", "));
+    // what the service says of the design beyond its lengths: its measure for the objective,
+    // the limits it rests on, the free choice its family leaves
+    const notes = [];
+    if (!["pareto", "min_size", "max_transmission_angle"].includes(body.objective)) {
+      notes.push(`${OBJECTIVE_TITLES[body.objective] || body.objective}: ${short(c.objective_value)}`);
+    }
+    if (c.active.length) notes.push(`at its limit: ${c.active.join(", ")}`);
+    if (c.family) notes.push(c.family.relation);
+    for (const n of notes) links.append(el("small", { class: "note" }, n));
     const btn = el("button", { type: "button", class: "choose",
       "aria-label": `Show candidate ${i + 1}, ${c.type}` }, "Show");
     btn.addEventListener("click", () => choose_(cands, i, body));
-    tr.append(el("td", {}, c.type), el("td", {}, fmt(c.min_transmission_angle_deg, 6)),
-      el("td", {}, fmt(c.size, 6)), el("td", {}, links), el("td", {}, c.method));
-    if (body.load) tr.append(el("td", {}, fmt(c.loads.torque.max, 5)), el("td", {}, fmt(c.loads.flywheel.inertia, 4)));
+    tr.append(el("td", {}, c.type), el("td", {}, short(c.min_transmission_angle_deg)),
+      el("td", {}, short(c.size)), links, el("td", {}, c.method.replaceAll("_", " ")));
+    if (body.load) tr.append(el("td", {}, short(c.loads.torque.max, 5)), el("td", {}, short(c.loads.flywheel.inertia, 4)));
     const last = el("td"); last.append(btn); tr.append(last);
     tbody.append(tr);
   });
@@ -385,7 +398,11 @@ async function showDesign(type, params, bound, onError, load = null) {
   }
   const a = summary.data;
   const tmin = a.extremes.min.crank_angle_deg, tmax = a.extremes.max.crank_angle_deg;
-  const angles = [...Array(FRAMES).keys()].map((k) => (k * 360) / FRAMES).concat([tmin, tmax]);
+  // the frames drawn, the dead centres, then the plots' angles: every degree, and where the
+  // torque is extreme (so the plots reach the exact extremes the analysis found)
+  const extra = a.loads ? [a.loads.torque.max_at_deg, a.loads.torque.min_at_deg] : [];
+  const angles = [...Array(FRAMES).keys()].map((k) => (k * 360) / FRAMES).concat([tmin, tmax],
+    [...Array(PLOT_POINTS).keys()], extra);
   const r = await api("v1/analyze", { mechanism: { type, params }, crank_angles_deg: angles,
     include: TYPES[type].drawing.length ? ["pins"] : [], ...loaded });
   if (mine !== shown) return;
@@ -492,17 +509,29 @@ function play(on) {
   $("play").setAttribute("aria-pressed", String(on));
 }
 
-function curvePlots() {
+function sortedCurves() {
+  // the curves past the animation's frames (the dead centres, every degree, the torque's
+  // extremes), by crank angle in [0, 360): what the plots draw
   const c = current.curves;
-  const th = c.crank_angle_deg.slice(0, FRAMES);
+  const idx = [...c.crank_angle_deg.keys()].slice(FRAMES)
+    .map((k) => [((c.crank_angle_deg[k] % 360) + 360) % 360, k]).sort((p, q) => p[0] - q[0]);
+  const pick = (v) => (v ? idx.map(([, k]) => v[k]) : null);
+  return { th: idx.map(([x]) => x), position: pick(c.position), velocity: pick(c.velocity),
+    acceleration: pick(c.acceleration), transmission: pick(c.transmission_deg), torque: pick(c.torque) };
+}
+
+function curvePlots() {
+  const c = sortedCurves();
   const a = current.analysis;
   const dead = [a.extremes.min.crank_angle_deg, a.extremes.max.crank_angle_deg];
-  const common = { xlabel: "crank angle (°)", vlines: dead, cursor: true, phases: true };
-  plot($("plot-position"), th, [{ ys: c.position.slice(0, FRAMES), color: COLORS[0], label: "position" }], common);
-  const speed = current.load ? `at ${current.load.crank_rpm} rpm, ${current.load.length_unit}/s` : "ω = 1";
-  plot($("plot-velocity"), th, [{ ys: c.velocity.slice(0, FRAMES), color: COLORS[0], label: `velocity (${speed})` }], common);
-  plot($("plot-acceleration"), th, [{ ys: c.acceleration.slice(0, FRAMES), color: COLORS[0], label: `acceleration (${speed}²)` }], common);
-  plot($("plot-transmission"), th, [{ ys: c.transmission_deg.slice(0, FRAMES), color: COLORS[0], label: "transmission angle (°)" }],
+  const common = { xlabel: "crank angle (°)", xticks: [0, 90, 180, 270, 360], vlines: dead, cursor: true, phases: true };
+  const unit = current.load ? current.load.length_unit : "length";
+  const rate = current.load ? `${unit}/s at ${current.load.crank_rpm} rpm` : `${unit} per rad, ω = 1`;
+  const rate2 = current.load ? `${unit}/s² at ${current.load.crank_rpm} rpm` : `${unit} per rad², ω = 1`;
+  plot($("plot-position"), c.th, [{ ys: c.position, color: COLORS[0], label: `position (${unit})` }], common);
+  plot($("plot-velocity"), c.th, [{ ys: c.velocity, color: COLORS[0], label: `velocity (${rate})` }], common);
+  plot($("plot-acceleration"), c.th, [{ ys: c.acceleration, color: COLORS[0], label: `acceleration (${rate2})` }], common);
+  plot($("plot-transmission"), c.th, [{ ys: c.transmission, color: COLORS[0], label: "transmission angle (°)" }],
     { ...common, hlines: current.bound > 0 ? [{ y: current.bound, label: `bound ${current.bound}°` }] : [] });
 }
 
@@ -518,13 +547,21 @@ function loadsView() {
     `peak ${fmt(l.power.peak, 4)} W, motor ${fmt(l.power.rated, 4)} W; flywheel: energy swing ` +
     `${fmt(l.flywheel.energy, 4)} J, inertia ${fmt(l.flywheel.inertia, 4)} kg·m² on the crank shaft; ` +
     `largest joint force ${fmt(top[1].max, 4)} N at ${top[0]}, guide ${fmt(l.guide.max, 4)} N.`;
-  const c = current.curves;
-  const th = c.crank_angle_deg.slice(0, FRAMES);
-  const torque = c.torque.slice(0, FRAMES);
+  const c = sortedCurves();
   const dead = [current.analysis.extremes.min.crank_angle_deg, current.analysis.extremes.max.crank_angle_deg];
-  plot($("plot-torque"), th, [{ ys: torque, color: COLORS[0], label: "crank torque (N·m)" }],
-    { xlabel: "crank angle (°)", vlines: dead, cursor: true, phases: true, fillTo: l.torque.mean,
+  plot($("plot-torque"), c.th, [{ ys: c.torque, color: COLORS[0], label: "crank torque (N·m)" }],
+    { xlabel: "crank angle (°)", xticks: [0, 90, 180, 270, 360], vlines: dead, cursor: true, phases: true, fillTo: l.torque.mean,
       hlines: [{ y: l.torque.mean, label: `mean ${fmt(l.torque.mean, 4)}` }] });
+}
+
+function ticks(lo, hi, n = 4) {
+  // about n round numbers between lo and hi
+  if (!(hi > lo)) return [lo];
+  const raw = (hi - lo) / n, p = 10 ** Math.floor(Math.log10(raw));
+  const step = [1, 2, 2.5, 5, 10].map((m) => m * p).find((st) => st >= raw);
+  const out = [];
+  for (let x = Math.ceil(lo / step) * step; x <= hi + step * 1e-9; x += step) out.push(Math.abs(x) < step * 1e-9 ? 0 : x);
+  return out;
 }
 
 // A small line plot in an SVG: series against xs (a second scale on the right for `right`
@@ -549,15 +586,22 @@ function plot(svg, xs, series, opts = {}) {
   }
   svg.append(el("line", { x1: L, y1: H - B, x2: W - R, y2: H - B, stroke: "#999" }));
   svg.append(el("line", { x1: L, y1: T, x2: L, y2: H - B, stroke: "#999" }));
-  svg.append(el("text", { x: L, y: H - 6 }, fmt(x0, 4)), el("text", { x: W - R - 30, y: H - 6 }, fmt(x1, 4)));
-  if (opts.xlabel) svg.append(el("text", { x: (W - 60) / 2, y: H - 6 }, opts.xlabel));
+  for (const x of opts.xticks || ticks(x0, x1)) { // grid lines and their numbers
+    svg.append(el("line", { class: "grid", x1: sx(x), x2: sx(x), y1: T, y2: H - B, stroke: "#eee" }));
+    svg.append(el("text", { class: "tick", x: sx(x), y: H - B + 13, "text-anchor": "middle" }, short(x)));
+  }
+  if (opts.xlabel) svg.append(el("text", { x: W - R, y: H - 2, "text-anchor": "end" }, opts.xlabel));
   series.forEach((s, i) => {
     const extra = (opts.hlines || []).map((h) => h.y);
     const sy = scale(s.ys, extra);
     const [lo, hi] = range(s.ys.concat(extra));
-    const xl = s.right ? W - R + 2 : 2;
-    svg.append(el("text", { x: xl, y: T + 8 + 12 * (s.right ? 1 : 0) }, fmt(hi, 4)), el("text", { x: xl, y: H - B - 2 }, fmt(lo, 4)));
-    svg.append(el("text", { x: L + 4 + 150 * i, y: 12, fill: s.color }, s.label));
+    for (const y of ticks(lo, hi)) {
+      if (i === 0) svg.append(el("line", { class: "grid", x1: L, x2: W - R, y1: sy(y), y2: sy(y), stroke: "#eee" }));
+      svg.append(el("text", { class: "tick", x: s.right ? W - R + 3 : L - 3, y: sy(y) + 4,
+        "text-anchor": s.right ? "start" : "end", style: `fill:${s.color}` }, short(y)));
+    }
+    // the legend, in the series' colour (inline: the page's text colour would override it)
+    svg.append(el("text", { class: "legend", x: L + 4 + 180 * i, y: 12, style: `fill:${s.color}` }, s.label));
     if (opts.fillTo !== undefined) { // the areas between the series and a level, by sign
       for (let k = 0; k + 1 < xs.length; k++) {
         const y = (s.ys[k] + s.ys[k + 1]) / 2;
@@ -568,7 +612,9 @@ function plot(svg, xs, series, opts = {}) {
     }
     const pts = [];
     s.ys.forEach((y, k) => { if (y !== null && Number.isFinite(y)) pts.push(`${sx(xs[k])},${sy(y)}`); });
-    svg.append(el("polyline", { points: pts.join(" "), fill: "none", stroke: s.color, "stroke-width": 1.5, class: "series" }));
+    const drawn = finite(s.ys);
+    svg.append(el("polyline", { points: pts.join(" "), fill: "none", stroke: s.color, "stroke-width": 1.5,
+      class: "series", "data-max": Math.max(...drawn), "data-min": Math.min(...drawn) }));
     for (const h of opts.hlines || []) {
       svg.append(el("line", { class: "bound", x1: L, x2: W - R, y1: sy(h.y), y2: sy(h.y), stroke: DEAD, "stroke-dasharray": "5 3" }));
       svg.append(el("text", { x: W - R - 70, y: sy(h.y) - 3 }, h.label));
@@ -662,6 +708,7 @@ function buildObjectives(schema) {
   // the objectives a request may name, in the service's order, in the words its schema gives
   const o = schema.components.schemas.SynthesizeRequest.properties.objective;
   const titles = o["x-titles"] || {};
+  Object.assign(OBJECTIVE_TITLES, titles);
   $("objective").replaceChildren(...o.enum.map((k) => el("option", { value: k }, titles[k] || k)));
   $("objective").value = o.default;
 }

@@ -468,3 +468,68 @@ def test_the_docs_and_the_playground_ask_nothing_of_another_origin(site, at):
     sent = [u for u in asked if u not in blocked]
     assert sent and all(u.startswith((base + "/", "blob:" + base)) for u in sent), sent
     assert not failed, failed
+
+
+def test_plots_tell_their_series_apart_and_reach_the_exact_extremes(page):
+    """Each legend in its line's colour; the position's and the torque's drawn extremes the
+    analysis's exact ones (dead centres, the torque's stationary points), not the frames'."""
+    pg = page.page
+    pg.click("#tab-analyze")
+    pg.wait_for_selector("#a-param-coupler")
+    pg.click("#a-load summary")
+    pg.fill("#a-load-crank_rpm", "40")
+    pg.click("#a-run")
+    pg.wait_for_selector("#plot-torque polyline.series", state="attached")
+    for plot in ("position", "velocity", "acceleration", "transmission", "torque"):
+        legend = pg.locator(f"#plot-{plot} text.legend").first
+        line = pg.locator(f"#plot-{plot} polyline.series").first
+        colour = legend.evaluate("e => getComputedStyle(e).fill")
+        assert colour == line.evaluate("e => getComputedStyle(e).stroke"), plot
+        assert pg.locator(f"#plot-{plot} line.grid").count() >= 6, plot  # grid lines
+    a = pg.evaluate("current.analysis")
+    torque = pg.locator("#plot-torque polyline.series")
+    exact = a["loads"]["torque"]  # at its angles, to rounding (degrees and back)
+    assert float(torque.get_attribute("data-max")) == pytest.approx(exact["max"], rel=1e-12)
+    assert float(torque.get_attribute("data-min")) == pytest.approx(exact["min"], rel=1e-12)
+    position = pg.locator("#plot-position polyline.series")
+    assert float(position.get_attribute("data-max")) == pytest.approx(
+        a["extremes"]["max"]["position"], rel=1e-12, abs=1e-12
+    )
+    assert float(position.get_attribute("data-min")) == pytest.approx(
+        a["extremes"]["min"]["position"], rel=1e-12, abs=1e-12
+    )
+    # and the sweep's two series, each in its own colour
+    pg.click("#tab-sweep")
+    pg.wait_for_selector("#s-param-coupler")
+    pg.click("#s-run")
+    pg.wait_for_selector("#sweep-plot polyline.series", state="attached")
+    colours = pg.eval_on_selector_all(
+        "#sweep-plot text.legend", "ts => ts.map(t => getComputedStyle(t).fill)"
+    )
+    lines = pg.eval_on_selector_all(
+        "#sweep-plot polyline.series", "ls => ls.map(l => getComputedStyle(l).stroke)"
+    )
+    assert colours == lines and len(set(colours)) == 2
+
+
+def test_candidates_say_what_the_service_says_of_them(page):
+    """Lengths as a person writes them, the limits a design rests on, its family's free
+    choice, and its measure for a searched objective."""
+    pg = page.page
+    project(pg)
+    first = pg.inner_text("#candidates tbody tr >> nth=0")
+    assert "crank = 0.225, " in first and "0.2250000" not in first
+    only(pg, "whitworth")
+    pg.fill("#time_ratio", "1.6")
+    pg.fill("#stroke", "300")
+    pg.fill("#bound", "40")
+    pg.click("#run")
+    pg.wait_for_selector("#candidates tbody tr[data-type=whitworth]")
+    notes = pg.inner_text("#candidates tbody tr >> nth=0")
+    assert "at its limit: pivot_distance ≥ 30, connecting_rod ≤ 600" in notes  # its bounds
+    assert "pivot_distance = 0.354604887043 × crank" in notes  # the free choice
+    pg.select_option("#objective", "uniform_cutting_speed")
+    pg.click("#run")
+    pg.wait_for_function(
+        "document.querySelector('#candidates tbody tr')?.innerText.includes('cutting speed')"
+    )
