@@ -405,7 +405,9 @@ class SweepRequest(Strict):
 class ExportRequest(Strict):
     mechanism: Design
     format: Literal[FORMATS] = Field(  # type: ignore[valid-type]
-        "svg", description="svg: true size; dxf: each link on its own layer"
+        "svg",
+        description="svg: true size; dxf: each link on its own layer; json: the drawing and "
+        "its symbols' shapes, for a page that draws them",
     )
     crank_angle_deg: float = Field(0.0, ge=-1e6, le=1e6, description="where the crank is drawn")
     length_unit: Literal[tuple(LENGTH_UNITS)] = Field(  # type: ignore[valid-type]

@@ -11,7 +11,7 @@ from ..schemas import REFUSALS, ExportRequest
 from .common import EngineDep, run_design
 
 router = APIRouter(tags=["analysis"], route_class=Route)
-MEDIA = {"svg": "image/svg+xml", "dxf": "image/vnd.dxf"}
+MEDIA = {"svg": "image/svg+xml", "dxf": "image/vnd.dxf", "json": "application/json"}
 
 
 @router.post(

@@ -403,11 +403,15 @@ async function showDesign(type, params, bound, onError, load = null) {
   const extra = a.loads ? [a.loads.torque.max_at_deg, a.loads.torque.min_at_deg] : [];
   const angles = [...Array(FRAMES).keys()].map((k) => (k * 360) / FRAMES).concat([tmin, tmax],
     [...Array(PLOT_POINTS).keys()], extra);
-  const r = await api("v1/analyze", { mechanism: { type, params }, crank_angles_deg: angles,
-    include: TYPES[type].drawing.length ? ["pins"] : [], ...loaded });
+  const [r, drawn] = await Promise.all([
+    api("v1/analyze", { mechanism: { type, params }, crank_angles_deg: angles,
+      include: TYPES[type].drawing.length ? ["pins"] : [], ...loaded }),
+    api("v1/export", { mechanism: { type, params }, format: "json" }), // its symbols' shapes
+  ]);
   if (mine !== shown) return;
   if (!r.ok) { if (onError) onError(r.data.detail); $("detail").hidden = true; return; }
-  current = { type, params: a.params, analysis: a, curves: r.data.curves, bound, load };
+  current = { type, params: a.params, analysis: a, curves: r.data.curves, bound, load,
+    sketch: drawn.ok ? drawn.data : null };
   $("detail").hidden = false;
   $("detail-title").textContent = `${TYPES[type].title}`;
   $("detail-summary").textContent = `time ratio ${fmt(a.time_ratio, 8)}, stroke ${fmt(a.stroke, 8)}, ` +
@@ -437,6 +441,8 @@ function drawLinkage() {
   if (!names.length) return;
   let xs = [], ys = [];
   for (const n of names) { xs = xs.concat(pins[n].x); ys = ys.concat(pins[n].y); }
+  const sk = current.sketch && current.sketch.sketch;
+  if (sk) for (const [x, y] of [...sk.guide.flat(), ...sk.dimension, sk.label_at]) { xs.push(x); ys.push(y); }
   const xmin = Math.min(...xs), xmax = Math.max(...xs), ymin = Math.min(...ys), ymax = Math.max(...ys);
   const pad = 0.08 * Math.max(xmax - xmin, ymax - ymin, 1e-12);
   svg.setAttribute("viewBox", `${xmin - pad} ${-(ymax + pad)} ${xmax - xmin + 2 * pad} ${ymax - ymin + 2 * pad}`);
@@ -467,7 +473,22 @@ function drawLinkage() {
   }
   world.append(el("polyline", { ...stroke, class: "slider-path", fill: "none", stroke: "#bbb",
     points: pins[slider].x.slice(0, FRAMES).map((x, k) => `${x},${pins[slider].y[k]}`).join(" ") }));
+  if (sk) { // the frame's symbols, the service's shapes: guide, fixed pivots, stroke
+    const pts = (ps) => ps.map(([x, y]) => `${x},${y}`).join(" ");
+    for (const [[x1, y1], [x2, y2]] of [...sk.guide, ...sk.hatch]) {
+      world.append(el("line", { ...stroke, class: "frame", x1, y1, x2, y2, stroke: "#555" }));
+    }
+    for (const t of sk.ground) world.append(el("polygon", { ...stroke, class: "ground", points: pts(t), fill: "#bbb", stroke: "#333" }));
+    const [[d1x, d1y], [d2x, d2y]] = sk.dimension;
+    world.append(el("line", { ...stroke, class: "dimension", x1: d1x, y1: d1y, x2: d2x, y2: d2y, stroke: "#333" }));
+    svg.append(el("text", { class: "dimension", x: sk.label_at[0], y: -sk.label_at[1], "text-anchor": "middle",
+      style: `font-size:${sk.text_height}px` }, sk.label));
+    world.append(el("polygon", { ...stroke, id: "block", class: "slider", points: pts(sk.block), fill: "#ddd", stroke: "#333" }));
+  }
   const moving = el("g", { id: "moving" });
+  for (const names of (current.sketch && current.sketch.drawing.slots) || []) {
+    moving.append(el("line", { ...stroke, class: "slot", "data-pins": names.join(" "), stroke: "#bbb", "stroke-width": 7 }));
+  }
   for (const [name, a, b] of drawing) {
     if (current.params[name] === 0) continue; // a part left out (a slot drive)
     moving.append(el("line", { ...stroke, class: "member", "data-name": name, "data-from": a, "data-to": b,
@@ -478,6 +499,9 @@ function drawLinkage() {
       stroke: "#333", ...stroke }));
   }
   world.append(moving);
+  for (const n of names) { // upright: outside the flipped group, at (x, −y)
+    svg.append(el("text", { class: "pin-label", "data-name": n, style: `font-size:${sk ? sk.text_height : pad * 0.3}px` }, n));
+  }
 }
 
 function setFrame(k) {
@@ -495,6 +519,21 @@ function setFrame(k) {
   for (const c of document.querySelectorAll("#linkage circle.pin")) {
     const p = pins[c.dataset.name];
     c.setAttribute("cx", p.x[frame]); c.setAttribute("cy", p.y[frame]);
+  }
+  const r = 1.5 * Number(document.querySelector("#linkage circle.pin")?.getAttribute("r") || 0);
+  for (const t of document.querySelectorAll("#linkage text.pin-label")) {
+    const p = pins[t.dataset.name];
+    t.setAttribute("x", p.x[frame] + r); t.setAttribute("y", -p.y[frame] - r);
+  }
+  for (const line of document.querySelectorAll("#linkage line.slot")) { // to the farther pin
+    const [a, b, c] = line.dataset.pins.split(" ").map((n) => [pins[n].x[frame], pins[n].y[frame]]);
+    const end = Math.hypot(b[0] - a[0], b[1] - a[1]) > Math.hypot(c[0] - a[0], c[1] - a[1]) ? b : c;
+    line.setAttribute("x1", a[0]); line.setAttribute("y1", a[1]); line.setAttribute("x2", end[0]); line.setAttribute("y2", end[1]);
+  }
+  const block = $("block");
+  if (block && current.sketch) { // the ram's block, moved with the ram's pin
+    const d = current.sketch.drawing, ram = pins[d.ram], at = d.pins[d.ram];
+    block.setAttribute("transform", `translate(${ram.x[frame] - at[0]},${ram.y[frame] - at[1]})`);
   }
   for (const cur of document.querySelectorAll("#detail .cursor")) {
     cur.setAttribute("x1", cur.dataset.scale * th + Number(cur.dataset.offset));
@@ -568,7 +607,7 @@ function ticks(lo, hi, n = 4) {
 // series), dashed vertical lines, horizontal lines, shaded x intervals, a cursor.
 function plot(svg, xs, series, opts = {}) {
   svg.replaceChildren();
-  const W = 400, H = 180, L = 46, R = series.some((s) => s.right) ? 46 : 10, T = 18, B = 26;
+  const W = 400, H = 180, L = 46, R = series.some((s) => s.right) ? 46 : 16, T = 18, B = 26;
   svg.setAttribute("viewBox", `0 0 ${W} ${H}`);
   const finite = (v) => v.filter((y) => y !== null && Number.isFinite(y));
   const range = (v) => { const f = finite(v); const lo = Math.min(...f), hi = Math.max(...f); return hi > lo ? [lo, hi] : [lo - 1, hi + 1]; };

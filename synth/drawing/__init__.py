@@ -21,7 +21,7 @@ from ..load import LENGTH_UNITS
 from ..mechanisms import get
 from ..mechanisms.registry import GROUND
 
-FORMATS = ("svg", "dxf")
+FORMATS = ("svg", "dxf", "json")
 PATH_SAMPLES = 181  # angles a pin's path is drawn through (2° apart)
 GUIDE_OVERRUN = 0.15  # the guide runs past each end of the stroke by this share of it
 
@@ -45,8 +45,8 @@ class Drawing:
     of the type's equations (``synth.joints``), the crank pivot at the origin.
 
     ``pins``: every pin's (x, y); ``links``: the members (zero-length ones left out);
-    ``slots``: the centre line of each slot a block slides in, along its line to the farther
-    of its block and its line's far pin;
+    ``slots``: each slot a block slides in, as (the line's first pin, the block's pin, the
+    line's far pin), drawn along its line to the farther of the other two (``slot``);
     ``ground``: the pins fixed to the frame; ``ram``: the ram's pin, on its ``path`` (a unit
     vector); ``stroke``: the ram pin at its two dead centres; ``guide``: the guide's ends, the
     stroke and ``GUIDE_OVERRUN`` of it each side; ``paths``: each moving pin's path over a
@@ -58,7 +58,7 @@ class Drawing:
     pins: dict[str, tuple[float, float]]
     links: tuple[Link, ...]
     ground: tuple[str, ...]
-    slots: tuple[Segment, ...]
+    slots: tuple[tuple[str, str, str], ...]
     ram: str
     path: tuple[float, float]
     stroke: Segment
@@ -101,18 +101,13 @@ def drawing(
     links = tuple(Link(name, u, v, float(a.params[name])) for name, u, v in m.drawing
                   if a.params.get(name, 0.0) > 0)  # fmt: skip
     ground = tuple(pin for pin, b1, b2 in frame.pins if GROUND in (b1, b2))
-    slots: list[Segment] = []
-    for block, _, _, line in frame.slots:
-        if line is not None:
-            start, far = pins[line[0]], pins[line[1]]
-            end = max((pins[block], far), key=lambda q: math.dist(start, q))
-            slots.append((start, end))
+    slots = tuple((line[0], block, line[1]) for block, _, _, line in frame.slots if line)
     traced = None
     if paths:
         turn = joints(mechanism, a.params, np.linspace(0.0, 360.0, PATH_SAMPLES).tolist())
         traced = {k: v for k, v in turn.items() if np.ptp(v, axis=0).max() > 0}
-    return Drawing(mechanism, dict(a.params), float(crank_angle_deg), pins, links, ground,
-                   tuple(slots), ram, (tx, ty), ends, guide, traced)  # fmt: skip
+    return Drawing(mechanism, dict(a.params), float(crank_angle_deg), pins, links, ground, slots,
+                   ram, (tx, ty), ends, guide, traced)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -170,6 +165,13 @@ def sketch(d: Drawing) -> Sketch:
     label = f"stroke {np.hypot(ex - sx, ey - sy):.6g}"
     return Sketch(size, 0.012 * size, 0.03 * size, 0.006 * size, (rails[0], rails[1]), block,
                   tuple(tri), tuple(hatch), dim, label, label_at)  # fmt: skip
+
+
+def slot(pins: Mapping[str, tuple[float, float]], names: tuple[str, str, str]) -> Segment:
+    """A slot's centre line (``Drawing.slots``) at pins: from its line's first pin to the
+    farther of its block and its line's far pin."""
+    start, block, far = (pins[n] for n in names)
+    return start, max((block, far), key=lambda q: math.dist(start, q))
 
 
 def unit_mm(length_unit: str) -> float:

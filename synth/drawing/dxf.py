@@ -10,7 +10,7 @@ from ezdxf import units
 from ezdxf.document import Drawing as Document
 from ezdxf.filemanagement import new
 
-from . import Drawing, sketch, unit_mm
+from . import Drawing, sketch, slot, unit_mm
 
 UNITS = {"mm": units.MM, "m": units.M, "in": units.IN}
 # the symbols' layers (none a parameter's name: layer names ignore case) and their colours
@@ -30,8 +30,8 @@ def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
     for i, link in enumerate(d.links):
         doc.layers.add(link.name, color=i % 6 + 1)
         msp.add_line(d.pins[link.a], d.pins[link.b], dxfattribs={"layer": link.name})
-    for a, b in d.slots:
-        msp.add_line(a, b, dxfattribs={"layer": "SLOTS"})
+    for names in d.slots:
+        msp.add_line(*slot(d.pins, names), dxfattribs={"layer": "SLOTS"})
     for name, p in d.pins.items():
         msp.add_circle(p, sk.pin_radius, dxfattribs={"layer": "PINS"})
         label = msp.add_text(name, height=sk.text_height, dxfattribs={"layer": "PINS"})

@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping
+from dataclasses import asdict
 from typing import Any
 
 from ..errors import InvalidParameters
 from ..mechanisms import get
-from . import FORMATS, check_angle, drawing, unit_mm
+from . import FORMATS, check_angle, drawing, sketch, unit_mm
 from .dxf import dxf
 from .svg import svg
 
@@ -21,8 +23,9 @@ def export(
     paths: bool = False,
 ) -> bytes:
     """The design drawn at ``crank_angle_deg``: ``format`` ``svg`` (true size, the lengths in
-    ``length_unit``) or ``dxf`` (each link on its own layer, the unit set); with ``paths``,
-    each moving pin's path over a turn.
+    ``length_unit``), ``dxf`` (each link on its own layer, the unit set) or ``json`` (the
+    ``Drawing`` and its ``Sketch``, for a page that draws them); with ``paths``, each moving
+    pin's path over a turn.
 
     >>> doc = export("crank_shaper", {"crank": 120, "pivot_distance": 240, "lever": 450})
     >>> doc.startswith(b"<?xml") and b'width="' in doc
@@ -30,7 +33,15 @@ def export(
     """
     check(mechanism, params, format, crank_angle_deg, length_unit)
     d = drawing(mechanism, params, crank_angle_deg, paths)
+    if format == "json":  # the drawing and its symbols, for a page that draws them itself
+        return json.dumps(
+            {"drawing": asdict(d), "sketch": asdict(sketch(d))}, default=_listed
+        ).encode()
     return svg(d, length_unit).encode() if format == "svg" else dxf(d, length_unit)
+
+
+def _listed(x: Any) -> Any:
+    return x.tolist()
 
 
 def check(

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from . import drawing, sketch
+from . import drawing, sketch, slot
 from .svg import COLOURS
 
 
@@ -40,8 +40,9 @@ def draw(
     for end, pin in ((a, sa), (b, sb)):
         ax.plot(*zip(end, pin, strict=True), color="#222", lw=0.5 * lw)
     ax.text(*sk.label_at, sk.label, ha="center", va="center", fontsize=8)
-    for a, b in d.slots:
-        ax.plot(*zip(a, b, strict=True), color="#777", lw=7 * lw, alpha=0.35, zorder=3.5)
+    for names in d.slots:
+        ax.plot(*zip(*slot(d.pins, names), strict=True), color="#777", lw=7 * lw, alpha=0.35,
+                zorder=3.5)  # fmt: skip
     for i, link in enumerate(d.links):
         (ax_, ay), (bx, by) = d.pins[link.a], d.pins[link.b]
         label = f"{link.name} {link.length:.6g}"

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from xml.sax.saxutils import escape
 
-from . import Drawing, sketch, unit_mm
+from . import Drawing, sketch, slot, unit_mm
 
 # each link's colour, in the order of the type's drawing (told apart in print too)
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#17becf")
@@ -60,7 +60,7 @@ def svg(d: Drawing, length_unit: str = "mm") -> str:
     out += [line(end, pin, "extension") for end, pin in zip(sk.dimension, d.stroke, strict=True)]
     lx, ly = pt(sk.label_at).split(",")
     out.append(f'<text class="dimension" x="{lx}" y="{ly}" text-anchor="middle">{sk.label}</text>')
-    out += [line(a, b, "slot") for a, b in d.slots]
+    out += [line(*slot(d.pins, names), "slot") for names in d.slots]
     for i, link in enumerate(d.links):
         colour = COLOURS[i % len(COLOURS)]
         extra = f' style="stroke:{colour}" data-length="{link.length:.17g}"'

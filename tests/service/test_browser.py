@@ -533,3 +533,29 @@ def test_candidates_say_what_the_service_says_of_them(page):
     pg.wait_for_function(
         "document.querySelector('#candidates tbody tr')?.innerText.includes('cutting speed')"
     )
+
+
+def test_the_drawing_has_its_frame_ram_and_named_pins(page):
+    """The fixed pivots hatched, the ram's block on its guide, the stroke dimensioned, every
+    pin named; the block and the names move with the frames."""
+    pg = page.page
+    project(pg)
+    pg.wait_for_selector("#linkage line.member", state="attached")
+    if pg.get_attribute("#play", "aria-pressed") == "true":
+        pg.click("#play")
+    assert pg.locator("#linkage polygon.ground").count() == 2  # O2 and O4
+    assert pg.locator("#linkage #block").count() == 1
+    assert pg.text_content("#linkage text.dimension") == "stroke 0.3"
+    names = set(
+        pg.eval_on_selector_all("#linkage text.pin-label", "ts => ts.map(t => t.textContent)")
+    )
+    assert names == {"O2", "A", "O4", "B", "C", "D"}
+
+    def where():
+        return pg.evaluate("""() => [document.querySelector('#block').getAttribute('transform'),
+            document.querySelector('#linkage text.pin-label[data-name=D]').getAttribute('x')]""")
+
+    before = where()
+    pg.fill("#angle", "20")
+    pg.dispatch_event("#angle", "input")
+    assert where() != before
