@@ -2,6 +2,7 @@
 them (ezdxf, an XML parser), and bad requests refused with a 422 naming the field."""
 
 import io
+import math
 import xml.etree.ElementTree as ET
 
 import ezdxf
@@ -40,6 +41,14 @@ def test_every_type_exports_in_both_formats(client, mtype):
             assert (e.dxf.end - e.dxf.start).magnitude == pytest.approx(p[e.dxf.layer], rel=1e-9)
     (dim,) = doc.modelspace().query("DIMENSION")
     assert dim.get_measurement() == pytest.approx(bruteforce.simulate(mtype, p)["stroke"], rel=1e-9)
+
+    r = client.post("/v1/export", json=body(mtype, p, format="json"))
+    assert r.status_code == 200 and r.headers["content-type"] == "application/json"
+    drawn = r.json()["drawing"]
+    for link in drawn["links"]:  # each between its pins, as long as the design says
+        (ax, ay), (bx, by) = drawn["pins"][link["a"]], drawn["pins"][link["b"]]
+        assert math.hypot(bx - ax, by - ay) == pytest.approx(p[link["name"]], rel=1e-9)
+    assert len(r.json()["sketch"]["ground"]) == len(drawn["ground"])
 
     r = client.post("/v1/export", json=body(mtype, p, crank_angle_deg=45.0))
     assert r.status_code == 200 and r.headers["content-type"].startswith("image/svg+xml")
