@@ -199,7 +199,10 @@ async function synthesize(choose = 0) {
     for (const n of notes) links.append(el("small", { class: "note" }, n));
     const btn = el("button", { type: "button", class: "choose",
       "aria-label": `Show candidate ${i + 1}, ${c.type}` }, "Show");
-    btn.addEventListener("click", () => choose_(cands, i, body));
+    btn.addEventListener("click", async () => {
+      await choose_(cands, i, body);
+      if (window.innerWidth <= 800) $("detail").scrollIntoView(); // below the table on a phone
+    });
     tr.append(el("td", {}, c.type), el("td", {}, short(c.min_transmission_angle_deg)),
       el("td", {}, short(c.size)), links, el("td", {}, c.method.replaceAll("_", " ")));
     if (body.load) tr.append(el("td", {}, short(c.loads.torque.max, 5)), el("td", {}, short(c.loads.flywheel.inertia, 4)));
@@ -220,7 +223,7 @@ function choose_(cands, i, body) {
   }
   const c = cands[i];
   saveState("synthesize", { ...synthState(), choose: String(i) });
-  showDesign(c.type, c.params, body.min_transmission_angle_deg || 0, null, body.load || null);
+  return showDesign(c.type, c.params, body.min_transmission_angle_deg || 0, null, body.load || null);
 }
 
 function synthState() {
@@ -336,6 +339,7 @@ function loadFieldId(prefix, loc) {
 }
 
 function analysisFieldId(loc) {
+  if (loc[loc.length - 1] === "crank_speed") return "a-rpm";
   return loadFieldId("a", loc) ?? designFieldId("a")(loc);
 }
 
@@ -345,7 +349,7 @@ async function analyzeView() {
   const d = designOf("a");
   saveState("analyze", { type: d.type, ...d.params });
   await busy(form, () => showDesign(d.type, d.params, 0,
-    (detail) => showErrors(detail, analysisFieldId, "a-form-error"), loadOf("a")));
+    (detail) => showErrors(detail, analysisFieldId, "a-form-error"), loadOf("a"), num("a-rpm")));
 }
 
 function setSweepRange() {
@@ -386,9 +390,10 @@ function pinsOf(curves) {
   return curves.pins || {};
 }
 
-async function showDesign(type, params, bound, onError, load = null) {
+async function showDesign(type, params, bound, onError, load = null, rpm = null) {
+  // the curves at the load's crank speed, else at rpm strokes a minute, else per unit ω
   const mine = ++shown;
-  const loaded = load ? { load } : {};
+  const loaded = load ? { load } : rpm !== null ? { crank_speed: typeof rpm === "number" ? (rpm * Math.PI) / 30 : rpm } : {};
   const summary = await api("v1/analyze", { mechanism: { type, params }, ...loaded });
   if (mine !== shown) return;
   if (!summary.ok) {
@@ -411,6 +416,7 @@ async function showDesign(type, params, bound, onError, load = null) {
   if (mine !== shown) return;
   if (!r.ok) { if (onError) onError(r.data.detail); $("detail").hidden = true; return; }
   current = { type, params: a.params, analysis: a, curves: r.data.curves, bound, load,
+    rpm: load ? load.crank_rpm : rpm,
     sketch: drawn.ok ? drawn.data : null };
   $("detail").hidden = false;
   $("detail-title").textContent = `${TYPES[type].title}`;
@@ -565,8 +571,8 @@ function curvePlots() {
   const dead = [a.extremes.min.crank_angle_deg, a.extremes.max.crank_angle_deg];
   const common = { xlabel: "crank angle (°)", xticks: [0, 90, 180, 270, 360], vlines: dead, cursor: true, phases: true };
   const unit = current.load ? current.load.length_unit : "length";
-  const rate = current.load ? `${unit}/s at ${current.load.crank_rpm} rpm` : `${unit} per rad, ω = 1`;
-  const rate2 = current.load ? `${unit}/s² at ${current.load.crank_rpm} rpm` : `${unit} per rad², ω = 1`;
+  const rate = current.rpm ? `${unit}/s at ${current.rpm} rpm` : `${unit} per rad, ω = 1`;
+  const rate2 = current.rpm ? `${unit}/s² at ${current.rpm} rpm` : `${unit} per rad², ω = 1`;
   plot($("plot-position"), c.th, [{ ys: c.position, color: COLORS[0], label: `position (${unit})` }], common);
   plot($("plot-velocity"), c.th, [{ ys: c.velocity, color: COLORS[0], label: `velocity (${rate})` }], common);
   plot($("plot-acceleration"), c.th, [{ ys: c.acceleration, color: COLORS[0], label: `acceleration (${rate2})` }], common);

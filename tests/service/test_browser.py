@@ -559,3 +559,34 @@ def test_the_drawing_has_its_frame_ram_and_named_pins(page):
     pg.fill("#angle", "20")
     pg.dispatch_event("#angle", "input")
     assert where() != before
+
+
+def test_curves_at_the_crank_speed_a_designer_gives(page):
+    pg = page.page
+    pg.click("#tab-analyze")
+    pg.wait_for_selector("#a-param-coupler")
+    pg.click("#a-run")
+    pg.wait_for_selector("#plot-velocity polyline.series", state="attached")
+    per_radian = float(pg.get_attribute("#plot-velocity polyline.series", "data-max"))
+    pg.fill("#a-rpm", "40")
+    pg.click("#a-run")
+    pg.wait_for_function("document.querySelector('#plot-velocity').innerHTML.includes('40 rpm')")
+    at_speed = float(pg.get_attribute("#plot-velocity polyline.series", "data-max"))
+    assert at_speed == pytest.approx(per_radian * 40 * math.pi / 30, rel=1e-12)  # v = ω ds/dθ
+
+
+def test_show_on_a_phone_brings_the_drawing_into_view(site):
+    p = Page(site, viewport=PHONE)
+    pg = p.page
+    try:
+        project(pg)
+        pg.wait_for_selector("#detail:not([hidden])")
+        pg.evaluate("window.scrollTo(0, 0)")
+        before = pg.evaluate("shown")
+        pg.locator("#candidates tbody tr").nth(1).locator("button.choose").click()
+        pg.wait_for_function(f"+document.querySelector('#detail').dataset.shown > {before}")
+        pg.wait_for_function(
+            "Math.abs(document.querySelector('#detail').getBoundingClientRect().top) < 50"
+        )
+    finally:
+        p.close()
