@@ -11,8 +11,11 @@ ENV PYTHONDONTWRITEBYTECODE=1 \
 WORKDIR /app
 COPY requirements.lock .
 RUN pip install --no-cache-dir --require-hashes -r requirements.lock
+COPY pyproject.toml .
 COPY synth synth
 COPY api api
+# the project itself, for its command line (quickreturn); its dependencies are the lock's
+RUN pip install --no-cache-dir --no-deps --no-build-isolation .
 
 # the analysis compiled to machine code (synth/numerics/native.py), built here with a C compiler so that
 # the image carries the libraries and not the compiler

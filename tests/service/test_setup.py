@@ -316,8 +316,9 @@ def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
     assert native["FROM"] == image["FROM"] == ["base"]
     # the install step is the lock make serve installed into the fresh checkout's .venv
     installs = [r for stage in d.values() for r in stage.get("RUN", []) if "pip install" in r]
-    assert installs == [r for r in base["RUN"] if "pip install" in r] and len(installs) == 1
+    assert installs == [r for r in base["RUN"] if "pip install" in r] and len(installs) == 2
     assert "--require-hashes -r requirements.lock" in installs[0]
+    assert installs[1].endswith("--no-deps --no-build-isolation .")  # the project, nothing else
     assert image["USER"] and image["USER"][-1] not in ("root", "0")
     assert image["EXPOSE"] == ["8000"]
     # the build context leaves out the checkout's environment and history (a 1 GB .venv)
@@ -338,6 +339,14 @@ def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
         else:
             target.parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(work / src, target)
+
+    # the project's install from what the base copied (into a folder here, not the venv)
+    project = installs[1].split("pip install ", 1)[1].split()
+    site = tmp_path / "site"
+    subprocess.run([str(work / ".venv/bin/python"), "-m", "pip", "install", "--quiet",
+                    *project[:-1], "--target", str(site), project[-1]], cwd=app, check=True,
+                   timeout=300)  # fmt: skip
+    assert (site / "bin" / "quickreturn").exists() and (site / "api" / "static").is_dir()
 
     def environment(stage) -> dict[str, str]:
         pairs = [shlex.split(e) for e in stage["ENV"]]
