@@ -116,10 +116,13 @@ class SpeedFluctuation:
 
 @dataclass(frozen=True)
 class PeakAcceleration:
-    """The largest |slider acceleration| over each stroke, in units of ω²·stroke."""
+    """The largest |slider acceleration| over each stroke, in units of ω²·stroke, and the
+    crank angle (degrees) where each is reached."""
 
     working_stroke: float
     return_stroke: float
+    working_stroke_at_deg: float
+    return_stroke_at_deg: float
 
 
 @dataclass(frozen=True)

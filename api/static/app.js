@@ -394,7 +394,7 @@ async function showDesign(type, params, bound, onError, load = null, rpm = null)
   // the curves at the load's crank speed, else at rpm strokes a minute, else per unit ω
   const mine = ++shown;
   const loaded = load ? { load } : rpm !== null ? { crank_speed: typeof rpm === "number" ? (rpm * Math.PI) / 30 : rpm } : {};
-  const summary = await api("v1/analyze", { mechanism: { type, params }, ...loaded });
+  const summary = await api("v1/analyze", { mechanism: { type, params }, include: ["motion"], ...loaded });
   if (mine !== shown) return;
   if (!summary.ok) {
     if (onError) onError(summary.data.detail);
@@ -404,8 +404,11 @@ async function showDesign(type, params, bound, onError, load = null, rpm = null)
   const a = summary.data;
   const tmin = a.extremes.min.crank_angle_deg, tmax = a.extremes.max.crank_angle_deg;
   // the frames drawn, the dead centres, then the plots' angles: every degree, and where the
-  // torque is extreme (so the plots reach the exact extremes the analysis found)
-  const extra = a.loads ? [a.loads.torque.max_at_deg, a.loads.torque.min_at_deg] : [];
+  // acceleration peaks and the torque is extreme (so the plots reach the exact extremes the
+  // analysis found)
+  const peaks = a.motion.peak_acceleration;
+  const extra = [peaks.working_stroke_at_deg, peaks.return_stroke_at_deg].concat(
+    a.loads ? [a.loads.torque.max_at_deg, a.loads.torque.min_at_deg] : []);
   const angles = [...Array(FRAMES).keys()].map((k) => (k * 360) / FRAMES).concat([tmin, tmax],
     [...Array(PLOT_POINTS).keys()], extra);
   const [r, drawn] = await Promise.all([

@@ -20,7 +20,7 @@ Everything is exact to rounding, with no sampling and no finite differences:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import cast
 
 import numpy as np
@@ -103,6 +103,8 @@ class MotionTerms:
     middle: np.ndarray
     working: np.ndarray
     returning: np.ndarray
+    working_at: np.ndarray  # the crank angle of each acceleration term (radians)
+    returning_at: np.ndarray
     middle_dp: np.ndarray | None = None
     working_dp: np.ndarray | None = None
     returning_dp: np.ndarray | None = None
@@ -140,6 +142,8 @@ def motion_terms(
         middle=np.abs(v) * window,
         working=np.abs(np.concatenate([a_w, a_d])) / st.stroke,
         returning=np.abs(np.concatenate([a_r, a_d])) / st.stroke,
+        working_at=np.concatenate([a_at[a_work], dead]),
+        returning_at=np.concatenate([a_at[a_ret], dead]),
     )
     if not gradient:
         return out
@@ -176,16 +180,17 @@ def motion_terms(
 
     working_dp = accel_dp(mp[n_v : n_v + n_w, 1], a_w)
     returning_dp = accel_dp(mp[n_v + n_w : n_v + n_w + n_r, 1], a_r)
-    return MotionTerms(out.whole, out.middle, out.working, out.returning, middle_dp, working_dp,
-                       returning_dp)  # fmt: skip
+    return replace(out, middle_dp=middle_dp, working_dp=working_dp, returning_dp=returning_dp)
 
 
 def motion(m: Mechanism, variant: frozenset[str], f: Model, pv: np.ndarray, st: Strokes) -> Motion:
     """Speed fluctuation over the working stroke and peak accelerations, at constant ω."""
     t = motion_terms(m, variant, f, pv, st)
+    k, j = int(np.argmax(t.working)), int(np.argmax(t.returning))
+    at = np.degrees([t.working_at[k] % TWO_PI, t.returning_at[j] % TWO_PI])
     return Motion(
         SpeedFluctuation(float(t.whole.max()), float(t.middle.max())),
-        PeakAcceleration(float(t.working.max()), float(t.returning.max())),
+        PeakAcceleration(float(t.working[k]), float(t.returning[j]), float(at[0]), float(at[1])),
     )
 
 

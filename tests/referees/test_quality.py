@@ -25,7 +25,7 @@ from synth.mechanisms import all_types
 from synth.results import Tolerance
 
 from ..support.designs import TYPES, random_designs
-from ..support.motion_bruteforce import brute_motion
+from ..support.motion_bruteforce import acceleration, brute_motion
 
 N = 200
 STRESS = os.environ.get("HYPOTHESIS_PROFILE") == "stress"  # make stress: more envelopes
@@ -42,6 +42,18 @@ def test_motion_matches_a_brute_force(mtype):
         assert m.peak_acceleration.working_stroke == pytest.approx(working, rel=1e-9), p
         assert m.peak_acceleration.return_stroke == pytest.approx(ret, rel=1e-9), p
         assert ours.middle >= 1 and ours.whole >= 1  # a peak is never below the mean
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_the_peak_accelerations_are_where_they_say(mtype):
+    """The brute force's acceleration at each reported crank angle is that stroke's peak."""
+    for p in random_designs(mtype, 40, seed=17):
+        a = synth.analyze(mtype, p, include=["motion"])
+        peak = a.motion.peak_acceleration
+        at = np.radians([peak.working_stroke_at_deg, peak.return_stroke_at_deg])
+        there = np.abs(acceleration(mtype, p, at)) / a.stroke
+        assert there[0] == pytest.approx(peak.working_stroke, rel=1e-9), p
+        assert there[1] == pytest.approx(peak.return_stroke, rel=1e-9), p
 
 
 def test_the_scotch_yoke_moves_harmonically():

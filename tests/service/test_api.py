@@ -133,9 +133,12 @@ def test_analyze_includes_motion_and_tolerances_when_asked(client):
             "tolerance": {"relative": 1e-3}}  # fmt: skip
     out = client.post("/v1/analyze", json=body).json()
     assert out["motion"]["working_speed_fluctuation"]["whole"] == pytest.approx(math.pi / 2)
-    assert out["motion"]["peak_acceleration"] == {
-        "working_stroke": pytest.approx(0.5), "return_stroke": pytest.approx(0.5)
-    }  # fmt: skip
+    peak = out["motion"]["peak_acceleration"]
+    assert peak["working_stroke"] == pytest.approx(0.5)
+    assert peak["return_stroke"] == pytest.approx(0.5)
+    # at the dead centres (θ = 0 and 180°), where the yoke turns
+    at = sorted((peak["working_stroke_at_deg"], peak["return_stroke_at_deg"]))
+    assert at == pytest.approx([0.0, 180.0], abs=1e-9)
     sens = out["sensitivities"]  # the stroke is 2r: ± 2 × 1e-3 × 35
     assert sens["stroke"] == {"crank": pytest.approx(2.0)}
     assert sens["deviation"]["stroke"] == pytest.approx(0.07)

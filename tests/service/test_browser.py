@@ -491,6 +491,12 @@ def test_plots_tell_their_series_apart_and_reach_the_exact_extremes(page):
     exact = a["loads"]["torque"]  # at its angles, to rounding (degrees and back)
     assert float(torque.get_attribute("data-max")) == pytest.approx(exact["max"], rel=1e-12)
     assert float(torque.get_attribute("data-min")) == pytest.approx(exact["min"], rel=1e-12)
+    acceleration = pg.locator("#plot-acceleration polyline.series")
+    drawn = max(abs(float(acceleration.get_attribute(f"data-{k}"))) for k in ("max", "min"))
+    peak = a["motion"]["peak_acceleration"]  # per ω² and stroke
+    omega = 40 * math.pi / 30
+    exact = max(peak["working_stroke"], peak["return_stroke"]) * a["stroke"] * omega**2
+    assert drawn == pytest.approx(exact, rel=1e-12)
     position = pg.locator("#plot-position polyline.series")
     assert float(position.get_attribute("data-max")) == pytest.approx(
         a["extremes"]["max"]["position"], rel=1e-12, abs=1e-12

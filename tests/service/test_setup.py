@@ -258,7 +258,7 @@ def same(shown, got, path="") -> None:
 def test_the_readme_shows_a_curl_for_every_endpoint():
     commands = " ".join(cmd for cmd, _ in readme_console_commands())
     for path in ("/health", "/v1/mechanisms", "/v1/mechanisms/", "/v1/analyze",
-                 "/v1/synthesize", "/v1/sweep"):  # fmt: skip
+                 "/v1/synthesize", "/v1/sweep", "/v1/export"):  # fmt: skip
         assert f"localhost:8000{path}" in commands, path
 
 
