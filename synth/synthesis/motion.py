@@ -24,7 +24,7 @@ local NLP over each structural variant's free parameters (stroke units), solved 
   equalities (where fixed parts leave too few of them designs, ``SAMPLES`` more of the box
   about the starts, within ``AROUND``), all ranked by their measure on a grid of crank
   angles (``screen``: batched, a few milliseconds); it runs from the ``STARTS`` best of the
-  exact solvers' designs and the ``DRAWN`` best points (``DRAWN_FIXED`` with parts fixed),
+  exact solvers' designs and the best points, as many as the objective's ``Aim.drawn`` says,
   until the request's deadline, at most ``MAX_ITER`` iterations each. No
   other clock decides anything: the answer does not depend on the machine's load unless the
   deadline cuts it short (and then the answer says so).
@@ -60,9 +60,10 @@ from .search import Proposal, Spec, Targets, Variant, proposal, same, scaled, se
 from .solve import starts as halton
 
 # SLSQP runs per variant from the best ranked of each source of starts: the exact solvers'
-# designs, and projected points of the box (where the four-bars' other basins lie), more of
-# these with parts fixed, where the exact solvers' designs are fewer and the basins more apart
-STARTS, DRAWN, DRAWN_FIXED = 2, 2, 4
+# designs (STARTS), and projected points of the box, where the four-bars' other basins lie
+# (``Aim.drawn``: more with parts fixed, where the exact solvers' designs are fewer and the
+# basins more apart)
+STARTS = 2
 MAX_ITER = 300
 AROUND = 3.0  # the box about the starts (each part within this factor of theirs) drawn again
 STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
@@ -206,7 +207,7 @@ def local_optima(
     wide = box_of(starts[0]) if starts else [bounds[k] for k in free]
     lo, hi = (np.array([b[i] for b in wide]) for i in (0, 1))
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
-    drawn_starts = DRAWN_FIXED if fixed_parts else DRAWN
+    drawn_starts = aim.drawn[bool(fixed_parts)]
     drawn = screen.project(form, key, halton(lo, hi, lo > 0, SAMPLES), pv, lo, hi)
     near = drawn[:0]
     if fixed_parts and len(drawn) < drawn_starts and len(own):
