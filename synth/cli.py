@@ -31,7 +31,7 @@ import click
 
 from .analysis.kinematics import analyze as _analyze
 from .analysis.sweep import sweep as _sweep
-from .drawing import FORMATS as FORMATS_OUT
+from .drawing import FORMATS
 from .drawing.export import export as _export
 from .errors import InvalidParameters, SynthError
 from .load import LENGTH_UNITS, Load
@@ -40,7 +40,6 @@ from .results import Analysis, SweepResult, SynthesisResult
 from .synthesis import synthesize as _synthesize
 from .targets import OBJECTIVES, PARETO
 
-FORMATS = ("table", "json", "csv")
 INCLUDE = ("motion", "sensitivities", "envelope", "pins", "forces")
 CURVES = ("crank_angle_deg", "position", "velocity", "acceleration", "transmission_deg", "torque")
 
@@ -164,9 +163,8 @@ def _params(f: Callable[..., Any]) -> Callable[..., Any]:
     help="Quick-return mechanisms from the shell: link lengths for a time ratio, stroke and "
     "transmission bound (synthesize), a design's motion and loads (analyze), a parameter's "
     "effect (sweep), a drawing for CAD (export), which type reaches which targets (atlas), "
-    "the service (serve). Each "
-    "command prints a table, --json the API's reply, --csv rows. Exit status: 0 with an "
-    "answer, 1 when every type refuses, 2 on bad input."
+    "the service (serve). Each command prints a table, --json the API's reply, --csv rows. "
+    "Exit status: 0 with an answer, 1 when every type refuses, 2 on bad input."
 )
 @click.version_option(package_name="quickreturn-synth")
 def main() -> None:
@@ -357,7 +355,7 @@ def _sweep_text(s: SweepResult, rows: list[dict[str, Any]]) -> str:
 
 @main.command(help="A design's drawing for CAD or a document (POST /v1/export).")
 @_params
-@click.option("--format", "fmt", type=click.Choice(FORMATS_OUT), default="svg", show_default=True,
+@click.option("--format", "fmt", type=click.Choice(FORMATS), default="svg", show_default=True,
               help="svg: true size; dxf: each link on its own layer")  # fmt: skip
 @click.option("--crank-angle", type=float, default=0.0, show_default=True, help="degrees")
 @click.option("--length-unit", type=click.Choice(list(LENGTH_UNITS)), default="mm",
