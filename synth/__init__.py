@@ -17,7 +17,7 @@ from . import atlas, mechanisms
 from .analysis.kinematics import analyze, analyze_many, joints
 from .analysis.sweep import sweep
 from .drawing.export import export
-from .drawing.figure import draw
+from .drawing.figure import animate, draw
 from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
 from .load import Load
 from .mechanisms import register
@@ -44,6 +44,7 @@ __all__ = [
     "UnknownMechanism",
     "analyze",
     "analyze_many",
+    "animate",
     "atlas",
     "draw",
     "export",

@@ -56,3 +56,41 @@ def draw(
     ax.legend(fontsize=7, loc="best", frameon=False)
     ax.grid(True, lw=0.3, alpha=0.5)
     return ax.figure
+
+
+def animate(
+    mechanism: str,
+    params: Mapping[str, float],
+    frames: int = 36,
+    fps: float = 12.0,
+    path: str | None = None,
+) -> bytes:
+    """A turn of the crank as an animated GIF (``frames`` drawings, equal crank steps, the
+    pins' paths in each), for notebooks and documents; written to ``path`` too if given
+    (matplotlib and pillow, imported here)."""
+    import io
+
+    import matplotlib.pyplot as plt
+    from PIL import Image
+
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    x0, x1, y0, y1 = None, None, None, None
+    images = []
+    for k in range(frames):
+        ax.clear()
+        draw(mechanism, params, 360.0 * k / frames, paths=True, ax=ax)
+        if x0 is None:  # every frame in the first one's box: the drawing does not jump
+            (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        ax.set_xlim(x0, x1)
+        ax.set_ylim(y0, y1)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=80)
+        images.append(Image.open(buf).convert("P", palette=Image.Palette.ADAPTIVE))
+    plt.close(fig)
+    out = io.BytesIO()
+    images[0].save(out, format="GIF", save_all=True, append_images=images[1:],
+                   duration=round(1000 / fps), loop=0)  # fmt: skip
+    if path is not None:
+        with open(path, "wb") as f:
+            f.write(out.getvalue())
+    return out.getvalue()

@@ -143,3 +143,17 @@ def test_paths_close_over_a_turn():
     assert d.paths is not None and "O2" not in d.paths and "O4" not in d.paths
     for xy in d.paths.values():
         assert np.allclose(xy[0], xy[-1], atol=1e-9)
+
+
+def test_animate_gives_a_gif_of_a_turn(tmp_path):
+    from PIL import Image
+
+    out = tmp_path / "shaper.gif"
+    gif = synth.animate("crank_shaper", {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0},
+                        frames=6, path=str(out))  # fmt: skip
+    assert out.read_bytes() == gif
+    img = Image.open(out)
+    assert img.format == "GIF" and img.n_frames == 6
+    first = np.asarray(img.convert("RGB"))
+    img.seek(3)  # half a turn on: the crank has moved
+    assert not np.array_equal(first, np.asarray(img.convert("RGB")))
