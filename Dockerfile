@@ -1,6 +1,9 @@
 # The service image: slim Python 3.11, dependencies from the hash-pinned lock, non-root.
 #   docker build -t quickreturn-synth . && docker run -p 8000:8000 quickreturn-synth
-FROM python:3.11-slim AS base
+# The base image by its tag; pin it by digest for a build that can be repeated:
+#   docker build --build-arg BASE=python:3.11-slim@sha256:<digest> …
+ARG BASE=python:3.11-slim
+FROM ${BASE} AS base
 
 ENV PYTHONDONTWRITEBYTECODE=1 \
     PYTHONUNBUFFERED=1 \

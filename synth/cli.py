@@ -202,9 +202,11 @@ def main() -> None:
     metavar="NAME=LOW:HIGH",
     help="a free part's range, in each type given",
 )
-@click.option("--objective", type=click.Choice(list(OBJECTIVES)), default=PARETO, show_default=True)
+@click.option("--objective", type=click.Choice(list(OBJECTIVES)), default=PARETO,
+              show_default=True, help="what the candidates are best at")  # fmt: skip
 @click.option("--max-candidates", type=int, help="at most this many in all")
-@click.option("--time-budget-ms", type=float, default=2000.0, show_default=True)
+@click.option("--time-budget-ms", type=float, default=2000.0, show_default=True,
+              help="the search's time; past it, the best found (reported incomplete)")  # fmt: skip
 @click.option(
     "--include",
     multiple=True,
@@ -331,9 +333,10 @@ def _analysis_text(a: Analysis) -> str:
 @main.command(help="One parameter varied, the rest held (POST /v1/sweep).")
 @_params
 @click.option("--vary", required=True, help="the parameter to vary")
-@click.option("--start", type=float, required=True)
-@click.option("--stop", type=float, required=True)
-@click.option("--points", type=int, default=101, show_default=True)
+@click.option("--start", type=float, required=True, help="its first value")
+@click.option("--stop", type=float, required=True, help="its last value")
+@click.option("--points", type=int, default=101, show_default=True,
+              help="values from start to stop, evenly spaced")  # fmt: skip
 @_formats
 def sweep(mechanism: str, params: tuple[str, ...], vary: str, start: float, stop: float,
           points: int, fmt: str) -> None:  # fmt: skip

@@ -189,3 +189,37 @@ def test_serve_answers_on_its_port():
     finally:
         server.terminate()
         server.wait(timeout=30)
+
+
+def test_every_option_says_what_it_is_for():
+    """Each subcommand's and the atlas's options carry help text."""
+    import argparse
+
+    import click
+
+    from synth.atlas import __main__ as atlas_main
+    from synth.cli import main
+
+    bare = []
+    for name, command in main.commands.items():
+        for p in command.params:
+            if isinstance(p, click.Option) and not p.hidden and not (p.help or p.is_flag):
+                bare.append(f"{name} {p.opts[0]}")
+    assert not bare, bare
+    captured: list[argparse.ArgumentParser] = []
+    real = argparse.ArgumentParser.parse_args
+
+    def keep(self, *a, **k):
+        captured.append(self)
+        raise SystemExit(0)
+
+    argparse.ArgumentParser.parse_args = keep
+    try:
+        with pytest.raises(SystemExit):
+            atlas_main.main([])
+    finally:
+        argparse.ArgumentParser.parse_args = real
+    (parser,) = captured
+    assert all(a.help for a in parser._actions if a.option_strings), [
+        a.option_strings for a in parser._actions if not a.help
+    ]

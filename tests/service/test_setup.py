@@ -300,7 +300,7 @@ def dockerfile() -> dict[str, dict[str, list[str]]]:
             if word.upper() == "FROM":
                 base, _, name = rest.partition(" AS ")
                 stages.append((name.strip(), {"FROM": [base.strip()]}))
-            else:
+            elif stages:  # (an ARG before the first FROM is the build's, for the FROMs)
                 stages[-1][1].setdefault(word.upper(), []).append(rest.strip())
     *built, (_, image) = stages
     return dict(built) | {"": image}
@@ -312,7 +312,8 @@ def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
     work = served[1]
     d = dockerfile()
     base, native, image = d["base"], d["native"], d[""]
-    assert base["FROM"] == ["python:3.11-slim"]
+    assert base["FROM"] == ["${BASE}"]  # the build argument: the tag, or a digest given
+    assert "BASE=python:3.11-slim" in (ROOT / "Dockerfile").read_text()
     assert native["FROM"] == image["FROM"] == ["base"]
     # the install step is the lock make serve installed into the fresh checkout's .venv
     installs = [r for stage in d.values() for r in stage.get("RUN", []) if "pip install" in r]
