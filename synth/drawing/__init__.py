@@ -18,7 +18,7 @@ import numpy as np
 from ..analysis.kinematics import analyze, joints
 from ..errors import InvalidParameters
 from ..load import LENGTH_UNITS
-from ..mechanisms import get
+from ..mechanisms import Mechanism, get
 from ..mechanisms.registry import GROUND
 
 FORMATS = ("svg", "dxf", "json")
@@ -82,10 +82,10 @@ def drawing(
     """The drawing of a design at a crank angle (degrees); with ``paths``, each moving pin's
     path over a turn. Raises what ``synth.analyze`` raises for a design that cannot run."""
     check_angle(crank_angle_deg)
+    m = drawn(mechanism)
     a = analyze(mechanism, params)  # checks the design, and finds its dead centres
-    m = get(mechanism)
     p = m.complete(a.params)
-    assert m.frame is not None
+    assert m.frame is not None  # ``drawn`` saw it
     frame = m.frame(m.variant(p))
     angles = [crank_angle_deg, a.extremes.min.crank_angle_deg, a.extremes.max.crank_angle_deg]
     at = joints(mechanism, a.params, angles)
@@ -180,6 +180,15 @@ def unit_mm(length_unit: str) -> float:
         msg = f"length_unit must be one of {', '.join(LENGTH_UNITS)}, got {length_unit!r}"
         raise InvalidParameters(msg, ("length_unit",))
     return LENGTH_UNITS[length_unit] * 1e3
+
+
+def drawn(mechanism: str) -> Mechanism:
+    """The type, if it can be drawn (its pins and its frame, ``Mechanism.joints`` and
+    ``.frame``); else InvalidParameters (a registered type may have neither)."""
+    m = get(mechanism)
+    if m.joints is None or m.frame is None:
+        raise InvalidParameters(f"{mechanism} has no drawing yet", ("mechanism",))
+    return m
 
 
 def check_angle(crank_angle_deg: float) -> None:

@@ -8,8 +8,7 @@ from dataclasses import asdict
 from typing import Any
 
 from ..errors import InvalidParameters
-from ..mechanisms import get
-from . import FORMATS, check_angle, drawing, sketch, unit_mm
+from . import FORMATS, check_angle, drawing, drawn, sketch, unit_mm
 from .dxf import dxf
 from .svg import svg
 
@@ -53,7 +52,7 @@ def check(
     **_: Any,
 ) -> None:
     """What ``export`` checks before it draws (its arguments' meaning)."""
-    m = get(mechanism)
+    m = drawn(mechanism)
     for k in params:
         m.parameter(k)
     if format not in FORMATS:

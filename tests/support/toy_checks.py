@@ -92,6 +92,14 @@ def test_the_api_serves_them():
     assert s.status_code == 200 and len(s.json()["candidates"]) >= 3
 
 
+def test_a_type_without_a_frame_is_not_drawn_but_refused():
+    r = client.post(
+        "/v1/export", json={"mechanism": {"type": TOY, "params": {"crank": 1, "coupler": 3}}}
+    )
+    assert r.status_code == 422, r.text
+    assert "has no drawing yet" in r.json()["detail"][0]["msg"]
+
+
 def test_a_broken_toy_is_a_422_at_the_parameters_its_condition_reads():
     design = {"type": TOY, "params": {"crank": 2, "coupler": 1}}
     r = client.post("/v1/analyze", json={"mechanism": design})
