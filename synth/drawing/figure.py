@@ -4,9 +4,11 @@ SVG and DXF exports, equal axes in the design's unit."""
 from __future__ import annotations
 
 from collections.abc import Mapping
+from dataclasses import replace
 from typing import Any
 
-from . import drawing, sketch, slot
+from ..analysis.kinematics import joints
+from . import Drawing, drawing, sketch, slot
 from .svg import COLOURS
 
 
@@ -21,12 +23,18 @@ def draw(
     path over a turn with ``paths``: the figure (matplotlib, imported here: notebooks have
     it, the service does not need it)."""
     import matplotlib.pyplot as plt
-    from matplotlib.patches import Circle, Polygon
 
-    d = drawing(mechanism, params, crank_angle_deg, paths)
-    sk = sketch(d)
     if ax is None:
         _, ax = plt.subplots(figsize=(6, 4.5))
+    _render(drawing(mechanism, params, crank_angle_deg, paths), ax)
+    return ax.figure
+
+
+def _render(d: Drawing, ax: Any) -> None:
+    """``d`` on the matplotlib axes ``ax``."""
+    from matplotlib.patches import Circle, Polygon
+
+    sk = sketch(d)
     lw = 1.0
     for xy in (d.paths or {}).values():
         ax.plot(xy[:, 0], xy[:, 1], color="#999", lw=0.7 * lw, ls="--", zorder=1)
@@ -55,7 +63,6 @@ def draw(
     ax.set_title(f"{d.type} at crank angle {d.crank_angle_deg:g}°", fontsize=10)
     ax.legend(fontsize=7, loc="best", frameon=False)
     ax.grid(True, lw=0.3, alpha=0.5)
-    return ax.figure
 
 
 def animate(
@@ -73,12 +80,17 @@ def animate(
     import matplotlib.pyplot as plt
     from PIL import Image
 
+    # one drawing (its analysis, the pins' paths), its pins moved to each frame's angle
+    first = drawing(mechanism, params, 0.0, paths=True)
+    angles = [360.0 * k / frames for k in range(frames)]
+    at = joints(mechanism, first.params, angles)
     fig, ax = plt.subplots(figsize=(6, 4.5))
     x0, x1, y0, y1 = None, None, None, None
     images = []
-    for k in range(frames):
+    for k, angle in enumerate(angles):
         ax.clear()
-        draw(mechanism, params, 360.0 * k / frames, paths=True, ax=ax)
+        pins = {name: (float(xy[k, 0]), float(xy[k, 1])) for name, xy in at.items()}
+        _render(replace(first, crank_angle_deg=angle, pins=pins), ax)
         if x0 is None:  # every frame in the first one's box: the drawing does not jump
             (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
         ax.set_xlim(x0, x1)
