@@ -76,14 +76,12 @@ def _numbers(values: Iterable[str], flag: str) -> dict[str, float]:
 def _ranges(values: Iterable[str]) -> dict[str, tuple[float, float]]:
     out = {}
     for k, v in _pairs(values, "--bounds").items():
-        lo, colon, hi = v.partition(":")
         try:
+            lo, hi = v.split(":")
             out[k] = (float(lo), float(hi))
         except ValueError:
             msg = f"{k}={v!r}: expected low:high"
             raise click.BadParameter(msg, param_hint="--bounds") from None
-        if not colon:
-            raise click.BadParameter(f"{k}={v!r}: expected low:high", param_hint="--bounds")
     return out
 
 
@@ -98,7 +96,6 @@ def _load(text: str | None) -> Load | None:
     if not isinstance(fields, dict):
         raise click.BadParameter("a JSON object, e.g. '{\"length_unit\": \"mm\", ...}'",
                                  param_hint="--load")  # fmt: skip
-    fields = {k: tuple(map(tuple, v)) if k == "force_profile" else v for k, v in fields.items()}
     try:
         return Load(**fields)
     except TypeError as e:
