@@ -21,10 +21,9 @@ import numpy.typing as npt
 
 from ..mechanisms import Mechanism, all_types, get, kinetics, rod
 from ..mechanisms.fourbar.construction import construction
-from ..numerics.native import Mapped, Slot
+from ..numerics.native import Mapped
 
 GRID = 128  # samples per revolution that bracket the stationary points
-EACH = 32 * GRID  # the most angles ``_Batched.each`` keeps a slot for (a batch of designs)
 POLISH_STEPS = 8  # safeguarded Newton steps a compiled polish takes (``Polisher``)
 
 _local = threading.local()
@@ -104,13 +103,12 @@ def _rows(
 
 
 class _Batched:
-    """out(θ, p) compiled, evaluated at each θ of a vector.
-
-    Up to GRID angles go through a slot for their number (``Mapped``, made on first use,
-    owned like the function by one thread's Model): an ordinary call's numpy <-> DM
-    conversions cost ~40 µs, more than a few-angle Newton step's evaluation. Common
-    subexpressions are merged (the derivatives repeat g's terms): the same operations on the
-    same operands, so the same results, from half the instructions."""
+    """out(θ, p) compiled, evaluated at each θ of a vector through ``Mapped``'s slots (owned
+    like the function by one thread's Model): an ordinary call's numpy <-> DM conversions
+    cost ~40 µs, more than a few-angle Newton step's evaluation, and would keep a mapped
+    function for every number of angles. Common subexpressions are merged (the derivatives
+    repeat g's terms): the same operations on the same operands, so the same results, from
+    half the instructions."""
 
     def __init__(self, name: str, th: ca.SX, pv: ca.SX, out: ca.SX) -> None:
         out = ca.densify(out)  # structural zeros (a fixed pivot, a constant row) as numbers
@@ -120,26 +118,13 @@ class _Batched:
         self.own = Mapped(fn, (False, False), compiled=self.fn)  # each angle its design's
 
     def __call__(self, theta: npt.ArrayLike, pv: np.ndarray) -> np.ndarray:
-        theta = np.atleast_1d(theta)
-        n = theta.size
-        if n > GRID:  # curves: the conversions are small against the work
-            return cast(np.ndarray, self.fn(theta[None, :], pv).full())
-        return _run(self.shared[n], theta, pv)
+        """out at each θ, shape (rows, len(θ)), for one design's parameters ``pv``."""
+        return self.shared(np.atleast_1d(theta)[:, None], pv)
 
     def each(self, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
         """out at each θ with its own parameters (``pv``: shape (len(θ), p)), as ``__call__``
         gives it: the same operations, so the same results, for several designs at once."""
-        n = theta.size
-        if n > EACH:
-            return cast(np.ndarray, self.fn(theta[None, :], pv.T).full())
-        return _run(self.own[n], theta, pv)
-
-
-def _run(slot: Slot, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
-    x, p = slot.args
-    x[:, 0], p[:] = theta, pv
-    slot.run()
-    return slot.out.T.copy()  # the slot is reused by the next call
+        return self.own(theta[:, None], pv)
 
 
 class Polisher:
@@ -179,13 +164,10 @@ class Polisher:
         """(x, the last step, d at the point before it, the bracket's width) per root: shape
         (4, n). ``rows``: each root's row; ``pv``: the parameters, (n, p) or shared (p,)."""
         n = len(x0)
-        slot = self.mapped[n]
-        a0, a1, a2, a3, w, p = slot.args
-        a0[:, 0], a1[:, 0], a2[:, 0], a3[:, 0], p[:] = x0, lo, hi, rising, pv
-        w[:] = 0.0
+        w = np.zeros((n, self.mapped.fn.nnz_in(4)))
         w[np.arange(n), rows] = 1.0
-        slot.run()
-        return slot.out.T.copy()
+        pv = np.broadcast_to(pv, (n, pv.shape[-1]))
+        return self.mapped(x0[:, None], lo[:, None], hi[:, None], rising[:, None], w, pv)
 
 
 class Forces:
@@ -251,15 +233,9 @@ class Forces:
 
 
 def _evaluate(fn: _Batched, theta: np.ndarray, pv: np.ndarray) -> np.ndarray:
-    """fn at each θ, one row per angle, for shared numbers ``pv`` (``GRID`` angles a call) or
-    each angle's (a row of ``pv`` each, ``EACH`` a call): through the compiled slots, not
-    CasADi's conversions."""
-    if pv.ndim == 1:
-        parts = [fn(theta[i : i + GRID], pv) for i in range(0, len(theta), GRID)]
-    else:
-        parts = [fn.each(theta[i : i + EACH], pv[i : i + EACH])
-                 for i in range(0, len(theta), EACH)]  # fmt: skip
-    return (parts[0] if len(parts) == 1 else np.hstack(parts)).T
+    """fn at each θ, one row per angle, for shared numbers ``pv`` or each angle's (a row of
+    ``pv`` each)."""
+    return (fn(theta, pv) if pv.ndim == 1 else fn.each(theta, pv)).T
 
 
 def _system(rows: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -15,11 +15,11 @@ from typing import cast
 import numpy as np
 
 from ..errors import InvalidDesign
-from .model import EACH, GRID, Model, Polisher
+from .model import GRID, Model, Polisher
 
 TWO_PI = 2 * math.pi
 EPS4 = 4 * sys.float_info.epsilon
-BATCH = EACH // GRID  # designs whose grids one compiled call evaluates
+BATCH = 32  # designs whose grids go through one batched evaluation
 
 Points = tuple[np.ndarray, np.ndarray, np.ndarray]  # (row, θ, value) of each stationary point
 # (rows, the brackets' lower and upper ends, g' at each end, the row's scale), and (rows, θ)
@@ -66,7 +66,7 @@ def stationary_points_many(f: Model, pvs: np.ndarray) -> list[Points | None]:
     """``stationary_points`` of several designs of one variant (``pvs``: one row each) in
     shared compiled calls, with the same results to the bit: each step is the one design's,
     on the same numbers. None for a design that ``stationary_points`` refuses (it says why).
-    At most ``BATCH`` designs go through one call (their grids: ``model.EACH`` angles)."""
+    At most ``BATCH`` designs go through one batched evaluation."""
     if len(pvs) > BATCH:
         return [found for i in range(0, len(pvs), BATCH)
                 for found in stationary_points_many(f, pvs[i : i + BATCH])]  # fmt: skip

@@ -28,6 +28,8 @@ FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
 BUILD_SECONDS = 120  # the most one compilation may take
 _lock = threading.Lock()  # one build at a time in a process (files: atomic renames)
 _failed: set[str] = set()  # libraries that could not be built here: not tried again
+SMALL = 16  # up to this many points a slot of their own number (``widths``)
+WIDEST = 64  # the widest slot; between, powers of two (wider was no faster: 64–256 measured)
 
 
 def cache() -> Path:
@@ -86,12 +88,14 @@ class Slot:
 
 
 class Mapped:
-    """``fn`` compiled and evaluated at many points in one call, through a ``Slot`` per number
-    of points (made on first use); the arguments ``shared`` by every point are given once. At
-    the ``looped`` numbers of points the map itself is compiled, as one loop (CasADi's map of
-    a compiled function calls it point by point, at about 1.6 times the cost; a library per
-    number, so only for a few). Each thread keeps its own (a CasADi function is never shared
-    between threads)."""
+    """``fn`` compiled and evaluated at many points in one call: ``mapped(*args)``, the
+    arguments ``shared`` by every point given once. The points go through a ``Slot`` per
+    width, of a few fixed widths only (``widths``): what a thread keeps is bounded whatever
+    numbers of points its callers ask for (a slot holds ~2 × its outputs per point). At the
+    ``looped`` widths the map itself is compiled, as one loop (CasADi's map of a compiled
+    function calls it point by point, at about 1.6 times the cost; a library per width, so
+    only for a few). Each thread keeps its own (a CasADi function is never shared between
+    threads)."""
 
     def __init__(
         self,
@@ -114,9 +118,35 @@ class Mapped:
             slot = self.slots[width] = Slot(mapped, self.fn, width, self.shared)
         return slot
 
+    def __call__(self, *args: np.ndarray) -> np.ndarray:
+        """The function at n points: a shared argument's numbers (k,), any other's (n, k), a
+        row a point; shape (rows, n). Every point's numbers are its own call's, to the bit."""
+        n = next(len(a) for a, one in zip(args, self.shared, strict=True) if not one)
+        out = np.empty((self.fn.nnz_out(0), n))
+        k = 0
+        for w in widths(n):
+            slot = self[w]
+            for a, into, one in zip(args, slot.args, self.shared, strict=True):
+                into[:] = a if one else a[k : k + w]
+            slot.run()
+            out[:, k : k + w] = slot.out.T
+            k += w
+        return out
+
     def compiled(self) -> list[ca.Function]:
         """The compiled functions: one point's, and each looped map (built here if need be)."""
         return [self.fn, *(self[w].fn for w in self.looped)]
+
+
+def widths(n: int) -> list[int]:
+    """n points as the widths of the slots that take them: ``WIDEST`` at a time, then powers
+    of two, and the last ``SMALL`` or fewer in a slot of their own number (a few points are
+    what a Newton step asks for: no padding, no second call)."""
+    out = []
+    while n > SMALL:
+        out.append(min(WIDEST, 1 << (n.bit_length() - 1)))
+        n -= out[-1]
+    return [*out, n] if n else out
 
 
 class Points:
@@ -124,7 +154,7 @@ class Points:
     points (``Mapped``): up to ``small`` points in a slot for their number, more in chunks of
     ``chunk`` through the looped map."""
 
-    def __init__(self, fn: ca.Function, small: int = 16, chunk: int = 256) -> None:
+    def __init__(self, fn: ca.Function, small: int = SMALL, chunk: int = 256) -> None:
         self.mapped = Mapped(fn, (False, True), looped=(chunk,))
         self.fn, self.small, self.chunk, self.rows = self.mapped.fn, small, chunk, fn.nnz_out(0)
 
