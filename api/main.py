@@ -26,7 +26,7 @@ from synth.errors import UnknownMechanism
 from .body_limit import too_large
 from .engine import Busy, Engine
 from .errors import capped, error_item, worded
-from .gate import Gate
+from .gate import NOSNIFF, Gate, Headers
 from .routers import analyze, atlas, export, mechanisms, sweep, synthesize
 from .routers.common import Located
 from .schemas import Health
@@ -35,10 +35,10 @@ from .schemas import Health
 @asynccontextmanager
 async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     engine = Engine.of(app)
+    if engine.settings.warm:  # before uvicorn listens: a budget holds from the first request
+        await engine.warm()
     gc.collect()
-    gc.freeze()  # what the imports made lives as long as the process: no collection scans it
-    if engine.settings.warm:
-        engine.warm()  # in the background: /health answers within ~0.2 s
+    gc.freeze()  # what the imports and the warm-up made lives as long as the process: unscanned
     yield
     engine.close()
     del app.state.engine
@@ -74,30 +74,7 @@ async def favicon() -> FileResponse:
     return FileResponse(FAVICON, media_type="image/png")
 
 
-class OwnImages:
-    """/redoc's page draws its maker's logo from a CDN: the docs' pages take images from this
-    service only, so the browser does not ask (nothing leaves the machine)."""
-
-    PATHS = ("/docs", "/redoc")
-    HEADER = (b"content-security-policy", b"img-src 'self' data:")
-
-    def __init__(self, app: Any) -> None:
-        self.app = app
-
-    async def __call__(self, scope: Any, receive: Any, send: Any) -> None:
-        if scope["type"] != "http" or scope["path"] not in self.PATHS:
-            await self.app(scope, receive, send)
-            return
-
-        async def sending(message: Any) -> None:
-            if message["type"] == "http.response.start":
-                message["headers"] = [*message.get("headers", []), self.HEADER]
-            await send(message)
-
-        await self.app(scope, receive, sending)
-
-
-app.add_middleware(OwnImages)
+app.add_middleware(Headers)  # nosniff, and the pages' policies (api.gate)
 
 
 @app.get("/health", response_model=Health, tags=["service"])
@@ -147,6 +124,17 @@ async def located(request: Request, exc: Located) -> JSONResponse:
     e = exc.error
     detail = capped(exc.locs, lambda loc: error_item(["body", *loc], e.msg, e.kind))
     return JSONResponse({"detail": detail}, status_code=422)
+
+
+@app.exception_handler(Exception)
+async def unexpected(request: Request, exc: Exception) -> JSONResponse:
+    """Anything else: 500 in FastAPI's shape, nothing of the error in it (uvicorn logs it), and
+    ``Connection: close``: uvicorn closes the connection once the error reaches it, so the client
+    sends no next request on it to be reset."""
+    msg = "the server failed to answer this request (the error is in its log)"
+    headers = {"Connection": "close", NOSNIFF[0].decode(): NOSNIFF[1].decode()}
+    detail = [error_item([], msg, "internal_error")]
+    return JSONResponse({"detail": detail}, status_code=500, headers=headers)
 
 
 @app.exception_handler(UnknownMechanism)
