@@ -27,7 +27,7 @@ from synth.analysis.kinematics import ANALYSIS_INCLUDE, INCLUDE, MAX_CURVE_POINT
 from synth.analysis.quality import CUT
 from synth.analysis.sweep import MAX_POINTS
 from synth.drawing import FORMATS
-from synth.load import LENGTH_UNITS
+from synth.load import GAP, LENGTH_UNITS, RANGES
 from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.synthesis.driver import MAX_CANDIDATES, PER_TYPE
 from synth.targets import OBJECTIVES, PARETO
@@ -234,7 +234,12 @@ class LoadSpec(Strict):
     length_unit: Literal[tuple(LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
         ..., description="the unit of the design's lengths (forces and masses are SI)"
     )
-    crank_rpm: float = Field(..., gt=0.0, le=1e6, description="the crank's constant speed")
+    crank_rpm: float = Field(
+        ...,
+        ge=RANGES["crank_rpm"][0],
+        le=RANGES["crank_rpm"][1],
+        description="the crank's constant speed",
+    )
     cutting_force: float = Field(
         0.0, ge=0.0, le=1e12, description="N, resisting the ram through the cutting zone"
     )
@@ -250,9 +255,17 @@ class LoadSpec(Strict):
         0.0, ge=0.0, le=1e12, description="kg/m: each drawn link a uniform slender rod (0: none)"
     )
     speed_fluctuation: float = Field(
-        0.05, gt=0.0, le=1.0, description="Cs = (ω_max − ω_min)/ω the flywheel keeps the crank to"
+        0.05,
+        ge=RANGES["speed_fluctuation"][0],
+        le=RANGES["speed_fluctuation"][1],
+        description="Cs = (ω_max − ω_min)/ω the flywheel keeps the crank to",
     )
-    efficiency: float = Field(1.0, gt=0.0, le=1.0, description="the drive's, motor to crank")
+    efficiency: float = Field(
+        1.0,
+        ge=RANGES["efficiency"][0],
+        le=RANGES["efficiency"][1],
+        description="the drive's, motor to crank",
+    )
     guide_friction: float = Field(
         0.0, ge=0.0, le=2.0, description="Coulomb coefficient at the ram's guide (0: none)"
     )
@@ -278,8 +291,9 @@ class LoadSpec(Strict):
     @field_validator("cutting_zone")
     @classmethod
     def _zone(cls, zone: list[float]) -> list[float]:
-        if not zone[0] < zone[1]:
-            raise ValueError(f"start {zone[0]:g} must be less than end {zone[1]:g}")
+        if not zone[1] - zone[0] >= GAP:
+            raise ValueError(f"start {zone[0]:g} must be less than end {zone[1]:g}, by {GAP:g} "
+                             "or more")  # fmt: skip
         return zone
 
     @field_validator("force_profile")
@@ -289,9 +303,9 @@ class LoadSpec(Strict):
         for i, u in enumerate(fractions):
             if u > 1:
                 raise ValueError(f"[{i}]: the fraction {u:g} must be at most 1")
-            if i and u <= fractions[i - 1]:
-                raise ValueError(f"[{i}]: fractions must increase, got {u:g} after "
-                                 f"{fractions[i - 1]:g}")  # fmt: skip
+            if i and not u - fractions[i - 1] >= GAP:
+                raise ValueError(f"[{i}]: fractions must increase, each by {GAP:g} or more, got "
+                                 f"{u:g} after {fractions[i - 1]:g}")  # fmt: skip
         return profile
 
     @model_validator(mode="after")

@@ -14,6 +14,14 @@ from .errors import InvalidParameters
 
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "in": 0.0254}  # metres per length unit
 GRAVITY = 9.80665  # m/s², standard
+# the ranges of the numbers the flywheel and the motor's power divide by, wider than any machine
+# needs: a crank that turns once in 1.9 years to one at 1e6 rpm, a flywheel that holds the speed
+# to a millionth or to ±50 %, a drive that wastes all but a millionth. So Cs ω² ≥ 1.1e-20 and
+# mean·ω/η stay finite numbers
+RANGES = {"crank_rpm": (1e-6, 1e6), "speed_fluctuation": (1e-6, 1.0), "efficiency": (1e-6, 1.0)}
+# the least step between two fractions of the working stroke (a cut's zone, a profile's points):
+# a nanometre of a metre's stroke. The force's slope between them, ΔF / (Δu · stroke), is finite
+GAP = 1e-9
 
 
 @dataclass(frozen=True)
@@ -30,7 +38,8 @@ class Load:
     is the direction gravity pulls in, in the drawing's frame (degrees from +x, counter-
     clockwise; −90: down the drawing's y axis); None: no weight (the plane is horizontal).
     ``speed_fluctuation`` is the coefficient Cs = (ω_max − ω_min)/ω a flywheel must hold the
-    crank within, ``efficiency`` the drive's from motor to crank."""
+    crank within, ``efficiency`` the drive's from motor to crank; these two and ``crank_rpm``
+    within ``RANGES``."""
 
     length_unit: str
     crank_rpm: float
@@ -51,29 +60,26 @@ class Load:
                 f"design's lengths: forces and masses are SI), got {self.length_unit!r}",
                 ("load", "length_unit"),
             )
-        for name, low, strict in (("crank_rpm", 0.0, True), ("cutting_force", 0.0, False),
-                                  ("slider_mass", 0.0, False),
-                                  ("link_mass_per_length", 0.0, False),
-                                  ("guide_friction", 0.0, False),
-                                  ("speed_fluctuation", 0.0, True)):  # fmt: skip
-            v = getattr(self, name)
-            ok = _number(v) and (v > low if strict else v >= low)
-            if not ok:
-                sign = ">" if strict else "≥"
-                msg = f"load.{name} must be a finite number {sign} {low:g}, got {v!r}"
+        for name in ("crank_rpm", "cutting_force", "slider_mass", "link_mass_per_length",
+                     "guide_friction", "speed_fluctuation"):  # fmt: skip
+            v, (lo, hi) = getattr(self, name), RANGES.get(name, (0.0, math.inf))
+            if not (_number(v) and lo <= v <= hi):
+                rule = f"> 0, at least {lo:g} and at most {hi:g}" if name in RANGES else "≥ 0"
+                msg = f"load.{name} must be a finite number {rule}, got {v!r}"
                 raise InvalidParameters(msg, ("load", name))
         if self.gravity_deg is not None and not _number(self.gravity_deg):
             msg = f"load.gravity_deg must be a finite angle, got {self.gravity_deg!r}"
             raise InvalidParameters(msg, ("load", "gravity_deg"))
-        e = self.efficiency
-        if not (_number(e) and 0 < e <= 1):
-            msg = f"load.efficiency must be in (0, 1], got {e!r}"
+        e, (lo, hi) = self.efficiency, RANGES["efficiency"]
+        if not (_number(e) and lo <= e <= hi):
+            msg = f"load.efficiency must be in (0, 1], at least {lo:g}, got {e!r}"
             raise InvalidParameters(msg, ("load", "efficiency"))
         zone = tuple(self.cutting_zone)
         if not (len(zone) == 2 and all(_number(z) for z in zone)
-                and 0 <= zone[0] < zone[1] <= 1):  # fmt: skip
-            msg = (f"load.cutting_zone must be [start, end] with 0 ≤ start < end ≤ 1 (fractions "
-                   f"of the working stroke), got {list(zone)!r}")  # fmt: skip
+                and 0 <= zone[0] < zone[1] <= 1 and zone[1] - zone[0] >= GAP):  # fmt: skip
+            msg = (f"load.cutting_zone must be [start, end] with 0 ≤ start < end ≤ 1, end − "
+                   f"start ≥ {GAP:g} (fractions of the working stroke), got "
+                   f"{list(zone)!r}")  # fmt: skip
             raise InvalidParameters(msg, ("load", "cutting_zone"))
         object.__setattr__(self, "cutting_zone", (float(zone[0]), float(zone[1])))
         if self.force_profile is not None:
@@ -94,9 +100,9 @@ class Load:
                 msg = (f"load.force_profile[{i}]: the fraction must be in [0, 1] and the force "
                        f"≥ 0, got [{u:g}, {f:g}]")  # fmt: skip
                 raise InvalidParameters(msg, (*loc, i))
-            if i and u <= points[i - 1][0]:
-                msg = (f"load.force_profile[{i}]: fractions must increase, got {u:g} after "
-                       f"{points[i - 1][0]:g}")  # fmt: skip
+            if i and not u - points[i - 1][0] >= GAP:
+                msg = (f"load.force_profile[{i}]: fractions must increase, each by at least "
+                       f"{GAP:g}, got {u:g} after {points[i - 1][0]:g}")  # fmt: skip
                 raise InvalidParameters(msg, (*loc, i))
         object.__setattr__(self, "force_profile", tuple((float(u), float(f)) for u, f in points))
 

@@ -3,11 +3,10 @@ flywheel that evens it out, and the forces at the joints and the ram's guide.
 
 The forces at a crank angle solve the design's Newton–Euler equations A z = b
 (``synth.mechanisms.kinetics``); their derivatives in the crank angle solve the same system
-differentiated, A z′ = b′ − A′ z and A z″ = b″ − 2 A′ z′ − A″ z, with A′, A″, b′, b″ by
-automatic differentiation. The resisting force is linear in the ram's position between the
-points of the load's profile (a cutting force over its zone: two points), and steps where the
-working stroke passes them (``quality.reached``): the turn is a piece between each two and a
-piece for the rest; with the guide's friction, split further where the ram turns and where
+differentiated (``model.Forces``). The resisting force is linear in the ram's position between
+the points of the load's profile (a cutting force over its zone: two points), and steps where
+the working stroke passes them (``quality.reached``): the turn is a piece between each two and
+a piece for the rest; with the guide's friction, split further where the ram turns and where
 the guide's force changes sign (``_pieces``). On each piece everything is smooth:
 
 - extremes: the stationary points of each quantity on each piece (bracketed on a grid,
@@ -18,9 +17,11 @@ the guide's force changes sign (``_pieces``). On each piece everything is smooth
   mean (roots, polished alike) or jumps across it at a piece's end; its largest swing ΔE
   over a turn gives the inertia I = ΔE / (Cs ω²).
 
-For the least peak torque's search, ``peak_terms`` gives the torque's maxima and the pieces'
-ends with their derivatives in the lengths (A ∂z/∂p = ∂b/∂p − ∂A/∂p z, and each end's
-angle moving with the design).
+Where no finite forces move the design, it is refused with the crank angle named: a loaded
+dead point (``Forces.dead``), a ram the guide's friction locks (``Forces.lock``), A singular
+to rounding where the extremes land (``Forces.bounded``). ``peak_terms`` gives the least peak
+torque's search the torque's maxima and the pieces' ends with their derivatives in the
+lengths (A ∂z/∂p = ∂b/∂p − ∂A/∂p z, and each end's angle moving with the design).
 """
 
 from __future__ import annotations
@@ -33,13 +34,13 @@ from typing import cast
 
 import numpy as np
 
-from ..errors import InvalidDesign, InvalidParameters
+from ..errors import InvalidParameters
 from ..load import Load
 from ..mechanisms import Mechanism, kinetics
 from ..results import Flywheel, Force, Loads, Power, Torque
 from .model import GRID, Forces, Model, forces
 from .quality import Strokes, reached
-from .roots import TWO_PI, _rtsafe
+from .roots import TWO_PI, _rtsafe, stationary_points
 
 PANEL = math.pi / 64  # the widest panel of the quadrature (π/32: a sharp drag-link mean 5e-8 off)
 NODES, WEIGHTS = np.polynomial.legendre.leggauss(16)  # per panel
@@ -171,6 +172,7 @@ def _extremes(pieces: Pieces, fs: list[Quantity], largest: int) -> list[tuple[np
              for x, o in pieces.roots(fs, 1, largest)]  # fmt: skip
     x, owner = (np.concatenate(c) for c in zip(*found, strict=True))
     z = pieces(x, owner)
+    pieces.sys.bounded(x, pieces.pv[owner], z[0])
     cut = np.cumsum([f[0].size for f in found])[:-1]
     return [(xs, f(zs)[0]) for (xs, _), zs, f
             in zip(found, np.split(z, cut, axis=1), fs, strict=True)]  # fmt: skip
@@ -217,6 +219,14 @@ def loads(
     its torque and forces as functions of crank angles (radians), for curves."""
     sys = forces(m, variant)
     pieces = _pieces(sys, _spans(f, pv, st, load, load.metres), st, load.guide_friction)
+
+    def owner(theta: np.ndarray) -> np.ndarray:  # the piece each angle is in (the first)
+        inside = (theta[:, None] - pieces.lo) % TWO_PI <= pieces.hi - pieces.lo
+        return cast(np.ndarray, np.argmax(inside, axis=1))
+
+    rows, at, c = stationary_points(f, pv)  # a joint's transmission angle 0°: a dead point
+    flat = (rows > 0) & (np.abs(c) >= 1 - sys.FLAT)
+    sys.dead(at[flat], pieces.pv[owner(at[flat])], [f.names[r - 1] for r in rows[flat]])
     lay = sys.layout
     pushes = [_magnitude([lay.pin(j), lay.pin(j) + 1]) for j in range(len(lay.pins))]
     pushes += [_magnitude([lay.slot(j)]) for j in range(len(lay.slots))]
@@ -228,9 +238,9 @@ def loads(
     t = Torque(float(v[k_hi]), _deg(x[k_hi]), float(v[k_lo]), _deg(x[k_lo]), mean,
                math.sqrt(squares / TWO_PI))  # fmt: skip
     energy = _energy(pieces, mean)
-    om = load.omega
+    om = load.omega  # ≥ 1e-7 rad/s, Cs ≥ 1e-6 and η ≥ 1e-6 (``Load``): no division by 0
     power = Power(mean * om, t.max * om, mean * om / load.efficiency)
-    flywheel = Flywheel(energy, energy / (load.speed_fluctuation * om**2))
+    flywheel = Flywheel(energy, energy / load.speed_fluctuation / om / om)
     largest = [Force(float(v.max()), _deg(x[int(np.argmax(v))])) for x, v in found_all]
     joints = dict(zip((*lay.pins, *lay.slots), largest[:-1], strict=True))
     quantities = [_torque, *pushes]
@@ -238,10 +248,7 @@ def loads(
     def curves(theta: np.ndarray) -> dict[str, np.ndarray]:
         """The torque and each force (``Loads``' names, the guide's last) at each crank angle,
         from the piece it lies in (the earlier piece's at a piece's end)."""
-        owner = np.full(theta.size, -1)
-        for i, (lo, hi) in enumerate(zip(pieces.lo, pieces.hi, strict=True)):
-            owner[(owner < 0) & ((theta - lo) % TWO_PI <= hi - lo)] = i
-        z = pieces(theta, owner)
+        z = pieces(theta, owner(theta))
         out = [q(z)[0] for q in quantities]
         return dict(zip(("torque", *joints, "guide"), out, strict=True))
 
@@ -384,6 +391,7 @@ def _pieces(sys: Forces, spans: list[_Span], st: Strokes, mu: float) -> Pieces:
     if mu == 0:
         whole = [Piece(s.lo, s.hi, np.append(s.pv, 0.0), i) for i, s in enumerate(spans)]
         return Pieces(sys, whole)
+    sys.lock(np.append(spans[-1].pv, 0.0), mu)  # the design's ram leans past atan μ: refused
     turns = TWO_PI * np.arange(-1, 3)
     dead = np.concatenate([st.start + turns, st.start + st.working + turns])
     up = math.copysign(1.0, st.s1 - st.s0)  # sign(v) in the working stroke
@@ -409,16 +417,7 @@ def _pieces(sys: Forces, spans: list[_Span], st: Strokes, mu: float) -> Pieces:
     for j in np.nonzero(pulled)[0]:  # N < 0
         p = out[j]
         out[j] = Piece(p.lo, p.hi, np.append(p.pv[:-1], mu * signs[owner[j]]), p.span)
-    pieces = Pieces(sys, out)
-    held = _guide(pieces(mid, np.arange(len(out)), 0))[0] > tiny[owner]
-    locked = np.nonzero(pulled & held)[0]  # neither sign of N is consistent there
-    if locked.size:
-        raise InvalidDesign(
-            f"the guide's friction {mu:g} locks the ram at crank angle "
-            f"{_deg(float(mid[locked[0]])):.6g}°: no guide force is consistent with it",
-            (), "friction",
-        )  # fmt: skip
-    return pieces
+    return Pieces(sys, out)  # one sign of N consistent everywhere: the ram does not lock
 
 
 def _guide(z: np.ndarray) -> np.ndarray:
