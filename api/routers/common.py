@@ -52,23 +52,28 @@ async def run(
     engine: Engine,
     locate: Callable[[SynthError], list[Loc]],
     op: str,
-    inline: bool = False,
+    then: Callable[[Any], Any] | None = None,
     **kwargs: Any,
 ) -> Any:
-    """Run ``op`` on the engine (see ``Engine.run`` for ``inline``, which the operation's
-    ``short`` may set too; waits and budgets count from the request's arrival) once its checks
-    pass; a domain error goes where ``locate`` places it in the request body."""
-    inline = inline or OPERATIONS[op].short(**kwargs)
+    """Run ``op`` on the engine, on its short lane where the operation says it is short (waits
+    and budgets count from the request's arrival), once its checks pass: a 422 under any load;
+    ``then`` of its result, in the lane too (``Engine.run``). A domain error goes where
+    ``locate`` places it in the request body."""
+    operation = OPERATIONS[op]
     try:
-        if not inline:  # inline, the operation itself raises the same at once; else its checks
-            OPERATIONS[op].check(**kwargs)  # before it waits for a solver: a 422 under any load
-        return await engine.run(op, inline, arrival(request), **kwargs)
+        operation.check(**kwargs)
+        return await engine.run(op, operation.short(**kwargs), arrival(request), then, **kwargs)
     except SynthError as e:
         raise Located(e, locate(e)) from None
 
 
 async def run_design(
-    request: Request, engine: Engine, op: str, design: Any, inline: bool = False, **kwargs: Any
+    request: Request,
+    engine: Engine,
+    op: str,
+    design: Any,
+    then: Callable[[Any], Any] | None = None,
+    **kwargs: Any,
 ) -> Any:
     """``run`` for an operation on one design of the request (``body.mechanism``): an error
     about its parameters is located at each parameter in ``mechanism.params``, any other at
@@ -82,7 +87,7 @@ async def run_design(
             return [("mechanism", "params", *e.loc)]
         return [e.loc]
 
-    return await run(request, engine, locate, op, inline, mechanism=design.type, params=params,
+    return await run(request, engine, locate, op, then, mechanism=design.type, params=params,
                      **kwargs)  # fmt: skip
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from ..analysis.kinematics import analyze, check_drawn, check_include
-from ..errors import InvalidParameters
+from ..errors import InvalidDesign, InvalidParameters
 from ..load import Load
 from ..mechanisms import all_types, get
 from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
@@ -112,8 +112,7 @@ def synthesize(
     else:
         cands, infeasible = _single(specs, targets, max_candidates, extras)
     if load is not None:  # what the returned candidates carry, theirs alone
-        cands = [c if c.loads else replace(c, loads=analyze(c.type, c.params, load=load).loads)
-                 for c in cands]  # fmt: skip
+        cands, infeasible = _loaded(cands, infeasible, load, targets.deadline)
     return SynthesisResult(
         candidates=tuple(cands),
         infeasible=tuple(infeasible),
@@ -162,6 +161,42 @@ def _verified(
         if c is not None:
             found.append(_Found(p.spec, c))
     return found, left
+
+
+def _loaded(
+    cands: list[Candidate], infeasible: list[Infeasible], load: Load, deadline: float
+) -> tuple[list[Candidate], list[Infeasible]]:
+    """The candidates with their loads (an analysis each where the search gave them none,
+    ~15 ms), best first until the deadline: the rest are left out, and a type left with none
+    says that the budget ran out. A design the load cannot be carried by (friction locks its
+    ram, or a dead point meets a load) is left out too; a type left with none says why."""
+    out: list[Candidate] = []
+    refused: dict[str, str] = {}
+    for c in cands:
+        if not c.loads:
+            if time.monotonic() >= deadline:
+                continue
+            try:
+                c = replace(c, loads=analyze(c.type, c.params, load=load).loads)
+            except InvalidDesign as e:
+                refused.setdefault(c.type, e.msg)
+                continue
+        out.append(c)
+    lost = dict.fromkeys(c.type for c in cands if not any(o.type == c.type for o in out))
+    return out, infeasible + [_unloaded(t, refused.get(t)) for t in lost]
+
+
+def _unloaded(mtype: str, refusal: str | None) -> Infeasible:
+    """Why a type's designs came back without their loads: the load's refusal of its best
+    design, else the budget."""
+    if refusal is not None:
+        why = f"no {mtype} design found carries this load: the best one is refused ({refusal})"
+        return Infeasible(mtype, "LOAD_NOT_CARRIED", why)
+    why = (
+        f"the time budget ran out before the loads of the {mtype} designs found were "
+        "analysed; ask again with a larger time_budget_ms"
+    )
+    return Infeasible(mtype, "BUDGET_EXHAUSTED", why)
 
 
 def _catalogue() -> str:

@@ -39,13 +39,11 @@ import math
 import threading
 import time
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from scipy.linalg import qr
-from scipy.optimize import minimize
 
 from ..analysis.quality import fluctuation
 from ..errors import SynthError
@@ -56,8 +54,24 @@ from . import aims, screen
 from .candidate import candidate
 from .diagnose import diagnose
 from .formulation import TIE, Formulation, formulate
-from .search import Proposal, Spec, Targets, Variant, proposal, same, scaled, search, whole
+from .search import Searched, Spec, Targets, Variant, proposal, same, scaled, search, whole
 from .solve import starts as halton
+
+
+def qr(*args: Any, **kwargs: Any) -> Any:
+    """scipy's, imported on first use (scipy.linalg and scipy.optimize: ~0.4 s of an import
+    of synth, as ``minimize``'s)."""
+    from scipy.linalg import qr
+
+    return qr(*args, **kwargs)
+
+
+def minimize(*args: Any, **kwargs: Any) -> Any:
+    """scipy's, imported on first use."""
+    from scipy.optimize import minimize
+
+    return minimize(*args, **kwargs)
+
 
 # SLSQP runs per variant from the best ranked of each source of starts: the exact solvers'
 # designs (STARTS), and projected points of the box, where the four-bars' other basins lie
@@ -106,16 +120,20 @@ def local_optima(
     limit: tuple[aims.Pick, float] | None,
     deadline: float,
     fixed_parts: bool = False,
-) -> list[dict[str, float]]:
-    """Local optima of the ``aim``'s measure over one variant, from ``starts`` (designs,
-    stroke units); ``targets`` is (time ratio, cos of the transmission bound). The measure is
-    a maximum of terms, so it is minimised in epigraph form: t, with t ≥ each of the
-    ``TERMS`` largest terms (a peak that moves to another place along the turn is then one
-    constraint handing over to another, not a kink), with the terms' exact derivatives; a
-    ``limit`` (terms, cap) bounds its terms alike. Designs in stroke units.
-    A default bound (not in ``explicit``) gives way to a start beyond it, as the exact
-    solvers' does to a length the targets set on their own. ``fixed_parts``: whether the
-    request fixes parts (more starts drawn, and about the starts where the box has few)."""
+) -> Iterator[dict[str, float]]:
+    """Local optima of the ``aim``'s measure over one variant, each as its run ends (verified
+    by the caller before the next), from ``starts`` (designs, stroke units); ``targets`` is
+    (time ratio, cos of the transmission bound). The measure is a maximum of terms, so it is
+    minimised in epigraph form: t, with t ≥ each of the ``TERMS`` largest terms (a peak that
+    moves to another place along the turn is then one constraint handing over to another,
+    not a kink), with the terms' exact derivatives; a ``limit`` (terms, cap) bounds its terms
+    alike. Designs in stroke units. A default bound (not in ``explicit``) gives way to a start
+    beyond it, as the exact solvers' does to a length the targets set on their own.
+    ``fixed_parts``: whether the request fixes parts (more starts drawn, and about the starts
+    where the box has few). The deadline is looked at before each evaluation of the measure
+    at a new design (a few ms, ~15 with a load): a run it cuts short ends at its last iterate."""
+    if time.monotonic() >= deadline:  # nothing built for a search that cannot run
+        return
     form = formulation(m, variant, free)
     key = (m.type, variant, free)  # the formulation's, for ``screen``'s compiled constraints
     pv = np.concatenate([[fixed[k] for k in form.fixed], targets])
@@ -130,6 +148,8 @@ def local_optima(
     def terms(y: np.ndarray) -> Any:
         key = y[:n].tobytes()
         if key not in memo:
+            if time.monotonic() >= deadline:
+                raise _Late
             if len(memo) > 256:
                 memo.clear()
             try:
@@ -225,7 +245,10 @@ def local_optima(
         source = np.arange(ends[j], ends[j + 1])
         taken = 0
         for k in source[np.argsort(value[source], kind="stable")]:
-            got = terms(points[k]) if np.isfinite(value[k]) and taken < most else None
+            try:
+                got = terms(points[k]) if np.isfinite(value[k]) and taken < most else None
+            except _Late:
+                return
             if got is not None:
                 measured.append((float(pick(got)[0].max()), points[k]))
                 taken += 1
@@ -236,19 +259,19 @@ def local_optima(
     if sc is not None and len(scaled) == 1 + len(sc.tied):
         for _, x in measured:
             x[scaled] *= max(lo[scaled] / x[scaled])
-    out = []
     ended: list[np.ndarray] = []  # where the runs so far ended
     for first, x0 in measured:
         if time.monotonic() >= deadline:
             break
         kept = equalities(x0)
         if kept.size == n:  # the equalities leave no freedom: the start is the optimum
-            out.append(design(x0))
+            yield design(x0)
             continue
         constraints = [{"type": "eq", "fun": lambda y, k=kept: rows(y)[0][k] - lbg[k],
                         "jac": lambda y, k=kept: rows(y)[1][k]}, *measures]  # fmt: skip
+        seen: list[np.ndarray] = []  # this run's iterates
 
-        def cap(y: np.ndarray, seen: list[np.ndarray] = []) -> None:  # noqa: B006 - this run's
+        def cap(y: np.ndarray, seen: list[np.ndarray] = seen) -> None:
             """Ends SLSQP (with its last iterate, projected below) at the deadline; once its
             iterates stand still (where its line search can no longer meet ``ftol`` it may
             repeat one point for a hundred iterations); or once it comes within ``NEAR`` of an
@@ -259,19 +282,27 @@ def local_optima(
             if still or known or time.monotonic() >= deadline:
                 raise StopIteration
 
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # SLSQP's notes on clipping to the bounds
-            res = minimize(lambda y: y[n] + TIE * (links @ y), np.append(x0, first),
-                           jac=lambda y: np.eye(n + 1)[n] + TIE * links, method="SLSQP",
-                           bounds=[*zip(lo, hi, strict=True), (0.0, None)],
-                           constraints=constraints, callback=cap,
-                           options={"maxiter": MAX_ITER, "ftol": 1e-12})  # fmt: skip
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # SLSQP's notes on clipping to the bounds
+                last = minimize(lambda y: y[n] + TIE * (links @ y), np.append(x0, first),
+                                jac=lambda y: np.eye(n + 1)[n] + TIE * links, method="SLSQP",
+                                bounds=[*zip(lo, hi, strict=True), (0.0, None)],
+                                constraints=constraints, callback=cap,
+                                options={"maxiter": MAX_ITER, "ftol": 1e-12}).x  # fmt: skip
+        except _Late:  # within an iteration: the run ends where its last one did
+            if not seen:
+                break
+            last = seen[-1]
         # SLSQP meets its constraints to ~1e-8, the verification asks 1e-9: projected onto
         # the equalities, the inequalities it is beyond held inside
-        for x in screen.project(form, key, res.x[None, :n], pv, lo, hi, every=False):
-            out.append(design(x))
+        for x in screen.project(form, key, last[None, :n], pv, lo, hi, every=False):
             ended.append(x)
-    return out
+            yield design(x)
+
+
+class _Late(Exception):
+    """The deadline passed before an evaluation of the measure (``local_optima``)."""
 
 
 def motion(
@@ -297,14 +328,18 @@ def motion(
             ))  # fmt: skip
             continue
         best_t = replace(t, objective=MAX_TRANSMISSION)
+        if time.monotonic() >= t.deadline:  # not begun: its reason says the budget ran out
+            infeasible.append(diagnose(m, spec, best_t, Searched()))
+            continue
         s = search(m, spec, i, best_t)
         pool = list(s.proposals)
         # the smallest designs, at the bound or at the least angle these searches keep
         small = replace(t, objective=MIN_SIZE, bound_deg=max(t.bound_deg, ACROSS_DEG))
         pool += search(m, spec, i, small).proposals
         mine = []
-        p: Proposal | None  # a proposal of the pool, then of an optimum
         for p in pool:
+            if time.monotonic() >= t.deadline:  # each an analysis: ~15 ms with a load
+                break
             c = candidate(m, p, t, s.variants, extras)
             if c is not None:
                 mine.append(c)
@@ -322,8 +357,8 @@ def motion(
                                   v.problem.explicit, targets, aim, starts, capped,
                                   t.deadline, bool(spec.fixed))  # fmt: skip
             for d in optima:
-                p = proposal(m, i, whole(spec, scaled(d, t.stroke), v.parts), "slsqp", t)
-                c = None if p is None else candidate(m, p, t, s.variants, extras)
+                q = proposal(m, i, whole(spec, scaled(d, t.stroke), v.parts), "slsqp", t)
+                c = None if q is None else candidate(m, q, t, s.variants, extras)
                 if c is not None:  # its family's smallest member, and it where that differs
                     smallest = _smallest_member(m, i, c, t, s.variants, extras)
                     mine += [smallest] if aim.scale_free else [c, smallest]
@@ -382,7 +417,7 @@ def _smallest_member(
 ) -> Candidate:
     """The smallest member of a candidate's family (the same motion and angles), verified."""
     f = c.family
-    if f is None:
+    if f is None or time.monotonic() >= t.deadline:  # past it: one analysis (~15 ms) saved
         return c
     (free,) = f.free
     lo = f.range[free][0]

@@ -16,6 +16,7 @@ Per variant (a slot drive, or a link where a part may be zero):
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -259,7 +260,7 @@ def ipopt(
     """Local optima of the formulation (caller's units) from the warm starts and valid cold
     ones, each with how it was found."""
     free, fixed = v.free, v.fixed
-    if not free:
+    if not free or time.monotonic() >= t.deadline:  # past it: no start would run (nor a build)
         return []
     b = built(m, v.parts, free, objective)
     s = t.stroke
