@@ -20,12 +20,13 @@ COPY api api
 # the project itself, for its command line (quickreturn); its dependencies are the lock's
 RUN pip install --no-cache-dir --no-deps --no-build-isolation .
 
-# the analysis compiled to machine code (synth/numerics/native.py), built here with a C compiler so that
-# the image carries the libraries and not the compiler
+# every compiled function a request can load, the analysis's and the motion search's, in machine
+# code (synth/numerics/native.py, synth/synthesis/warm.py), built here with a C compiler so that
+# the image carries the libraries and not the compiler: the service loads them as it starts
 FROM base AS native
 RUN apt-get update && apt-get install -y --no-install-recommends gcc libc6-dev \
     && rm -rf /var/lib/apt/lists/*
-RUN python -c "import synth.analysis.model; synth.analysis.model.compile_all()"
+RUN python -m synth.synthesis.warm
 
 FROM base
 COPY --from=native /opt/synth /opt/synth

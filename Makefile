@@ -46,19 +46,28 @@ notebook: $(VENV)/.dev
 		--display-name "quickreturn-synth (.venv)"
 	$(BIN)/jupyter lab $(JUPYTER_ARGS) notebooks/
 
-serve: $(VENV)/.runtime
+# every compiled function a request can load (the analysis's, the motion search's) in the disk
+# cache (SYNTH_CACHE, else ~/.cache/synth), built in a minute or two and again when synth's
+# sources change: the service loads them as it starts, no request waits for a compiler
+$(VENV)/.compiled: $(VENV)/.runtime $(shell find synth -name '*.py')
+	$(BIN)/python -m synth.synthesis.warm
+	touch $@
+
+serve: $(VENV)/.runtime $(VENV)/.compiled
 	$(BIN)/python -m api.serve
 
-test: $(VENV)/.dev
+test: $(VENV)/.dev $(VENV)/.compiled
 	$(BIN)/python -m pytest -q
 
 # the numerical-stability suite at full length (≥ 10 000 hypothesis cases per type and property)
 # and the full global-search cross-check of the synthesis optima (≥ 20 targets per type), and
-# the envelope against dense pin paths on more designs, and the motion objectives' referee
-# for the crank-rocker
+# the envelope against dense pin paths on more designs, the motion objectives' referee for the
+# crank-rocker, and 5 000 loaded analyses and 500 loaded syntheses at the limits, and 1 000
+# budgeted syntheses on the server, each within its budget (200 in `make test`)
 stress: $(VENV)/.dev
 	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q tests/referees/test_stress.py tests/referees/test_global_search.py \
-		tests/referees/test_quality.py tests/referees/test_motion_search.py
+		tests/referees/test_quality.py tests/referees/test_motion_search.py tests/referees/test_loaded_limits.py
+	SYNTH_BUDGET_REQUESTS=1000 $(BIN)/python -m pytest -q tests/service/test_budgets.py
 
 # the design atlas the service ships (GET /v1/atlas) and the README's charts: docs/atlas/,
 # resumed if interrupted; its summary goes to api/atlas.json, the one copy the service serves
@@ -67,7 +76,7 @@ atlas: $(VENV)/.dev
 	mv docs/atlas/atlas.json api/atlas.json
 
 # run time against error, analysis cost, service latency: tables, benchmarks/results/*.json, plots
-bench: $(VENV)/.dev
+bench: $(VENV)/.dev $(VENV)/.compiled
 	$(BIN)/python -m benchmarks
 
 # the style and the types: ruff's lint and its format check over the repository, and mypy

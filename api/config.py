@@ -36,10 +36,26 @@ class Settings(BaseSettings):
     # share one interpreter, so more threads would only take turns: each solve slower, and a
     # budget that binds under load changes the answer); a process pool: every core
     workers: int | None = Field(None, ge=1)
+    # threads of this server process for short work (analyses of up to 1 000 curve points,
+    # exports, syntheses the exact solvers answer alone), beside the solvers: short work never
+    # waits behind a long solve, and none runs in the event loop (api.engine)
+    short_workers: int = Field(1, ge=1)
     # a request must arrive whole (headers and body) this soon after the connection, or after
     # its first byte on a kept-alive one, else 408 and the connection is closed (api.connection)
     request_timeout_s: float = Field(5.0, gt=0)
-    warm: bool = True  # build the common solvers in the workers at start, in the background
+    # a connection whose client takes no byte of its reply for this long is closed, the reply
+    # dropped (api.connection)
+    write_timeout_s: float = Field(5.0, gt=0)
+    # replies written but not yet taken by their clients, per server process: one that would
+    # take them past this gets a 503 with Retry-After instead (api.connection)
+    max_unsent_mb: float = Field(64.0, gt=0)
+    # the names a request's Host may give (comma-separated, any port; "*": any). Unset: the
+    # loopback names on a connection made to a loopback address, any name on others (api.gate)
+    allowed_hosts: str | None = Field(None, validation_alias="ALLOWED_HOSTS")
+    # the proxies whose X-Forwarded-For and -Proto `api.serve` trusts (uvicorn's list of
+    # addresses and networks, "*": any). Unset: none (uvicorn's own default trusts 127.0.0.1)
+    forwarded_allow_ips: str | None = Field(None, validation_alias="FORWARDED_ALLOW_IPS")
+    warm: bool = True  # build what requests reach before the service listens (api.engine)
     # a line per request on stdout (uvicorn's access log): ~40 µs of a server process's time a
     # request, a tenth of a short analysis's (docs/benchmarks.md), so off unless asked for
     access_log: bool = False

@@ -15,13 +15,20 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from ..errors import InvalidParameters, SynthError
 from ..mechanisms import get
 from ..numerics.dense import bisect
 from ..results import Analysis, Extremum, MinMax, SweepResult
 from .kinematics import analyze, analyze_many
+
+
+def minimize_scalar(*args: Any, **kwargs: Any) -> Any:
+    """scipy's, imported on first use (scipy.optimize: ~0.2 s of an import of synth)."""
+    from scipy.optimize import minimize_scalar
+
+    return minimize_scalar(*args, **kwargs)
+
 
 MAX_POINTS = 10_000
 CHUNK = 256  # points analysed between two looks at the clock (~25 ms of a four-bar's)

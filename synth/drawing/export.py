@@ -9,7 +9,6 @@ from typing import Any
 
 from ..errors import InvalidParameters
 from . import FORMATS, check_angle, drawing, drawn, sketch, unit_mm
-from .dxf import dxf
 from .svg import svg
 
 
@@ -36,7 +35,11 @@ def export(
         return json.dumps(
             {"drawing": asdict(d), "sketch": asdict(sketch(d))}, default=_listed
         ).encode()
-    return svg(d, length_unit).encode() if format == "svg" else dxf(d, length_unit)
+    if format == "svg":
+        return svg(d, length_unit).encode()
+    from .dxf import dxf  # ezdxf: ~0.2 s to import, so on the first DXF
+
+    return dxf(d, length_unit)
 
 
 def _listed(x: Any) -> Any:

@@ -9,28 +9,23 @@ IPOPT's local optima of the diagnostic objectives (formulation.DIAGNOSTICS).
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Hashable, Iterator
 from dataclasses import dataclass, field, replace
-from functools import lru_cache
 
 from ..analysis.kinematics import analyze
 from ..errors import SynthError, Unreachable
 from ..mechanisms import Mechanism
 from ..mechanisms.reduced import differ
-from ..numerics.dense import bisect
 from ..results import TOL, Infeasible
 from ..targets import MAX_TRANSMISSION, time_ratio
+from . import scans
 from .search import Searched, Spec, Targets, Variant, ipopt, predict, scaled, whole
 
-GRID = 17  # time ratios scanned for the reachable range
-TOP = math.pi * (1 - 1e-6)  # β of the largest time ratio tried, about 2e6
 SCAN_TOL = 1e-6  # relative: a design at the scan's time ratio
 # β of the range's ends: the one the target lies beyond tighter than the verification (it tells
 # how far to move), the other to the six digits a message prints
 NEAR_END, FAR_END = 1e-10, 1e-6
-RANGES = 256  # reachable ranges kept per process (least recently used dropped)
 
 
 def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
@@ -52,6 +47,8 @@ def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
             f"{t.bound_deg:g}°",
             best_transmission_angle_deg=best,
         )
+    if time.monotonic() >= t.deadline:  # then what follows would end so: not begun
+        return _budget(m)
     trs = [tr for v in searchable for tr in _reach(m, v, spec, t)]
     if time.monotonic() >= t.deadline:
         return _budget(m)
@@ -134,21 +131,22 @@ def _reach(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
             if mu >= t.bound_deg - TOL * max(t.bound_deg, 1.0)
         ]
     scan = _Scan.of(m, v, t)
-    ends = _ends(scan)
-    if ends is None:
-        return []
     # the end the target lies beyond to NEAR_END, the other to FAR_END. Bisection from a kept
     # bracket goes on along the same midpoints, so the numbers do not depend on what was asked
-    # before; threads that narrow the same end at once at most repeat each other's work
-    below = t.beta < ends[0][1]
-    out = []
-    for k, tol in enumerate((NEAR_END, FAR_END) if below else (FAR_END, NEAR_END)):
-        inside, outside = bisect(scan.ok, ends[k][1], ends[k][0], tol)
-        bracket = (outside, inside)
-        if abs(bracket[1] - bracket[0]) < abs(ends[k][1] - ends[k][0]):
-            ends[k] = bracket
-        out.append(time_ratio(bracket[1]))
-    return out
+    # before; threads that narrow the same end at once at most repeat each other's work. What
+    # the deadline stops is kept for the next request (then this one says its budget ran out)
+    try:
+        ends = scans.ends(scan, t.deadline)
+        if ends is None:
+            return []
+        below = t.beta < ends[0][1]
+        out = []
+        for k, tol in enumerate((NEAR_END, FAR_END) if below else (FAR_END, NEAR_END)):
+            bracket = scans.narrowed(scan, ends, k, tol, t.deadline)
+            out.append(time_ratio(bracket[1]))
+        return out
+    except scans.Late:
+        return []
 
 
 @dataclass(frozen=True)
@@ -176,26 +174,9 @@ class _Scan:
         return angles is not None and any(a >= bound for a in angles)
 
 
-@lru_cache(maxsize=RANGES)
-def _ends(scan: _Scan) -> list[tuple[float, float]] | None:
-    """The brackets (β outside, β inside) of the reachable range's two ends on a grid of β,
-    narrowed in place as queries need; None if no β has a design. Kept per process: a
-    designer sweeping the time ratio past an end, or a tool checking many targets against the
-    same parts, pays the grid once and each end's bisection once."""
-    betas = [TOP * k / (GRID - 1) for k in range(GRID)]
-    flags = [scan.ok(b) for b in betas]
-    if not any(flags):
-        return None
-    i = flags.index(True)
-    j = len(flags) - 1 - flags[::-1].index(True)
-    low = (betas[i], betas[i]) if i == 0 else (betas[i - 1], betas[i])
-    high = (betas[j], betas[j]) if j == GRID - 1 else (betas[j + 1], betas[j])
-    return [low, high]
-
-
 def forget_ranges() -> None:
     """Drop the reachable ranges kept (a benchmark timing each refusal's whole cost)."""
-    _ends.cache_clear()
+    scans.forget()
 
 
 def _optima(

@@ -19,12 +19,12 @@ from typing import Any, cast
 
 import casadi as ca
 import numpy as np
-from scipy.stats import qmc
 
 from ..analysis.kinematics import analyze
 from ..analysis.terms import worst_transmission
 from ..errors import SynthError
 from ..mechanisms import Mechanism
+from ..numerics.halton import halton
 from .formulation import Formulation, formulate
 
 MAX_ITER = 200
@@ -101,7 +101,7 @@ def starts(lo: np.ndarray, hi: np.ndarray, log: np.ndarray, n: int) -> np.ndarra
     """n deterministic points in the box: Halton, log-uniform where ``log`` (positive bounds)."""
     if lo.size == 0:
         return np.zeros((min(n, 1), 0))
-    u = qmc.Halton(d=lo.size, scramble=False).random(n + 1)[1:]  # skip the corner point 0
+    u = halton(lo.size, n + 1)[1:]  # skip the corner point 0
     llo, lhi = np.log(np.where(log, lo, 1.0)), np.log(np.where(log, hi, 1.0))
     return cast(np.ndarray, np.where(log, np.exp(llo + u * (lhi - llo)), lo + u * (hi - lo)))
 

@@ -66,9 +66,11 @@ def test_a_resumed_run_computes_only_what_is_missing(tmp_path):
 
 
 def test_a_killed_run_resumes_to_the_same_atlas(tmp_path):
-    """The command line, killed once its first chunks are written, then run again."""
+    """The command line, killed once its first chunks are written, then run again (n chunks,
+    ~1 ms each: the kill comes with work left)."""
+    n = 240
     args = [sys.executable, "-m", "synth.atlas", "--types", "offset_slider_crank", "whitworth",
-            "--ratios", "1.1:3.0:24", "--bounds", "20", "--chunk", "2", "--workers", "2",
+            "--ratios", f"1.1:3.0:{n}", "--bounds", "20", "--chunk", "2", "--workers", "2",
             "--out", str(tmp_path)]  # fmt: skip
     proc = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     chunks = tmp_path / "chunks"
@@ -78,11 +80,11 @@ def test_a_killed_run_resumes_to_the_same_atlas(tmp_path):
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     written = len(list(chunks.glob("*.json")))
-    assert 3 <= written < 24, written  # killed with work left
-    ratios = [1.1 + 1.9 * k / 23 for k in range(24)]
+    assert 3 <= written < n, written  # killed with work left
+    ratios = [1.1 + 1.9 * k / (n - 1) for k in range(n)]
     inputs = {"types": ("offset_slider_crank", "whitworth"), "bounds": (20.0,), "chunk": 2}
     resumed = atlas(ratios=[round(r, 12) for r in ratios], **inputs, inline=True, out=tmp_path)
-    assert resumed.computed == 24 - written
+    assert resumed.computed == n - written
     same(resumed, atlas(ratios=[round(r, 12) for r in ratios], **inputs, inline=True))
 
 
