@@ -2,21 +2,24 @@
 
     python -m benchmarks.overload [--quick]
 
-A mixed load from 16 and then 64 clients, each on its own keep-alive connection, for a bounded
-time: analyses, syntheses (default ones of each type, and ones that need IPOPT), sweeps,
-invalid requests, and heavy ones (20 000 curve points with pins, a 2 001-point sweep, a body
-of 20 000 unknown fields); every synthesis and sweep in each of the budget classes
-``BUDGETS_MS`` in turn. Meanwhile a prober asks /health every 50 ms on its own connection.
-Reported per client count:
+Three mixes, each from its own clients on their own keep-alive connections, for a bounded
+time, while a prober asks /health every 50 ms on its own connection:
 
-- per budget class: the share served (200), the share refused (503 with Retry-After), each
-  served synthesis's wall time against the budget (the contract: p99 ≤ budget + 100 ms), and
-  the longest a 503 took against the documented wait, min(½ budget, 1 s) (the contract: ≤
-  that + 50 ms);
-- statuses, and errors: 5xx other than 503, and dropped connections (the contract: 0);
-- /health latency (p50, p99; the contract: p99 ≤ 100 ms);
+- ``mixed``, from 16 and then 64 clients: analyses, syntheses (default ones of each type, and
+  ones that need IPOPT), sweeps, invalid requests, and heavy ones (20 000 curve points with
+  pins, a 2 001-point sweep, a body of 20 000 unknown fields); every synthesis and sweep in
+  each of the budget classes ``BUDGETS_MS`` in turn;
+- ``inline``, from 48 clients: what once ran in the event loop, at its heaviest (analyses of
+  1 000 curve points with pins, default syntheses of all six types, loaded analyses);
+- ``loaded``, from 16 clients: loaded analyses and syntheses of random types, curve lengths
+  and force profiles (what once grew a process by ~35 MB for each new number of points).
 
-and the server's memory (RSS of all its processes) before and after 20 000 requests of the
+Reported per mix and client count: statuses and errors (5xx other than 503, and dropped
+connections; the contract: 0), /health latency (p50, p99, max), and the resident memory of
+each server process before and after; for ``mixed``, per budget class: the share served (200),
+the share refused (503 with Retry-After), each served synthesis's wall time against the
+budget, and the longest a 503 took against the documented wait, min(½ budget, 1 s). Last,
+the memory of all the server's processes before and after 20 000 requests of the ``loaded``
 mix. The load generator shares the machine's cores with the server: a floor.
 """
 
@@ -28,7 +31,11 @@ import json
 import random
 import statistics
 from pathlib import Path
+from typing import Any
 
+import numpy as np
+
+import synth
 from api.examples import DRAG_LINK
 
 from . import load
@@ -37,7 +44,9 @@ from .server import serving
 from .service import default_body
 
 BUDGETS_MS = (300.0, 500.0, 800.0, 1000.0, 2000.0)
-CLIENTS = (16, 64)
+CLIENTS = (16, 64)  # the mixed load's client counts
+INLINE_CLIENTS = 48
+LOADED_CLIENTS = 16
 WAIT_SLACK_MS = 50.0  # a 503's wall time may exceed the documented wait by this much
 WAIT_MAX_MS = 1000.0  # the documented wait: min(½ budget, this)
 
@@ -71,6 +80,86 @@ def mix() -> list[tuple[str, dict, float | None]]:
     return out + [("/v1/analyze", body, None) for body in bad] + heavy
 
 
+def inline_mix() -> list[tuple[str, dict, float | None]]:
+    """What once ran in the event loop, at its heaviest: 1 000 curve points with pins, the
+    default synthesis of all six types, a loaded analysis."""
+    analyze = {"mechanism": {"type": "drag_link_slider", "params": DRAG_LINK}}
+    heavy = {**analyze, "samples": 1000, "include": ["pins"]}
+    synthesize = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0}
+    loaded = {**analyze, "load": {"length_unit": "mm", "crank_rpm": 40, "cutting_force": 2000}}
+    return [
+        ("/v1/analyze", heavy, None),
+        ("/v1/synthesize", synthesize, 2000.0),
+        ("/v1/analyze", loaded, None),
+        ("/v1/analyze", analyze, None),
+    ]
+
+
+def random_load(rng: np.random.Generator) -> dict[str, Any]:
+    """A random load: a cutting force or a force profile of 2–60 points, a ram, maybe links
+    with mass and guide friction."""
+    out: dict[str, Any] = {
+        "length_unit": str(rng.choice(["m", "mm", "in"])),
+        "crank_rpm": float(rng.uniform(5, 120)),
+        "slider_mass": float(rng.uniform(0, 50)),
+    }
+    if rng.random() < 0.5:
+        k = int(rng.integers(2, 61))
+        u = np.linspace(0, 1, k) if rng.random() < 0.2 else np.sort(rng.uniform(0, 1, k))
+        forces = rng.uniform(0, 3000, k)
+        out["force_profile"] = [[float(a), float(f)] for a, f in zip(u, forces, strict=True)]
+    else:
+        out["cutting_force"] = float(rng.uniform(0, 3000))
+    if rng.random() < 0.3:
+        out["link_mass_per_length"] = float(rng.uniform(0, 10))
+    if rng.random() < 0.3:
+        out["guide_friction"] = float(rng.uniform(0, 0.2))
+    return out
+
+
+def loaded_mix(n: int, seed: int = 38) -> list[tuple[str, dict, float | None]]:
+    """n loaded requests of random types and sizes: four in five analyses (1–5 000 curve
+    points, or up to 300 given angles; a third with the joints' forces) of designs this
+    library synthesised, the rest syntheses of one type."""
+    rng = np.random.default_rng(seed)
+    designs = {}
+    for t in synth.mechanisms.all_types():
+        tr = 1.0 if t == "scotch_yoke" else 1.5
+        designs[t] = [
+            c.params
+            for c in synth.synthesize(tr, 300.0, 10.0, mechanisms=[t], max_candidates=10).candidates
+        ]
+    types = [t for t in designs if designs[t]]
+    out: list[tuple[str, dict, float | None]] = []
+    for _ in range(n):
+        t = types[int(rng.integers(len(types)))]
+        if rng.random() < 0.8:
+            params = designs[t][int(rng.integers(len(designs[t])))]
+            body: dict[str, Any] = {
+                "mechanism": {"type": t, "params": params},
+                "load": random_load(rng),
+            }
+            if rng.random() < 0.7:
+                body["samples"] = int(rng.integers(1, 5001))
+            else:
+                body["crank_angles_deg"] = rng.uniform(0, 360, int(rng.integers(1, 300))).tolist()
+            if rng.random() < 0.3:
+                body["include"] = ["forces"]
+            out.append(("/v1/analyze", body, None))
+        else:
+            body = {
+                "time_ratio": 1.0 if t == "scotch_yoke" else float(rng.uniform(1.2, 2.5)),
+                "stroke": float(rng.uniform(1, 500)),
+                "min_transmission_angle_deg": float(rng.uniform(0, 30)),
+                "mechanisms": [{"type": t}],
+                "max_candidates": int(rng.integers(1, 8)),
+                "load": random_load(rng),
+                "time_budget_ms": 5000.0,
+            }
+            out.append(("/v1/synthesize", body, 5000.0))
+    return out
+
+
 def quantiles(xs: list[float]) -> dict:
     if not xs:
         return {"p50": None, "p99": None, "max": None}
@@ -78,13 +167,23 @@ def quantiles(xs: list[float]) -> dict:
     return {"p50": q[49], "p99": q[98], "max": max(xs)}
 
 
-def drive(port: int, clients: int, seconds: float, requests: int | None = None) -> dict:
-    """``clients`` keep-alive clients sending the mix (each in its own seeded shuffle, over
-    and over) for ``seconds`` (or until ``requests`` in all), and the /health prober."""
-    bodies = [(path, json.dumps(b).encode(), (path, budget)) for path, b, budget in mix()]
-    orders = [itertools.cycle(random.Random(k).sample(bodies, len(bodies)))
+def drive(
+    port: int,
+    clients: int,
+    seconds: float,
+    requests: int | None = None,
+    bodies: list[tuple[str, dict, float | None]] | None = None,
+) -> dict:
+    """``clients`` keep-alive clients sending a mix (``mix()`` unless given; each client in its
+    own seeded shuffle, over and over) for ``seconds`` (or until ``requests`` in all), and the
+    /health prober; with the RSS of each server process before and after (MB)."""
+    payloads = [(path, json.dumps(b).encode(), (path, budget))
+                for path, b, budget in (bodies or mix())]  # fmt: skip
+    orders = [itertools.cycle(random.Random(k).sample(payloads, len(payloads)))
               for k in range(clients)]  # fmt: skip
+    before = rss_mb(port)
     d = load.drive(port, orders, seconds, total=requests, probe_s=0.05)
+    after = rss_mb(port)
     done = [(*s.tag, str(s.status), s.ms) for s in d.sent]  # path, budget, status, ms
     statuses = {str(k): n for k, n in load.statuses(d.sent).items()}
     errors = sum(n for k, n in statuses.items() if not k.isdigit() or (k[0] == "5" and k != "503"))
@@ -93,7 +192,7 @@ def drive(port: int, clients: int, seconds: float, requests: int | None = None) 
             "synthesis_wall_ms": quantiles([ms for p, _, k, ms in done
                                             if p == "/v1/synthesize" and k == "200"]),
             "health_ms": quantiles(d.health_ms), "statuses": statuses,
-            "errors": errors}  # fmt: skip
+            "errors": errors, "rss_mb_before": before, "rss_mb_after": after}  # fmt: skip
 
 
 def budget_class(done: list[tuple[str, float | None, str, float]], budget: float) -> dict:
@@ -110,44 +209,57 @@ def budget_class(done: list[tuple[str, float | None, str, float]], budget: float
             "refusal_max_ms": max(refused, default=None)}  # fmt: skip
 
 
-def rss_kb(pid: int) -> int:
-    """The resident memory of ``pid`` and every process below it."""
-    total = 0
-    for p in {pid, *descendants(pid)}:
+_SERVER: dict[int, int] = {}  # port: the server's first process (``main``)
+
+
+def rss_mb(port: int) -> dict[str, float]:
+    """The resident memory of each process of the server on ``port`` (MB, by pid)."""
+    pid = _SERVER.get(port)
+    out = {}
+    for p in sorted({pid, *descendants(pid)} if pid else ()):
         try:
             for line in Path(f"/proc/{p}/status").read_text().splitlines():
                 if line.startswith("VmRSS:"):
-                    total += int(line.split()[1])
+                    out[str(p)] = int(line.split()[1]) / 1024
         except OSError:
             pass
-    return total
+    return out
 
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="a smoke run: a few seconds each")
-    ap.add_argument("--seconds", type=float, default=30.0, help="per client count")
+    ap.add_argument("--seconds", type=float, default=30.0, help="per mix and client count")
     a = ap.parse_args(argv)
     seconds, volume = (3.0, 500) if a.quick else (float(a.seconds), 20_000)
+    loaded = loaded_mix(200 if a.quick else 2000)
     with serving("shipped", defaults=True) as (port, proc):
+        _SERVER[port] = proc.pid
         drive(port, 4, seconds / 3)  # warm-up: every process's models and solvers
         rows = [drive(port, n, seconds) for n in CLIENTS]
-        before = rss_kb(proc.pid)
-        memory = drive(port, 16, 600.0, requests=volume)
-        after = rss_kb(proc.pid)
-    flat = [{"clients": r["clients"], "requests": r["requests"], "errors": r["errors"],
-             "refused_503": r["statuses"].get("503", 0),
-             "synth_p99_ms": r["synthesis_wall_ms"]["p99"],
-             "synth_max_ms": r["synthesis_wall_ms"]["max"],
-             "health_p99_ms": r["health_ms"]["p99"]} for r in rows]  # fmt: skip
+        inline = drive(port, INLINE_CLIENTS, seconds, bodies=inline_mix())
+        mixes = {
+            "mixed": rows,
+            "inline": [inline],
+            "loaded": [drive(port, LOADED_CLIENTS, seconds, bodies=loaded)],
+        }
+        before = sum(rss_mb(port).values())
+        memory = drive(port, 16, 600.0, requests=volume, bodies=loaded)
+        after = sum(rss_mb(port).values())
+    flat = [{"mix": name, "clients": r["clients"], "requests": r["requests"],
+             "errors": r["errors"], "refused_503": r["statuses"].get("503", 0),
+             "health_p50_ms": r["health_ms"]["p50"], "health_p99_ms": r["health_ms"]["p99"],
+             "health_max_ms": r["health_ms"]["max"],
+             "rss_mb_before": " ".join(f"{v:.0f}" for v in r["rss_mb_before"].values()),
+             "rss_mb_after": " ".join(f"{v:.0f}" for v in r["rss_mb_after"].values())}
+            for name, rs in mixes.items() for r in rs]  # fmt: skip
     print(table(flat, tuple(flat[0])))
     classes = [{"clients": r["clients"], **c} for r in rows for c in r["classes"]]
     print(table(classes, tuple(classes[0])))
-    growth = {"requests": memory["requests"], "rss_before_mb": before / 1024,
-              "rss_after_mb": after / 1024, "growth_mb": (after - before) / 1024,
-              "errors": memory["errors"]}  # fmt: skip
+    growth = {"requests": memory["requests"], "rss_before_mb": before, "rss_after_mb": after,
+              "growth_mb": after - before, "errors": memory["errors"]}  # fmt: skip
     print(table([growth], tuple(growth)))
-    return report("overload", {"rows": rows, "memory": growth}, quick=a.quick)
+    return report("overload", {"rows": rows, "mixes": mixes, "memory": growth}, quick=a.quick)
 
 
 if __name__ == "__main__":

@@ -3,7 +3,7 @@ what they report holds (ours solves every feasible target it is given and refuse
 infeasible one, to 1e-12, never worse than the generic multistart; the service answers every
 request). Timings are printed, never asserted."""
 
-from benchmarks import analysis, overload, service, synthesis
+from benchmarks import analysis, overload, service, startup, synthesis
 from synth.mechanisms import all_types
 
 
@@ -71,7 +71,18 @@ def test_overload_benchmark_quick():
     connection, every synthesis and /health answered (their times are the benchmark's)."""
     out = overload.main(["--quick"])
     assert [r["clients"] for r in out["rows"]] == list(overload.CLIENTS)
-    for r in [*out["rows"], out["memory"]]:
+    assert list(out["mixes"]) == ["mixed", "inline", "loaded"]
+    rows = [r for rs in out["mixes"].values() for r in rs]
+    for r in [*rows, out["memory"]]:
         assert r["errors"] == 0, r
-    for r in out["rows"]:
+    for r in rows:
         assert r["synthesis_wall_ms"]["max"] is not None and r["health_ms"]["max"] is not None
+        assert r["rss_mb_before"].keys() == r["rss_mb_after"].keys() and r["rss_mb_after"], r
+
+
+def test_startup_benchmark_quick():
+    out = startup.main(["--quick"])
+    assert [r["module"] for r in out["imports"]] == ["synth", "api.main"]
+    assert {r["start"] for r in out["ready"]} == {"warm_cache", "no_warm_up"}
+    assert all(r["median_s"] > 0 for r in out["imports"] + out["ready"])
+    assert [r["request"] for r in out["first_requests"]] == [w for w, _ in startup.FIRST]

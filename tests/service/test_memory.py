@@ -1,0 +1,123 @@
+"""A server's memory is bounded by design: no request-controlled number (how many curve
+points, how long a force profile, which type) makes it keep more. Against the real server:
+1 000 loaded analyses and syntheses of random sizes and types, RSS of each server process
+measured after the first 50 and at the end."""
+
+from __future__ import annotations
+
+import http.client
+import json
+import threading
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from tests.support.bruteforce import TYPES
+from tests.support.designs import random_designs
+from tests.support.server import descendants, serving
+
+REQUESTS = 1000
+FIRST = 50  # requests before the baseline: what a process builds once is in it by then
+GROWTH_MB = 50.0  # the most a process's RSS may grow after them
+CLIENTS = 4
+
+
+def rss_mb(pid: int) -> float:
+    return int(Path(f"/proc/{pid}/statm").read_text().split()[1]) * 4096 / 1e6
+
+
+def load(rng: np.random.Generator) -> dict[str, Any]:
+    """A random load: a cutting force or a force profile of 2–60 points, a ram, maybe links
+    with mass and guide friction."""
+    out: dict[str, Any] = {
+        "length_unit": str(rng.choice(["m", "mm", "in"])),
+        "crank_rpm": float(rng.uniform(5, 120)),
+        "slider_mass": float(rng.uniform(0, 50)),
+    }
+    if rng.random() < 0.5:
+        k = int(rng.integers(2, 61))
+        u = np.linspace(0, 1, k) if rng.random() < 0.2 else np.sort(rng.uniform(0, 1, k))
+        forces = rng.uniform(0, 3000, k)
+        out["force_profile"] = [[float(a), float(f)] for a, f in zip(u, forces, strict=True)]
+    else:
+        out["cutting_force"] = float(rng.uniform(0, 3000))
+    if rng.random() < 0.3:
+        out["link_mass_per_length"] = float(rng.uniform(0, 10))
+    if rng.random() < 0.3:
+        out["guide_friction"] = float(rng.uniform(0, 0.2))
+    return out
+
+
+def requests(seed: int) -> list[tuple[str, dict[str, Any]]]:
+    rng = np.random.default_rng(seed)
+    designs = {t: random_designs(t, 20, seed=seed) for t in TYPES}
+    out = []
+    for _ in range(REQUESTS):
+        t = str(rng.choice(TYPES))
+        if rng.random() < 0.8:
+            body: dict[str, Any] = {
+                "mechanism": {"type": t, "params": designs[t][int(rng.integers(20))]},
+                "load": load(rng),
+            }
+            if rng.random() < 0.7:
+                body["samples"] = int(rng.integers(1, 5001))
+            else:
+                body["crank_angles_deg"] = rng.uniform(0, 360, int(rng.integers(1, 300))).tolist()
+            if rng.random() < 0.3:
+                body["include"] = ["forces"]
+            out.append(("/v1/analyze", body))
+        else:
+            body = {
+                "time_ratio": float(rng.uniform(1.2, 2.5)),
+                "stroke": float(rng.uniform(1, 500)),
+                "min_transmission_angle_deg": float(rng.uniform(0, 30)),
+                "mechanisms": [{"type": t}],
+                "max_candidates": int(rng.integers(1, 8)),
+                "load": load(rng),
+                "time_budget_ms": 1000,
+            }
+            out.append(("/v1/synthesize", body))
+    return out
+
+
+def send(port: int, work: list[tuple[str, dict[str, Any]]], statuses: list[int]) -> None:
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=120)
+    try:
+        for path, body in work:
+            conn.request("POST", path, json.dumps(body), {"Content-Type": "application/json"})
+            r = conn.getresponse()
+            r.read()
+            statuses.append(r.status)
+            if r.getheader("connection") == "close":
+                conn.close()
+    finally:
+        conn.close()
+
+
+def run(port: int, work: list[tuple[str, dict[str, Any]]]) -> list[int]:
+    statuses: list[int] = []
+    parts = [work[i::CLIENTS] for i in range(CLIENTS)]
+    threads = [threading.Thread(target=send, args=(port, part, statuses)) for part in parts]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    return statuses
+
+
+def test_random_loaded_requests_do_not_grow_a_process() -> None:
+    work = requests(seed=38)
+    with serving() as (port, proc):
+        processes = sorted(descendants(proc.pid))
+        first = run(port, work[:FIRST])
+        before = {pid: rss_mb(pid) for pid in processes}
+        rest = run(port, work[FIRST:])
+        after = {pid: rss_mb(pid) for pid in processes}
+    statuses = first + rest
+    assert len(statuses) == REQUESTS
+    counts = {s: statuses.count(s) for s in set(statuses)}
+    print(counts)
+    assert set(counts) <= {200, 422, 503} and counts.get(200, 0) >= 0.7 * REQUESTS, counts
+    grown = {pid: round(after[pid] - before[pid], 1) for pid in processes}
+    assert max(grown.values()) <= GROWTH_MB, f"RSS grew (MB): {grown}, from {before}"
