@@ -35,7 +35,7 @@ from multiprocessing.context import BaseContext
 from multiprocessing.process import BaseProcess
 from typing import Any, cast
 
-from synth.synthesis import warm
+from synth.synthesis import scans, warm
 
 from .config import Settings, get_settings
 from .operations import OPERATIONS
@@ -78,7 +78,8 @@ def _warm(lane: str, barrier: threading.Barrier | None = None) -> int:
     if lane == "short":
         warm.warm(("kinematics",), searches=False)
     else:
-        warm.warm()
+        warm.warm()  # and the thread that makes a refusal's scans, for the syntheses here
+        scans.prepare(partial(warm.warm, ("kinematics",), searches=False)).result()
     return os.getpid()
 
 

@@ -2,8 +2,8 @@
 
 Runs ``WEB_CONCURRENCY`` uvicorn processes (default: one per core) on one listening socket;
 ``HOST`` and ``PORT`` give the defaults of ``--host`` and ``--port`` (``api.config``).
-Each process answers short analyses in its own event loop and solves in its own solver threads
-(``api.config``); the processes share nothing, so analysis throughput scales with the cores.
+Each process answers in its own event loop and works in its own threads (``api.engine``'s
+lanes); the processes share nothing, so throughput scales with the cores.
 The event loop is uvloop's where it is installed (uvicorn's "auto" loop; the lock installs it):
 ~5% less of a process's time per short request than asyncio's (docs/benchmarks.md).
 Their connections are ``api.connection``'s: a request that does not arrive whole in time is

@@ -11,12 +11,13 @@ import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 import urllib.error
 import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import IO, Any
 
 from .common import descendants
 
@@ -83,21 +84,36 @@ def serving(
     base = {k: v for k, v in os.environ.items()
             if not defaults or (k != "WEB_CONCURRENCY" and "SYNTH_" not in k)}  # fmt: skip
     port = free_port()
-    proc = subprocess.Popen(
-        [*cmd, str(port)], cwd=ROOT, env={**base, "SYNTH_WARM": "1", **settings, **env},
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )  # fmt: skip
-    started: set[int] = set()
-    try:
-        wait_for_health(port, proc, timeout=HEALTH_S)
-        started = descendants(proc.pid)
-        yield port, proc
-    finally:
-        started |= descendants(proc.pid)
-        proc.send_signal(signal.SIGTERM)
+    environment = {**base, "SYNTH_WARM": "1", **settings, **env}
+    processes = int(environment.get("WEB_CONCURRENCY") or len(os.sched_getaffinity(0)))
+    with tempfile.TemporaryFile() as log:
+        proc = subprocess.Popen([*cmd, str(port)], cwd=ROOT, env=environment,
+                                stdout=subprocess.DEVNULL, stderr=log)  # fmt: skip
+        started: set[int] = set()
         try:
-            proc.wait(timeout=STOP_S)
+            wait_for_health(port, proc, timeout=HEALTH_S)
+            ready(log, processes, proc, timeout=HEALTH_S)
+            started = descendants(proc.pid)
+            yield port, proc
         finally:
-            for pid in started | ({proc.pid} if proc.poll() is None else set()):
-                with contextlib.suppress(OSError):
-                    os.kill(pid, signal.SIGKILL)
+            started |= descendants(proc.pid)
+            proc.send_signal(signal.SIGTERM)
+            try:
+                proc.wait(timeout=STOP_S)
+            finally:
+                for pid in started | ({proc.pid} if proc.poll() is None else set()):
+                    with contextlib.suppress(OSError):
+                        os.kill(pid, signal.SIGKILL)
+
+
+def ready(log: IO[bytes], processes: int, proc: subprocess.Popen[bytes], timeout: float) -> None:
+    """Wait until each of a server's ``processes`` has said in its ``log`` (uvicorn's) that its
+    start-up (the warm-up) is complete: the first /health comes from the first one ready, and
+    a test that starts right after it would meet the others still warming."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and proc.poll() is None:
+        log.seek(0)
+        if log.read().count(b"Application startup complete") >= processes:
+            return
+        time.sleep(0.05)
+    raise RuntimeError(f"not every one of {processes} server processes started in {timeout} s")

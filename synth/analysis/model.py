@@ -275,7 +275,8 @@ class Forces:
                 lo, hi = np.where(ahead, mid, lo), np.where(ahead, hi, mid)
             x = np.concatenate([x, lo])
             lean = np.concatenate([lean, np.abs(self.lean(lo, pv, 0)[0])])
-        k = int(np.argmax(np.where(np.isfinite(lean), lean, np.inf)))
+        lean = np.where(np.isfinite(lean), lean, np.inf)  # NaN: A singular there (a pole)
+        k = int(np.argmax(lean))
         if mu * lean[k] >= 1:
             least = 1 / lean[k]
             why = (f"it locks under a friction of {least:.6g} or more" if least > 1e-8

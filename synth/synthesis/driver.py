@@ -171,10 +171,11 @@ def _loaded(
     says that the budget ran out. A design the load cannot be carried by (friction locks its
     ram, or a dead point meets a load) is left out too; a type left with none says why."""
     out: list[Candidate] = []
-    refused: dict[str, str] = {}
+    refused: dict[str, str | None] = {}  # a type's first refusal; None: the budget ran out
     for c in cands:
         if not c.loads:
             if time.monotonic() >= deadline:
+                refused[c.type] = None
                 continue
             try:
                 c = replace(c, loads=analyze(c.type, c.params, load=load).loads)
@@ -187,10 +188,10 @@ def _loaded(
 
 
 def _unloaded(mtype: str, refusal: str | None) -> Infeasible:
-    """Why a type's designs came back without their loads: the load's refusal of its best
-    design, else the budget."""
+    """Why a type's designs came back without their loads: the load's refusal of the first
+    design analysed (each one was refused), else the budget."""
     if refusal is not None:
-        why = f"no {mtype} design found carries this load: the best one is refused ({refusal})"
+        why = f"no {mtype} design found carries this load: the first is refused ({refusal})"
         return Infeasible(mtype, "LOAD_NOT_CARRIED", why)
     why = (
         f"the time budget ran out before the loads of the {mtype} designs found were "

@@ -21,7 +21,7 @@ import queue
 import threading
 import time
 from collections import OrderedDict
-from collections.abc import Hashable
+from collections.abc import Callable, Hashable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Protocol
@@ -72,6 +72,7 @@ _lock = threading.Lock()
 _jobs: dict[Key, _Job] = {}  # the grids the thread is making or will make
 _queue: queue.SimpleQueue[_Job] = queue.SimpleQueue()
 _thread: threading.Thread | None = None
+_built: Future[None] = Future()  # the thread's ``build`` (``prepare``)
 
 
 def ends(scan: Scan, deadline: float) -> list[tuple[float, float]] | None:
@@ -124,7 +125,6 @@ def _grid(key: Key) -> _Grid:
 def _awaited(scan: Scan, deadline: float) -> bool:
     """Whether the thread made the grid, waited for until the deadline (then ``Late``); False
     if it is on another one."""
-    global _thread
     with _lock:
         job = _jobs.get(scan.key)
         if job is None:
@@ -132,9 +132,7 @@ def _awaited(scan: Scan, deadline: float) -> bool:
                 return False
             job = _jobs[scan.key] = _Job(scan, deadline)
             _queue.put(job)
-            if _thread is None:
-                _thread = threading.Thread(target=_scans, name="scans", daemon=True)
-                _thread.start()
+            _start(None)
         job.until = max(job.until, deadline)
     wait = None if math.isinf(deadline) else max(deadline - time.monotonic(), 0.0)
     try:
@@ -144,9 +142,42 @@ def _awaited(scan: Scan, deadline: float) -> bool:
     return True
 
 
-def _scans() -> None:
+def prepare(build: Callable[[], object]) -> Future[None]:
+    """Start the thread that makes grids, with ``build`` (what its scans use: its CasADi
+    functions are its own) run in it first: done when it has. A service's warm-up waits for
+    it, so that no request waits for those builds."""
+    with _lock:
+        return _start(build)
+
+
+def _start(build: Callable[[], object] | None) -> Future[None]:
+    """The thread, started with ``build`` if it has not been (the lock held); its build's."""
+    global _thread, _built
+    if _thread is None:
+        _built = Future()
+        _thread = threading.Thread(target=_scans, args=(build, _built), name="scans",
+                                   daemon=True)  # fmt: skip
+        _thread.start()
+    return _built
+
+
+def _scans(build: Callable[[], object] | None, built: Future[None]) -> None:
     """The thread that makes grids, one at a time (its CasADi functions its own), each while
-    a request waits for it."""
+    a request waits for it; ``build`` first."""
+    global _thread
+    try:
+        if build is not None:
+            build()
+    finally:
+        built.set_result(None)
+    try:
+        _serve()
+    finally:  # (a thread that dies: the next request starts another)
+        with _lock:
+            _thread = None
+
+
+def _serve() -> None:
     while True:
         job = _queue.get()
         try:

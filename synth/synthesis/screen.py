@@ -36,7 +36,7 @@ ANGLES = 96  # crank angles a ranking samples
 _local = threading.local()
 
 
-def _constraints(form: Formulation, key: object) -> Mapped:
+def compiled_constraints(form: Formulation, key: object) -> Mapped:
     """g and ∂g/∂x in one row per point, mapped over points with the parameters shared."""
     cache: dict[object, Mapped] = _local.__dict__.setdefault("constraints", {})
     if key not in cache:
@@ -51,11 +51,8 @@ def constraints(
 ) -> tuple[np.ndarray, np.ndarray]:
     """g and ∂g/∂x at each point x (rows), the formulation's parameters ``pv`` shared: shapes
     (points, g) and (points, g, x)."""
-    slot = _constraints(form, key)[len(x)]
-    slot.args[0][:], slot.args[1][:] = x, pv
-    slot.run()
+    out = compiled_constraints(form, key)(x, pv).T
     ng = form.lbg.size
-    out = slot.out.copy()  # the slot is reused by the next call
     return out[:, :ng], out[:, ng:].reshape(len(x), x.shape[1], ng).transpose(0, 2, 1)
 
 

@@ -117,7 +117,7 @@ def compile_all(part: int = 0, parts: int = 1) -> int:
         share = itertools.islice(share, part - 1, None, parts - 1) if part else ()
     n = 0
     for s in share:
-        fns.append(screen._constraints(formulation(get(s.type), s.variant, s.free), s).fn)
+        fns.append(screen.compiled_constraints(formulation(get(s.type), s.variant, s.free), s).fn)
         n += 1
     for fn in fns:
         if fn.class_name() != "External":

@@ -8,12 +8,15 @@ import itertools
 import math
 import shutil
 
+import casadi as ca
 import numpy as np
 import pytest
 
+import synth
 from synth.analysis.model import GRID, KINDS, Model
 from synth.mechanisms import all_types, get
-from synth.numerics.native import FLAGS
+from synth.numerics.native import FLAGS, SMALL, WIDEST, Mapped
+from synth.synthesis import screen
 
 from ..support.designs import random_designs
 
@@ -74,3 +77,31 @@ def test_without_a_compiler_or_a_cache_the_virtual_machine_runs(monkeypatch, tmp
     assert model(
         "offset_slider_crank", frozenset(), "kinematics", monkeypatch, True
     ).fn.fn.class_name() != ("External")
+
+
+def test_any_number_of_points_goes_through_the_same_few_slots():
+    """A compiled function evaluated at any number of points (curves, screens, roots) keeps
+    slots of the fixed widths alone (1–16, 32, 64), and each point's numbers are its own
+    call's, to the bit."""
+    x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 3)
+    out = ca.vertcat(ca.sin(x[0]) * p[0] + x[1] / p[1], ca.exp(p[2] * x[0]))
+    fn = ca.Function("f", [x, p], [out])
+    mapped = Mapped(fn, (False, True))
+    rng = np.random.default_rng(0)
+    params = rng.uniform(0.5, 2.0, 3)
+    for n in [*rng.integers(1, 3000, 40), 1, 16, 17, 64, 65, 4097]:
+        points = rng.uniform(-3, 3, (int(n), 2))
+        got = mapped(points, params)
+        one = np.hstack([fn(q, params).full() for q in points[:: max(1, int(n) // 7)]])
+        assert got.shape == (2, n) and np.array_equal(got[:, :: max(1, int(n) // 7)], one)
+    assert set(mapped.slots) <= {*range(1, SMALL + 1), 32, WIDEST}
+
+
+def test_a_searched_objective_screens_through_the_same_few_slots():
+    """The motion search's screen projects its points in shrinking sets: through the same
+    fixed-width slots too, whatever the request."""
+    for tr in (1.3, 1.7, 2.2):
+        types = ["offset_slider_crank", "crank_shaper"]
+        synth.synthesize(tr, 300.0, 10.0, mechanisms=types, objective="uniform_cutting_speed")
+    widths = {w for m in screen._local.constraints.values() for w in m.slots}
+    assert widths and widths <= {*range(1, SMALL + 1), 32, WIDEST}

@@ -183,17 +183,19 @@ def test_the_least_friction_that_locks_is_the_rods_lean():
 
 
 def test_a_synthesis_whose_design_locks_says_where(client):
-    """The smallest Whitworth locks under the load's friction: not a server error, and the
-    answer says where and from which friction on. (A candidate's loads are computed after the
-    search, ``synthesize``: today such a candidate refuses the request, a 422; an answer that
-    leaves it out must give its type that reason.)"""
+    """The smallest Whitworth locks under the load's friction: not a server error; the design
+    is left out, and its type's reason says where and from which friction on."""
     load = {"length_unit": "m", "crank_rpm": 60, "slider_mass": 1, "guide_friction": 0.5}
     r = client.post("/v1/synthesize", json={**SMALLEST, "load": load})
-    assert r.status_code in (200, 422), r.text
+    assert r.status_code == 200, r.text
     body = r.json()
-    why = [d["msg"] for d in body["detail"]] if r.status_code == 422 else [
-        i["reason"] for i in body["infeasible"]]  # fmt: skip
-    assert any(ANGLE.search(w) and "locks under a friction of 0.176327 or more" in w for w in why)
+    assert body["candidates"] == []
+    (why,) = body["infeasible"]
+    assert why["code"] == "LOAD_NOT_CARRIED", why
+    assert (
+        ANGLE.search(why["reason"])
+        and "locks under a friction of 0.176327 or more" in why["reason"]
+    )
 
 
 def test_a_screen_of_many_designs_ranks_a_dead_point_last():

@@ -497,9 +497,9 @@ def test_the_budget_limit_is_the_servers_setting(client):
 
 def test_a_synthesis_on_the_exact_solvers_alone_runs_without_a_solver_slot(client):
     """With every solver slot taken, what the library calls short (everything free, not a motion
-    objective, nothing added) is answered in the event loop; anything else waits and gets 503."""
-    # the inline ones are refused too once they wait past this (the loop may still be warming
-    # its solvers, ~0.2 s, when the first arrives): ample for them, short for the waiters' 503s
+    objective, nothing added) is answered on the short lane; anything else waits and gets 503."""
+    # the short ones are refused too once they wait past this (the short lane may still be
+    # building its models when the first arrives): ample for them, short for the waiters' 503s
     busy = Engine(Settings(max_queue_ms=1000.0))
     busy.slots.free = 0
     app.dependency_overrides[engine] = lambda: busy

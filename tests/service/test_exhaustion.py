@@ -328,7 +328,7 @@ def test_after_sigterm_a_new_connection_is_refused_at_once_and_those_in_flight_a
     """Syntheses under way when SIGTERM comes are answered; from 100 ms after it every new
     connection is refused, and none before it hangs: the listening socket is shut at once
     (uvicorn's supervisor kept it open while its processes drained)."""
-    # no warm-up: a solver busy with it could hold a request past the drain's 5 s
+    # no warm-up (a quicker start): the first synthesis builds what the others use
     with serving(WEB_CONCURRENCY=processes, SYNTH_WORKERS="2", SYNTH_WARM="0") as (port, proc):
         assert post(port, "/v1/synthesize", SYNTH) == 200  # a solver ready
         outcomes: list[int | str] = []

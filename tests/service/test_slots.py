@@ -118,10 +118,10 @@ def test_a_free_slot_is_taken_at_once_and_the_count_holds_under_churn():
     assert all(r == "in" for k, r in enumerate(results) if k % 3 == 0)  # the patient ones
 
 
-def test_a_request_run_in_the_event_loop_is_refused_once_it_waited_past_its_start_by():
-    """A synthesis the engine runs inline (no slot) that has waited behind others in the loop
-    for longer than a slot's waiter may (half its budget) gets ``Busy``, as that waiter would;
-    within it, it runs."""
+def test_a_request_that_waited_past_its_start_by_before_the_engine_is_refused():
+    """A short synthesis that has waited behind others in the loop, before it reached the
+    engine, for longer than a slot's waiter may (half its budget) gets ``Busy``, as that waiter
+    would; within it, it runs."""
     engine = Engine(Settings(executor="thread", workers=1))
     request = {"time_ratio": 1.5, "stroke": 1.0, "time_budget_ms": 1000.0}
     try:
