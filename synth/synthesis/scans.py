@@ -64,6 +64,7 @@ class _Job:
 
     scan: Scan
     until: float
+    grid: _Grid  # the one its requests hold (kept though the cache drops it meanwhile)
     done: Future[None] = field(default_factory=Future)
 
 
@@ -80,8 +81,12 @@ def ends(scan: Scan, deadline: float) -> list[tuple[float, float]] | None:
     place as queries need (``narrowed``); None if no β has a design. Raises ``Late`` if the
     deadline passes first."""
     grid = _grid(scan.key)
-    if not grid.whole and not _awaited(scan, deadline):  # the thread is on another grid
-        _make(scan, grid, deadline)
+    if not grid.whole:
+        made = _awaited(scan, grid, deadline)
+        if made is None:  # the thread is on another grid
+            _make(scan, grid, deadline)
+        else:
+            grid = made
     return grid.ends
 
 
@@ -122,15 +127,15 @@ def _grid(key: Key) -> _Grid:
     return grid
 
 
-def _awaited(scan: Scan, deadline: float) -> bool:
-    """Whether the thread made the grid, waited for until the deadline (then ``Late``); False
-    if it is on another one."""
+def _awaited(scan: Scan, grid: _Grid, deadline: float) -> _Grid | None:
+    """The grid the thread made (``grid``, or the one it was making for the same key), waited
+    for until the deadline (then ``Late``); None if it is on another key's."""
     with _lock:
         job = _jobs.get(scan.key)
         if job is None:
             if _jobs:
-                return False
-            job = _jobs[scan.key] = _Job(scan, deadline)
+                return None
+            job = _jobs[scan.key] = _Job(scan, deadline, grid)
             _queue.put(job)
             _start(None)
         job.until = max(job.until, deadline)
@@ -139,7 +144,7 @@ def _awaited(scan: Scan, deadline: float) -> bool:
         job.done.result(timeout=wait)
     except TimeoutError:
         raise Late from None
-    return True
+    return job.grid
 
 
 def prepare(build: Callable[[], object]) -> Future[None]:
@@ -181,7 +186,7 @@ def _serve() -> None:
     while True:
         job = _queue.get()
         try:
-            _make(job.scan, _grid(job.scan.key), job)
+            _make(job.scan, job.grid, job)
             job.done.set_result(None)
         except Exception as e:  # the waiting request's, as if it had made the steps itself
             job.done.set_exception(e)
