@@ -117,18 +117,17 @@ def random_load(rng: np.random.Generator) -> dict[str, Any]:
     return out
 
 
-def loaded_mix(n: int, seed: int = 38) -> list[tuple[str, dict, float | None]]:
+def loaded_mix(
+    n: int,
+    seed: int = 38,
+    designs: dict[str, list[dict[str, float]]] | None = None,
+    budget_ms: float = 5000.0,
+) -> list[tuple[str, dict, float | None]]:
     """n loaded requests of random types and sizes: four in five analyses (1–5 000 curve
-    points, or up to 300 given angles; a third with the joints' forces) of designs this
-    library synthesised, the rest syntheses of one type."""
+    points, or up to 300 given angles; a third with the joints' forces) of ``designs`` (by
+    type; default: ones this library synthesises), the rest syntheses of one type."""
     rng = np.random.default_rng(seed)
-    designs = {}
-    for t in synth.mechanisms.all_types():
-        tr = 1.0 if t == "scotch_yoke" else 1.5
-        designs[t] = [
-            c.params
-            for c in synth.synthesize(tr, 300.0, 10.0, mechanisms=[t], max_candidates=10).candidates
-        ]
+    designs = designs or {t: synthesised(t) for t in synth.mechanisms.all_types()}
     types = [t for t in designs if designs[t]]
     out: list[tuple[str, dict, float | None]] = []
     for _ in range(n):
@@ -154,10 +153,17 @@ def loaded_mix(n: int, seed: int = 38) -> list[tuple[str, dict, float | None]]:
                 "mechanisms": [{"type": t}],
                 "max_candidates": int(rng.integers(1, 8)),
                 "load": random_load(rng),
-                "time_budget_ms": 5000.0,
+                "time_budget_ms": budget_ms,
             }
-            out.append(("/v1/synthesize", body, 5000.0))
+            out.append(("/v1/synthesize", body, budget_ms))
     return out
+
+
+def synthesised(mtype: str) -> list[dict[str, float]]:
+    """Up to ten designs of a type, at time ratio 1.5 (the yoke's 1), stroke 300 and 10°."""
+    tr = 1.0 if mtype == "scotch_yoke" else 1.5
+    r = synth.synthesize(tr, 300.0, 10.0, mechanisms=[mtype], max_candidates=10)
+    return [c.params for c in r.candidates]
 
 
 def quantiles(xs: list[float]) -> dict:

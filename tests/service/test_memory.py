@@ -13,9 +13,7 @@ import threading
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from benchmarks.overload import random_load
+from benchmarks.overload import loaded_mix
 from tests.support.bruteforce import TYPES
 from tests.support.designs import random_designs
 from tests.support.server import descendants, serving
@@ -35,35 +33,10 @@ def rss_mb(pid: int) -> float:
 
 
 def requests(seed: int) -> list[tuple[str, dict[str, Any]]]:
-    rng = np.random.default_rng(seed)
+    """The overload benchmark's loaded mix, of designs drawn here (every type's)."""
     designs = {t: random_designs(t, 20, seed=seed) for t in TYPES}
-    out = []
-    for _ in range(REQUESTS):
-        t = str(rng.choice(TYPES))
-        if rng.random() < 0.8:
-            body: dict[str, Any] = {
-                "mechanism": {"type": t, "params": designs[t][int(rng.integers(20))]},
-                "load": random_load(rng),
-            }
-            if rng.random() < 0.7:
-                body["samples"] = int(rng.integers(1, 5001))
-            else:
-                body["crank_angles_deg"] = rng.uniform(0, 360, int(rng.integers(1, 300))).tolist()
-            if rng.random() < 0.3:
-                body["include"] = ["forces"]
-            out.append(("/v1/analyze", body))
-        else:
-            body = {
-                "time_ratio": float(rng.uniform(1.2, 2.5)),
-                "stroke": float(rng.uniform(1, 500)),
-                "min_transmission_angle_deg": float(rng.uniform(0, 30)),
-                "mechanisms": [{"type": t}],
-                "max_candidates": int(rng.integers(1, 8)),
-                "load": random_load(rng),
-                "time_budget_ms": 1000,
-            }
-            out.append(("/v1/synthesize", body))
-    return out
+    mix = loaded_mix(REQUESTS, seed, designs=designs, budget_ms=1000.0)
+    return [(path, body) for path, body, _ in mix]
 
 
 def send(port: int, work: list[tuple[str, dict[str, Any]]], statuses: list[int]) -> None:
