@@ -50,7 +50,7 @@ def native(fn: ca.Function) -> ca.Function:
         "\0".join((cast(Any, ca).__version__, *FLAGS, source)).encode()
     ).hexdigest()
     path = cache() / f"{fn.name()}_{key[:20]}.so"
-    if not path.exists() and not _build(source, path):
+    if not path.exists() and not build_library(source, path):
         return fn
     try:
         return ca.external(fn.name(), str(path))
@@ -197,7 +197,9 @@ class Points:
         return slot
 
 
-def _build(source: str, path: Path) -> bool:
+def build_library(source: str, path: Path) -> bool:
+    """C ``source`` built into the library at ``path`` (whole or not at all), unless it is
+    there; whether it is now."""
     with _lock:
         if path.exists():
             return True

@@ -18,7 +18,7 @@ from typing import Any, cast
 
 import casadi as ca
 
-from .native import FLAGS, _build, cache
+from .native import FLAGS, build_library, cache
 
 
 def compiled(
@@ -41,7 +41,7 @@ def compiled(
     fn = build(name, *parts)
     gen = ca.CodeGenerator(f"{name}.c", {"with_header": False})
     gen.add(fn)
-    if not _build(gen.dump(), path):
+    if not build_library(gen.dump(), path):
         return fn
     try:
         return ca.external(name, str(path))
