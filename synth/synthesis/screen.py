@@ -46,6 +46,13 @@ def compiled_constraints(form: Formulation, key: object) -> Mapped:
     return cache[key]
 
 
+def slot_widths() -> set[int]:
+    """The widths of the slots this thread's constraint functions keep: a few fixed ones
+    (``native.widths``), whatever numbers of points were screened."""
+    kept: dict[object, Mapped] = _local.__dict__.get("constraints", {})
+    return {w for m in kept.values() for w in m.slots}
+
+
 def constraints(
     form: Formulation, key: object, x: np.ndarray, pv: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:

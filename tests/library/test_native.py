@@ -103,5 +103,5 @@ def test_a_searched_objective_screens_through_the_same_few_slots():
     for tr in (1.3, 1.7, 2.2):
         types = ["offset_slider_crank", "crank_shaper"]
         synth.synthesize(tr, 300.0, 10.0, mechanisms=types, objective="uniform_cutting_speed")
-    widths = {w for m in screen._local.constraints.values() for w in m.slots}
+    widths = screen.slot_widths()
     assert widths and widths <= {*range(1, SMALL + 1), 32, WIDEST}
