@@ -314,9 +314,14 @@ def probe(port: int) -> str:
         s = socket.create_connection(("127.0.0.1", port), timeout=1.0)
     except ConnectionRefusedError:
         return "refused"
+    except ConnectionResetError:  # (in the backlog as the socket shut)
+        return "reset"
     except TimeoutError:
         return "hung"
-    s.sendall(request("GET", "/health"))
+    try:  # (taken from the backlog as the socket shut: reset before a byte is read)
+        s.sendall(request("GET", "/health"))
+    except (ConnectionResetError, BrokenPipeError):
+        return "reset"
     got, end = everything(s, 1.0)
     return "answered" if statuses(got) == [200] else "reset" if end != "open" else "hung"
 
