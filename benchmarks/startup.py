@@ -173,8 +173,8 @@ def main(argv: list[str] | None = None) -> dict:
     print(table(ready, ("start", "median_s", "min_s", "max_s", "busiest_process_cpu_s", "starts")))
     print(table(first, ("request", "budget_ms", "first_ms", "first_complete", "warm_ms",
                         "warm_complete", "kept")))  # fmt: skip
-    results = {"root": str(a.root), "cpus": len(os.sched_getaffinity(0)), "imports": imports,
-               "ready": ready, "first_requests": first}  # fmt: skip
+    cpus = len(os.sched_getaffinity(0))
+    results = {"cpus": cpus, "imports": imports, "ready": ready, "first_requests": first}
     return report("startup", results, quick=a.quick or a.root != ROOT)
 
 
