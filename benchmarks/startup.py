@@ -41,32 +41,53 @@ AGAIN = 5
 POLL_S = 0.01
 SLACK_MS = 50.0
 LOAD = {"length_unit": "mm", "crank_rpm": 40.0, "cutting_force": 2000.0, "slider_mass": 50.0}
-TORQUE = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0,
-          "objective": "min_peak_torque", "load": LOAD}  # fmt: skip
+TORQUE = {
+    "time_ratio": 1.6,
+    "stroke": 300.0,
+    "min_transmission_angle_deg": 20.0,
+    "objective": "min_peak_torque",
+    "load": LOAD,
+}
 # (what each first request is, its body): the default request, a least peak torque's (issue
 # 38: 5.9–7.3 s the first in a process), a motion objective's, and issue 38's first request
 # (4.76 s on a 300 ms budget; last: a refusal's scan may go on past it for a step)
 FIRST = [
     ("the default request", {"time_ratio": 1.5, "stroke": 1.0, "time_budget_ms": 300.0}),
-    ("the least peak torque, one type", {**TORQUE, "time_budget_ms": 300.0,
-                                         "mechanisms": [{"type": "whitworth"}]}),
+    (
+        "the least peak torque, one type",
+        {**TORQUE, "time_budget_ms": 300.0, "mechanisms": [{"type": "whitworth"}]},
+    ),
     ("the least peak torque, every type", {**TORQUE, "time_budget_ms": 500.0}),
-    ("the most uniform cutting speed", {"time_ratio": 1.6, "stroke": 300.0,
-                                       "objective": "uniform_cutting_speed",
-                                       "mechanisms": [{"type": "crank_shaper"}],
-                                       "time_budget_ms": 300.0}),
-    ("a crank-rocker with its rod bounded to nothing", {
-        "time_ratio": 1.5, "stroke": 1.0, "time_budget_ms": 300.0,
-        "mechanisms": [{"type": "crank_rocker_slider", "bounds": {"connecting_rod": [1e-9, 1e-9]}}],
-    }),
-]  # fmt: skip
+    (
+        "the most uniform cutting speed",
+        {
+            "time_ratio": 1.6,
+            "stroke": 300.0,
+            "objective": "uniform_cutting_speed",
+            "mechanisms": [{"type": "crank_shaper"}],
+            "time_budget_ms": 300.0,
+        },
+    ),
+    (
+        "a crank-rocker with its rod bounded to nothing",
+        {
+            "time_ratio": 1.5,
+            "stroke": 1.0,
+            "time_budget_ms": 300.0,
+            "mechanisms": [
+                {"type": "crank_rocker_slider", "bounds": {"connecting_rod": [1e-9, 1e-9]}}
+            ],
+        },
+    ),
+]
 
 
 def imported(root: Path, module: str) -> float:
     """Seconds ``import module`` takes in a fresh interpreter (its start left out)."""
     code = f"import time; t = time.perf_counter(); import {module}; print(time.perf_counter() - t)"
-    out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True,
-                         check=True).stdout  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", code], cwd=root, capture_output=True, text=True, check=True
+    ).stdout
     return float(out)
 
 
@@ -79,9 +100,12 @@ def started(root: Path, env: dict[str, str]) -> Iterator[tuple[float, int, float
     port = free_port()
     t0 = time.monotonic()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "api.serve", "--port", str(port)], cwd=root,
-        env={**os.environ, **env}, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )  # fmt: skip
+        [sys.executable, "-m", "api.serve", "--port", str(port)],
+        cwd=root,
+        env={**os.environ, **env},
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     seen: set[int] = set()
     try:
         while True:
@@ -137,42 +161,74 @@ def first_requests(root: Path, again: int, each: bool = True) -> list[dict]:
             if each:
                 stack.close()
             budget = body["time_budget_ms"]
-            rows.append({"request": what, "budget_ms": budget, "first_ms": first,
-                         "first_complete": out["complete"],
-                         "warm_ms": statistics.median(ms for ms, _ in later),
-                         "warm_complete": all(o["complete"] for _, o in later),
-                         "kept": first <= budget + SLACK_MS})  # fmt: skip
+            rows.append(
+                {
+                    "request": what,
+                    "budget_ms": budget,
+                    "first_ms": first,
+                    "first_complete": out["complete"],
+                    "warm_ms": statistics.median(ms for ms, _ in later),
+                    "warm_complete": all(o["complete"] for _, o in later),
+                    "kept": first <= budget + SLACK_MS,
+                }
+            )
     return rows
 
 
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--quick", action="store_true", help="a smoke run: one start of each kind "
-                    "(an empty cache's left out), one server for the first requests")  # fmt: skip
+    ap.add_argument(
+        "--quick",
+        action="store_true",
+        help="a smoke run: one start of each kind "
+        "(an empty cache's left out), one server for the first requests",
+    )
     ap.add_argument("--root", type=Path, default=ROOT, help="the checkout to measure")
     a = ap.parse_args(argv)
     starts, again = (1, 1) if a.quick else (STARTS, AGAIN)
-    imports = [{"module": m, "median_s": statistics.median(imported(a.root, m)
-                                                          for _ in range(starts))}
-               for m in ("synth", "api.main")]  # fmt: skip
-    kinds = {"warm_cache": ({"SYNTH_WARM": "1"}, False),
-             "cold_cache": ({"SYNTH_WARM": "1"}, True),
-             "no_warm_up": ({"SYNTH_WARM": "0"}, False)}  # fmt: skip
+    imports = [
+        {"module": m, "median_s": statistics.median(imported(a.root, m) for _ in range(starts))}
+        for m in ("synth", "api.main")
+    ]
+    kinds = {
+        "warm_cache": ({"SYNTH_WARM": "1"}, False),
+        "cold_cache": ({"SYNTH_WARM": "1"}, True),
+        "no_warm_up": ({"SYNTH_WARM": "0"}, False),
+    }
     if a.quick:  # an empty cache: a minute of compiling at each start
         del kinds["cold_cache"]
     times: dict[str, list[tuple[float, float]]] = {k: [] for k in kinds}
     for _ in range(starts):  # in turn, so that the machine's load touches each kind alike
         for k, (env, cold) in kinds.items():
             times[k].append(ready_s(a.root, env, cold))
-    ready = [{"start": k, "median_s": statistics.median(t for t, _ in ts),
-              "min_s": min(t for t, _ in ts), "max_s": max(t for t, _ in ts),
-              "busiest_process_cpu_s": statistics.median(c for _, c in ts), "starts": len(ts)}
-             for k, ts in times.items()]  # fmt: skip
+    ready = [
+        {
+            "start": k,
+            "median_s": statistics.median(t for t, _ in ts),
+            "min_s": min(t for t, _ in ts),
+            "max_s": max(t for t, _ in ts),
+            "busiest_process_cpu_s": statistics.median(c for _, c in ts),
+            "starts": len(ts),
+        }
+        for k, ts in times.items()
+    ]
     first = first_requests(a.root, again, each=not a.quick)
     print(table(imports, ("module", "median_s")))
     print(table(ready, ("start", "median_s", "min_s", "max_s", "busiest_process_cpu_s", "starts")))
-    print(table(first, ("request", "budget_ms", "first_ms", "first_complete", "warm_ms",
-                        "warm_complete", "kept")))  # fmt: skip
+    print(
+        table(
+            first,
+            (
+                "request",
+                "budget_ms",
+                "first_ms",
+                "first_complete",
+                "warm_ms",
+                "warm_complete",
+                "kept",
+            ),
+        )
+    )
     cpus = len(os.sched_getaffinity(0))
     results = {"cpus": cpus, "imports": imports, "ready": ready, "first_requests": first}
     return report("startup", results, quick=a.quick or a.root != ROOT)

@@ -160,8 +160,7 @@ def _start(build: Callable[[], object] | None) -> Future[None]:
     global _thread, _built
     if _thread is None:
         _built = Future()
-        _thread = threading.Thread(target=_scans, args=(build, _built), name="scans",
-                                   daemon=True)  # fmt: skip
+        _thread = threading.Thread(target=_scans, args=(build, _built), name="scans", daemon=True)
         _thread.start()
     return _built
 

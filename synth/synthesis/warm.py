@@ -69,8 +69,7 @@ def structures() -> Iterator[Structure]:
 def counts() -> dict[str, int]:
     """How many structures of each kind there are (every registered type's)."""
     types = [get(t) for t in all_types()]
-    analyses = sum(len(variants(m)) * (len(model.KINDS) + (m.frame is not None))
-                   for m in types)  # fmt: skip
+    analyses = sum(len(variants(m)) * (len(model.KINDS) + (m.frame is not None)) for m in types)
     free = sum(1 for _ in structures())
     return {"analyses": analyses, "solvers": free * len(OBJECTIVES), "motion_searches": free}
 
@@ -96,8 +95,11 @@ def warm(kinds: Collection[str] = model.KINDS, searches: bool = True) -> None:
 def variants(m: Mechanism) -> list[frozenset[str]]:
     """Every structural variant of a type: each set of its optional parts left out."""
     optional = [q.name for q in m.parameters if q.zero_means]
-    return [frozenset(parts) for k in range(len(optional) + 1)
-            for parts in itertools.combinations(optional, k)]  # fmt: skip
+    return [
+        frozenset(parts)
+        for k in range(len(optional) + 1)
+        for parts in itertools.combinations(optional, k)
+    ]
 
 
 def compile_all(part: int = 0, parts: int = 1) -> int:
@@ -108,8 +110,9 @@ def compile_all(part: int = 0, parts: int = 1) -> int:
     all. Raises where a library cannot be built; the number of the constraints' built."""
     fns = []
     if part == 0:
-        fns += [fn for m in map(get, all_types()) for v in variants(m)
-                for fn in model.compiled(m, v)]  # fmt: skip
+        fns += [
+            fn for m in map(get, all_types()) for v in variants(m) for fn in model.compiled(m, v)
+        ]
         c = construction()  # its points, its chunks' loop and its local model
         fns += [*c.points.mapped.compiled(), c.local.fn, rod.compiled().fn]
     share: Iterable[Structure] = structures()

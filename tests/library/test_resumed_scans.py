@@ -5,8 +5,12 @@ and no request waits past its budget for one (issue 38: 4.76 s on a 300 ms budge
 import synth
 from synth.synthesis.diagnose import forget_ranges
 
-REQUEST = {"time_ratio": 3.5, "stroke": 100.0, "min_transmission_angle_deg": 30.0,
-           "mechanisms": ["offset_slider_crank", "whitworth"]}  # fmt: skip
+REQUEST = {
+    "time_ratio": 3.5,
+    "stroke": 100.0,
+    "min_transmission_angle_deg": 30.0,
+    "mechanisms": ["offset_slider_crank", "whitworth"],
+}
 
 
 def test_a_scan_cut_short_goes_on_at_the_next_request_to_the_same_numbers():

@@ -20,20 +20,47 @@ LOAD = synth.Load(length_unit="mm", crank_rpm=40.0, cutting_force=2000.0, slider
 GENERIC = synth.Solver(accelerators=False)  # IPOPT for every variant, no exact solver first
 # requests that take IPOPT (parts fixed or bounded, a refusal's diagnosis) and the motion search
 REQUESTS = [
-    {"time_ratio": 1.5, "stroke": 0.3, "solver": GENERIC,
-     "mechanisms": [{"type": "drag_link_slider", "fixed": ref.DRAG_LINK_FIXED}]},
-    {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0, "solver": GENERIC,
-     "mechanisms": ["crank_shaper", {"type": "whitworth", "fixed": {"crank": 60.0}}]},
-    {"time_ratio": 2.9, "stroke": 300.0, "min_transmission_angle_deg": 60.0, "solver": GENERIC,
-     "mechanisms": ["offset_slider_crank"]},
-    {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0,
-     "mechanisms": [{"type": "crank_rocker_slider", "bounds": {"crank": [50, 200]}}]},
-    {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 85.0,
-     "mechanisms": [{"type": "crank_shaper", "bounds": {"ram_link": [30.0, 100.0]}}]},
-    {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0,
-     "objective": "min_peak_torque", "load": LOAD,
-     "mechanisms": [{"type": "whitworth", "fixed": {"pivot_distance": 100.0}}]},
-]  # fmt: skip
+    {
+        "time_ratio": 1.5,
+        "stroke": 0.3,
+        "solver": GENERIC,
+        "mechanisms": [{"type": "drag_link_slider", "fixed": ref.DRAG_LINK_FIXED}],
+    },
+    {
+        "time_ratio": 1.6,
+        "stroke": 300.0,
+        "min_transmission_angle_deg": 20.0,
+        "solver": GENERIC,
+        "mechanisms": ["crank_shaper", {"type": "whitworth", "fixed": {"crank": 60.0}}],
+    },
+    {
+        "time_ratio": 2.9,
+        "stroke": 300.0,
+        "min_transmission_angle_deg": 60.0,
+        "solver": GENERIC,
+        "mechanisms": ["offset_slider_crank"],
+    },
+    {
+        "time_ratio": 1.6,
+        "stroke": 300.0,
+        "min_transmission_angle_deg": 20.0,
+        "mechanisms": [{"type": "crank_rocker_slider", "bounds": {"crank": [50, 200]}}],
+    },
+    {
+        "time_ratio": 1.6,
+        "stroke": 300.0,
+        "min_transmission_angle_deg": 85.0,
+        "mechanisms": [{"type": "crank_shaper", "bounds": {"ram_link": [30.0, 100.0]}}],
+    },
+    {
+        "time_ratio": 1.6,
+        "stroke": 300.0,
+        "min_transmission_angle_deg": 20.0,
+        "objective": "min_peak_torque",
+        "load": LOAD,
+        "mechanisms": [{"type": "whitworth", "fixed": {"pivot_distance": 100.0}}],
+    },
+]
 
 
 def test_every_structure_a_request_builds_is_counted(monkeypatch):
@@ -56,16 +83,23 @@ def test_every_structure_a_request_builds_is_counted(monkeypatch):
     assert built and formulated
     assert {s for s, _ in built} <= counted and {o for _, o in built} <= set(warm.OBJECTIVES)
     assert set(formulated) <= counted
-    assert warm.counts() == {"analyses": 40, "solvers": 4 * len(counted),
-                             "motion_searches": len(counted)}  # fmt: skip
+    assert warm.counts() == {
+        "analyses": 40,
+        "solvers": 4 * len(counted),
+        "motion_searches": len(counted),
+    }
 
 
 @pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler: the virtual machine runs")
 def test_warm_builds_a_threads_analysis_compiled():
     def warmed() -> set[str]:
         warm.warm()
-        return {fn.class_name() for t in all_types() for v in warm.variants(get(t))
-                for fn in model.compiled(get(t), v)}  # fmt: skip
+        return {
+            fn.class_name()
+            for t in all_types()
+            for v in warm.variants(get(t))
+            for fn in model.compiled(get(t), v)
+        }
 
     out: list[set[str]] = []
     thread = threading.Thread(target=lambda: out.append(warmed()))  # a thread of its own

@@ -45,11 +45,20 @@ SCOTCH = {"type": "scotch_yoke", "params": {"crank": 1.0}}
 # or 270° (offset 1), a transmission angle of 0°
 LIMIT = {"type": "offset_slider_crank", "params": {"crank": 1.0, "coupler": 2.0, "offset": -1.0}}
 MIRROR = {"type": "offset_slider_crank", "params": {"crank": 1.0, "coupler": 2.0, "offset": 1.0}}
-SMALLEST = {"time_ratio": 1.2, "stroke": 0.4962307363062504, "min_transmission_angle_deg": 10,
-            "objective": "min_size", "mechanisms": [{"type": "whitworth"}]}  # fmt: skip
+SMALLEST = {
+    "time_ratio": 1.2,
+    "stroke": 0.4962307363062504,
+    "min_transmission_angle_deg": 10,
+    "objective": "min_size",
+    "mechanisms": [{"type": "whitworth"}],
+}
 # the smallest Whitworth of SMALLEST: its connecting rod at 10° to the ram's path at 0° and 180°
-WHITWORTH = {"crank": 0.3486851703779094, "pivot_distance": 0.04962307363062504,
-             "lever": 0.2481153681531252, "connecting_rod": 0.2519429476405122}  # fmt: skip
+WHITWORTH = {
+    "crank": 0.3486851703779094,
+    "pivot_distance": 0.04962307363062504,
+    "lever": 0.2481153681531252,
+    "connecting_rod": 0.2519429476405122,
+}
 
 
 @pytest.fixture(scope="module")
@@ -75,16 +84,21 @@ def detail(r):
     ("field", "load", "words"),
     [
         ("crank_rpm", {"crank_rpm": 1e-200}, "crank_rpm must be ≥ 1e-06, got 1e-200"),
-        ("speed_fluctuation", {"crank_rpm": 1, "speed_fluctuation": 5e-324},
-         "speed_fluctuation must be ≥ 1e-06, got 5e-324"),
+        (
+            "speed_fluctuation",
+            {"crank_rpm": 1, "speed_fluctuation": 5e-324},
+            "speed_fluctuation must be ≥ 1e-06, got 5e-324",
+        ),
         ("crank_rpm", {"crank_rpm": 2e6}, "crank_rpm must be ≤ 1e+06, got 2000000.0"),
         ("efficiency", {"crank_rpm": 1, "efficiency": 1e-300}, "efficiency must be ≥ 1e-06"),
     ],
-)  # fmt: skip
+)
 def test_the_flywheel_and_the_motor_divide_by_nothing_out_of_range(client, field, load, words):
     load = {"length_unit": "m", **load}
-    for r in (analyze(client, SCOTCH, load),
-              client.post("/v1/synthesize", json={**SMALLEST, "load": load})):  # fmt: skip
+    for r in (
+        analyze(client, SCOTCH, load),
+        client.post("/v1/synthesize", json={**SMALLEST, "load": load}),
+    ):
         d = detail(r)
         assert d["loc"] == ["body", "load", field] and d["msg"].startswith(words), d
     with pytest.raises(InvalidParameters, match=rf"load.{field} must be .* at least 1e-06") as e:
@@ -121,11 +135,23 @@ def test_a_dead_point_without_a_load_on_it_has_zero_forces(client):
         (LIMIT, {"slider_mass": 1.0}, 90),
         (MIRROR, {"slider_mass": 1.0, "length_unit": "mm"}, 270),
         # on the Grashof limit: it folds flat at 0°, coupler and rocker in line
-        ({"type": "crank_rocker_slider", "params": {"ground": 0.2, "crank": 0.1, "coupler": 1.0,
-          "rocker": 1.1, "rocker_arm": 1.1, "connecting_rod": 1.1}},
-         {"link_mass_per_length": 1.0, "crank_rpm": 1e-6}, 0),
+        (
+            {
+                "type": "crank_rocker_slider",
+                "params": {
+                    "ground": 0.2,
+                    "crank": 0.1,
+                    "coupler": 1.0,
+                    "rocker": 1.1,
+                    "rocker_arm": 1.1,
+                    "connecting_rod": 1.1,
+                },
+            },
+            {"link_mass_per_length": 1.0, "crank_rpm": 1e-6},
+            0,
+        ),
     ],
-)  # fmt: skip
+)
 def test_a_loaded_dead_point_names_its_angle_and_joint(client, mechanism, load, at):
     """The ram's mass (or the links') moves at the dead point: no finite force does it (with or
     without the guide's friction), whichever angles the curves ask for."""
@@ -133,8 +159,9 @@ def test_a_loaded_dead_point_names_its_angle_and_joint(client, mechanism, load, 
     for extra in ({}, {"crank_angles_deg": [at, at + 1e-9]}):
         d = detail(analyze(client, mechanism, load, **extra))
         assert d["loc"] == ["body", "mechanism"] and d["type"] == "invalid_design"
-        assert d["msg"].startswith(f"the joint forces are indeterminate at crank angle {at}°: a "
-                                   "dead point (the "), d  # fmt: skip
+        assert d["msg"].startswith(
+            f"the joint forces are indeterminate at crank angle {at}°: a dead point (the "
+        ), d
 
 
 @pytest.mark.parametrize("load", [{"slider_mass": 1}, {"cutting_force": 5}])
@@ -236,8 +263,10 @@ def load_spec(draw, lock: float | None):
     masses and cut from nothing to the schema's largest, and the guide's friction at the
     lock (``lock``: the friction from which the design locks) to a part in 1e15 either way,
     or any."""
-    out = {"length_unit": draw(st.sampled_from(["m", "mm", "in"])),
-           "crank_rpm": draw(in_range("crank_rpm"))}  # fmt: skip
+    out = {
+        "length_unit": draw(st.sampled_from(["m", "mm", "in"])),
+        "crank_rpm": draw(in_range("crank_rpm")),
+    }
     for name in ("speed_fluctuation", "efficiency"):
         if draw(st.booleans()):
             out[name] = draw(in_range(name))

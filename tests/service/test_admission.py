@@ -30,13 +30,29 @@ DESIGNS = {
     "offset_slider_crank": {"crank": 1.0, "coupler": 3.0, "offset": 0.5},
     "crank_shaper": {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0},
     "whitworth": {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0},
-    "crank_rocker_slider": {"ground": 5.0, "crank": 1.0, "coupler": 4.5, "rocker": 3.0,
-                            "rocker_arm": 4.0},
-    "drag_link_slider": {"ground": 0.1, "crank": 0.225, "coupler": 0.250428, "follower": 0.275,
-                         "follower_arm": 0.15, "connecting_rod": 0.3},
-}  # fmt: skip
-LOAD = {"length_unit": "mm", "crank_rpm": 40.0, "cutting_force": 2000.0, "slider_mass": 60.0,
-        "link_mass_per_length": 8.0}  # fmt: skip
+    "crank_rocker_slider": {
+        "ground": 5.0,
+        "crank": 1.0,
+        "coupler": 4.5,
+        "rocker": 3.0,
+        "rocker_arm": 4.0,
+    },
+    "drag_link_slider": {
+        "ground": 0.1,
+        "crank": 0.225,
+        "coupler": 0.250428,
+        "follower": 0.275,
+        "follower_arm": 0.15,
+        "connecting_rod": 0.3,
+    },
+}
+LOAD = {
+    "length_unit": "mm",
+    "crank_rpm": 40.0,
+    "cutting_force": 2000.0,
+    "slider_mass": 60.0,
+    "link_mass_per_length": 8.0,
+}
 TYPES = ("scotch_yoke", *DESIGNS)
 KINDS = ("curves", "loaded", "exact")
 
@@ -47,16 +63,27 @@ def mix() -> list[tuple[str, str, dict]]:
     out = []
     for t, params in DESIGNS.items():
         design = {"type": t, "params": params}
-        out.append(("curves", "/v1/analyze", {"mechanism": design, "samples": 1000,
-                                              "include": ["pins"]}))  # fmt: skip
+        out.append(
+            ("curves", "/v1/analyze", {"mechanism": design, "samples": 1000, "include": ["pins"]})
+        )
         out.append(("loaded", "/v1/analyze", {"mechanism": design, "load": LOAD, "samples": 72}))
     for t in TYPES:
         tr = 1.0 if t == "scotch_yoke" else 1.6
-        out.append(("exact", "/v1/synthesize", {"time_ratio": tr, "stroke": 300.0,
-                                                "mechanisms": [{"type": t}]}))  # fmt: skip
+        out.append(
+            (
+                "exact",
+                "/v1/synthesize",
+                {"time_ratio": tr, "stroke": 300.0, "mechanisms": [{"type": t}]},
+            )
+        )
     for tr, bound in ((1.6, 20.0), (2.2, 10.0), (1.3, 30.0)):
-        out.append(("exact", "/v1/synthesize", {"time_ratio": tr, "stroke": 300.0,
-                                                "min_transmission_angle_deg": bound}))  # fmt: skip
+        out.append(
+            (
+                "exact",
+                "/v1/synthesize",
+                {"time_ratio": tr, "stroke": 300.0, "min_transmission_angle_deg": bound},
+            )
+        )
     return out
 
 
@@ -91,8 +118,10 @@ async def _clients(port: int, n: int, seconds: float) -> list[tuple[str, int, bo
 
 def _raw(path: str, body: dict) -> bytes:
     data = json.dumps(body).encode()
-    return (f"POST {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
-            f"Content-Length: {len(data)}\r\n\r\n").encode() + data  # fmt: skip
+    return (
+        f"POST {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n"
+        f"Content-Length: {len(data)}\r\n\r\n"
+    ).encode() + data
 
 
 async def _head(reader: asyncio.StreamReader) -> tuple[int, dict[str, str]]:

@@ -27,8 +27,13 @@ REQUESTS = int(os.environ.get("SYNTH_BUDGET_REQUESTS", "200"))
 CLIENTS = 3
 SLACK_MS = 50.0
 BUDGETS_MS = (100.0, 200.0, 300.0, 500.0, 800.0, 1000.0, 1500.0, 2000.0)
-LOAD = {"length_unit": "mm", "crank_rpm": 40.0, "cutting_force": 2000.0, "slider_mass": 60.0,
-        "link_mass_per_length": 8.0}  # fmt: skip
+LOAD = {
+    "length_unit": "mm",
+    "crank_rpm": 40.0,
+    "cutting_force": 2000.0,
+    "slider_mass": 60.0,
+    "link_mass_per_length": 8.0,
+}
 TARGETS = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0}
 TORQUE = {**TARGETS, "objective": "min_peak_torque", "load": LOAD}  # every type: ~3 s
 
@@ -38,8 +43,12 @@ def requests() -> list[tuple[str, dict]]:
     with its limits and extras; syntheses that need IPOPT (parts fixed or bounded, time ratios
     near 1, a bound no design reaches)."""
     drag = {"ground": 0.1, "crank": 0.225, "follower": 0.275, "connecting_rod": 0.3}
-    fixed = {"time_ratio": 1.5, "stroke": 0.3, "min_transmission_angle_deg": 0.0,
-             "mechanisms": [{"type": "drag_link_slider", "fixed": drag}]}  # fmt: skip
+    fixed = {
+        "time_ratio": 1.5,
+        "stroke": 0.3,
+        "min_transmission_angle_deg": 0.0,
+        "mechanisms": [{"type": "drag_link_slider", "fixed": drag}],
+    }
     bounded = {"mechanisms": [{"type": "crank_rocker_slider", "bounds": {"crank": [50, 200]}}]}
     shaper = [{"type": "crank_shaper", "bounds": {"ram_link": [30.0, 100.0]}}]
     uniform = {**TARGETS, "objective": "uniform_cutting_speed"}
@@ -150,8 +159,12 @@ def test_a_request_retried_after_its_solver_process_died_keeps_its_budget():
     """One server process with a pool of one solver process, killed a second into a 3 s
     synthesis: the request is tried again on the new pool with what is left of its budget
     (or refused with a 503 once nothing is), not with a fresh budget."""
-    env = {"WEB_CONCURRENCY": "1", "SYNTH_EXECUTOR": "process", "SYNTH_WORKERS": "1",
-           "SYNTH_MAX_BUDGET_MS": "60000"}  # fmt: skip
+    env = {
+        "WEB_CONCURRENCY": "1",
+        "SYNTH_EXECUTOR": "process",
+        "SYNTH_WORKERS": "1",
+        "SYNTH_MAX_BUDGET_MS": "60000",
+    }
     body = {**TORQUE, "time_budget_ms": 3000.0}
     with serving(**env) as (port, proc):
         conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)

@@ -48,18 +48,27 @@ SYNTH = {
 
 @pytest.fixture(scope="module")
 def server():
-    with serving(WEB_CONCURRENCY="2", SYNTH_WORKERS="2", SYNTH_WARM="0",
-                 SYNTH_WRITE_TIMEOUT_S=str(WRITE_TIMEOUT_S),
-                 SYNTH_REQUEST_TIMEOUT_S=str(REQUEST_TIMEOUT_S),
-                 SYNTH_MAX_UNSENT_MB=str(MAX_UNSENT_MB)) as (port, proc):  # fmt: skip
+    with serving(
+        WEB_CONCURRENCY="2",
+        SYNTH_WORKERS="2",
+        SYNTH_WARM="0",
+        SYNTH_WRITE_TIMEOUT_S=str(WRITE_TIMEOUT_S),
+        SYNTH_REQUEST_TIMEOUT_S=str(REQUEST_TIMEOUT_S),
+        SYNTH_MAX_UNSENT_MB=str(MAX_UNSENT_MB),
+    ) as (port, proc):
         yield port, proc
 
 
 def request(method: str, path: str, body: bytes = b"", *headers: bytes) -> bytes:
     head = b"".join(h + b"\r\n" for h in headers)
     length = b"Content-Length: %d\r\n" % len(body) if body else b""
-    return (b"%s %s HTTP/1.1\r\nHost: localhost\r\nContent-Type: application/json\r\n%s%s\r\n%s"
-            % (method.encode(), path.encode(), head, length, body))  # fmt: skip
+    return b"%s %s HTTP/1.1\r\nHost: localhost\r\nContent-Type: application/json\r\n%s%s\r\n%s" % (
+        method.encode(),
+        path.encode(),
+        head,
+        length,
+        body,
+    )
 
 
 def everything(s: socket.socket, seconds: float) -> tuple[bytes, str]:
@@ -161,9 +170,10 @@ def test_replies_nobody_reads_are_dropped_and_their_memory_returned(server):
 # --- one reply to one request ----------------------------------------------------------------
 
 
-@pytest.mark.parametrize(("method", "path", "status"),
-                         [("GET", "/health", 200), ("GET", "/nope", 404),
-                          ("DELETE", "/health", 405)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("method", "path", "status"),
+    [("GET", "/health", 200), ("GET", "/nope", 404), ("DELETE", "/health", 405)],
+)
 def test_a_request_answered_before_its_body_arrives_gets_one_reply_and_a_close(
     server, method, path, status
 ):
@@ -184,8 +194,18 @@ PAGES = ("/app/", "/docs", "/redoc")
 
 def test_every_reply_says_nosniff_and_names_no_server_and_the_pages_have_a_policy(server):
     port, _ = server
-    asked = [request("GET", p) for p in (*PAGES, "/health", "/v1/mechanisms", "/app/app.js",
-                                         "/openapi.json", "/favicon.ico", "/nope")]  # fmt: skip
+    asked = [
+        request("GET", p)
+        for p in (
+            *PAGES,
+            "/health",
+            "/v1/mechanisms",
+            "/app/app.js",
+            "/openapi.json",
+            "/favicon.ico",
+            "/nope",
+        )
+    ]
     asked += [
         request("POST", "/v1/analyze", b"{}"),
         request("HEAD", "/health"),
@@ -212,9 +232,17 @@ def test_a_host_other_than_the_services_names_is_refused(server):
     name resolves to 127.0.0.1) gets a 400 that says why."""
     port, _ = server
     conn = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
-    for host, status in [("localhost", 200), (f"localhost:{port}", 200), ("127.0.0.1:1", 200),
-                         (f"[::1]:{port}", 200), ("LOCALHOST", 200), ("evil.example", 400),
-                         (f"evil.example:{port}", 400), ("127.0.0.2", 400), ("", 400)]:  # fmt: skip
+    for host, status in [
+        ("localhost", 200),
+        (f"localhost:{port}", 200),
+        ("127.0.0.1:1", 200),
+        (f"[::1]:{port}", 200),
+        ("LOCALHOST", 200),
+        ("evil.example", 400),
+        (f"evil.example:{port}", 400),
+        ("127.0.0.2", 400),
+        ("", 400),
+    ]:
         conn.putrequest("GET", "/health", skip_host=True)
         conn.putheader("Host", host)
         conn.endheaders()
@@ -254,8 +282,9 @@ def served_here(app: object) -> Iterator[int]:
     """``app`` on uvicorn with ``api.connection``'s connections, in a thread of this process
     (so a test can break it), on a free loopback port."""
     port = free_port()
-    config = uvicorn.Config(app, host="127.0.0.1", port=port, http=Connection, lifespan="off",
-                            log_level="critical")  # fmt: skip
+    config = uvicorn.Config(
+        app, host="127.0.0.1", port=port, http=Connection, lifespan="off", log_level="critical"
+    )
     server = uvicorn.Server(config)
     thread = threading.Thread(target=server.run, daemon=True)
     thread.start()
@@ -296,8 +325,11 @@ def test_an_unexpected_error_is_a_json_500_that_closes_its_connection_as_it_says
 
 
 def post(port: int, path: str, body: dict) -> int | str:
-    req = urllib.request.Request(f"http://127.0.0.1:{port}{path}", json.dumps(body).encode(),
-                                 {"Content-Type": "application/json"})  # fmt: skip
+    req = urllib.request.Request(
+        f"http://127.0.0.1:{port}{path}",
+        json.dumps(body).encode(),
+        {"Content-Type": "application/json"},
+    )
     try:
         with urllib.request.urlopen(req, timeout=30) as r:
             r.read()

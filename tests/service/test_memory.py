@@ -38,12 +38,17 @@ def rss_mb(pid: int) -> float:
 def requests(seed: int) -> list[tuple[str, dict[str, Any]]]:
     """The overload benchmark's loaded mix, of designs drawn here (every type's)."""
     designs = {t: random_designs(t, 20, seed=seed) for t in TYPES}
-    mix = [(path, body) for path, body, _ in loaded_mix(REQUESTS, seed, designs=designs,
-                                                         budget_ms=1000.0)]  # fmt: skip
+    mix = [
+        (path, body)
+        for path, body, _ in loaded_mix(REQUESTS, seed, designs=designs, budget_ms=1000.0)
+    ]
     # first, on each client's connection, an analysis and a synthesis of every type: what a
     # process builds once for a type (its solvers, its loads' functions) is built by then
-    tour = [next(r for r in mix if kind in r[0] and t in json.dumps(r[1]))
-            for t in TYPES for kind in ("analyze", "synthesize")]  # fmt: skip
+    tour = [
+        next(r for r in mix if kind in r[0] and t in json.dumps(r[1]))
+        for t in TYPES
+        for kind in ("analyze", "synthesize")
+    ]
     first = [r for r in tour for _ in range(CLIENTS)]
     return [*first, *mix[len(first) :]]
 

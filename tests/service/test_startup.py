@@ -30,8 +30,14 @@ def loaded_by(statement: str) -> list[str]:
     """The heavy libraries in ``sys.modules`` after ``statement`` in a fresh interpreter."""
     found = f"[m for m in {HEAVY!r} if m in sys.modules]"
     code = f"import json, sys; {statement}; print(json.dumps({found}))"
-    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
-                         text=True, check=True, timeout=120).stdout  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=120,
+    ).stdout
     return list(json.loads(out))
 
 
