@@ -269,11 +269,17 @@ class _Replying:
 
     async def _busy(self, retry_after_s: int) -> None:
         assert self.send is not None
-        msg = (f"the server holds as many replies not yet read as it may; try again in "
-               f"{retry_after_s} s")  # fmt: skip
+        msg = (
+            f"the server holds as many replies not yet read as it may; try again in "
+            f"{retry_after_s} s"
+        )
         body = json.dumps({"detail": [error_item([], msg, "busy")]}).encode()
-        headers = [(b"content-type", b"application/json"), (b"content-length", b"%d" % len(body)),
-                   (b"retry-after", b"%d" % retry_after_s), NOSNIFF]  # fmt: skip
+        headers = [
+            (b"content-type", b"application/json"),
+            (b"content-length", b"%d" % len(body)),
+            (b"retry-after", b"%d" % retry_after_s),
+            NOSNIFF,
+        ]
         await self.send({"type": "http.response.start", "status": 503, "headers": headers})
         await self.send({"type": "http.response.body", "body": body})
 

@@ -139,8 +139,14 @@ class Engine:
         engine: Engine = app.state.engine
         return engine
 
-    async def run(self, op: str, short: bool = False, arrival: float | None = None,
-                  then: Callable[[Any], Any] | None = None, **kwargs: Any) -> Any:  # fmt: skip
+    async def run(
+        self,
+        op: str,
+        short: bool = False,
+        arrival: float | None = None,
+        then: Callable[[Any], Any] | None = None,
+        **kwargs: Any,
+    ) -> Any:
         """``op`` on a slot of the short lane (``short``) or the solvers', waited for from
         ``arrival`` (monotonic seconds; None: now) until the start-by time; ``then`` of its
         result, in the lane too. With a ``time_budget_ms`` (a synthesis, a sweep) the budget
@@ -188,8 +194,12 @@ class Engine:
             await asyncio.wait_for(asyncio.shield(self._started), timeout)
         except (TimeoutError, BrokenExecutor):
             waited = (time.monotonic() - arrival) * 1000
-            raise Busy(waited, 1, "a solver process died, and its replacement had not warmed up "
-                       "within the request's budget") from None  # fmt: skip
+            raise Busy(
+                waited,
+                1,
+                "a solver process died, and its replacement had not warmed up "
+                "within the request's budget",
+            ) from None
 
     async def warm(self) -> None:
         """Build in every thread of both lanes (every worker process of a pool) what their
@@ -210,8 +220,10 @@ class Engine:
         warmed: set[int] = set()  # worker processes: calls until each has taken one
         try:
             while len(warmed) < self.workers:
-                calls = [loop.run_in_executor(self.executor, _warm, "solvers")
-                         for _ in range(self.workers - len(warmed))]  # fmt: skip
+                calls = [
+                    loop.run_in_executor(self.executor, _warm, "solvers")
+                    for _ in range(self.workers - len(warmed))
+                ]
                 new = set(await asyncio.gather(*calls)) - warmed
                 warmed |= new
                 if not new:  # an idle warm process took them: the others are still starting
@@ -231,8 +243,9 @@ class Engine:
             p.terminate()
 
 
-def _left(kwargs: dict[str, Any], deadline: float | None,
-          retried: float | None = None) -> dict[str, Any]:  # fmt: skip
+def _left(
+    kwargs: dict[str, Any], deadline: float | None, retried: float | None = None
+) -> dict[str, Any]:
     """``kwargs`` with what is left of the budget until ``deadline`` (None: no budget), less
     what the reply takes after it; ``retried`` (the arrival): a retry, refused with ``Busy``
     where less than ``REPLY_S`` is left (its own work could not end by the deadline)."""

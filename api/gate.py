@@ -51,8 +51,10 @@ class Gate:
             return
         length = headers.get(b"content-length", b"0")
         if not length.isdigit() or int(length) > self.limit:
-            response = too_large(f"the request body is {length.decode('latin-1')} bytes; at most "
-                                 f"{self.limit} are accepted")  # fmt: skip
+            response = too_large(
+                f"the request body is {length.decode('latin-1')} bytes; at most "
+                f"{self.limit} are accepted"
+            )
             await response(scope, receive, send)
             return
         seen = 0
@@ -69,8 +71,10 @@ class Gate:
 
         async def sent(message: Message) -> None:
             if message["type"] == "http.response.start":
-                message["headers"] = [(k, _relative(v, host) if k.lower() == b"location" else v)
-                                      for k, v in message.get("headers", ())]  # fmt: skip
+                message["headers"] = [
+                    (k, _relative(v, host) if k.lower() == b"location" else v)
+                    for k, v in message.get("headers", ())
+                ]
             elif head and message["type"] == "http.response.body":
                 message = {**message, "body": b""}
             await send(message)
@@ -189,6 +193,8 @@ _INLINE_SCRIPT = re.compile(rb"<script(?![^>]*\bsrc=)[^>]*>(.*?)</script>", re.D
 def _with_scripts(policy: bytes, page: bytes) -> bytes:
     """``policy`` with a script-src that allows this service's scripts and ``page``'s inline
     ones, each by its hash (FastAPI writes Swagger UI's settings into the page)."""
-    hashes = [b"'sha256-%s'" % base64.b64encode(hashlib.sha256(s).digest())
-              for s in _INLINE_SCRIPT.findall(page)]  # fmt: skip
+    hashes = [
+        b"'sha256-%s'" % base64.b64encode(hashlib.sha256(s).digest())
+        for s in _INLINE_SCRIPT.findall(page)
+    ]
     return policy + b"; script-src 'self' %s; worker-src 'self' blob:" % b" ".join(hashes)

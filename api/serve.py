@@ -183,27 +183,38 @@ def configure(app: str, host: str, port: int, settings: Settings) -> uvicorn.Con
     trusts 127.0.0.1 unless told: any process on the machine could then say who it is)."""
     forwarded = settings.forwarded_allow_ips
     workers = settings.web_concurrency or CORES
-    return uvicorn.Config(app, host=host, port=port, workers=workers, http=Connection,
-                          timeout_graceful_shutdown=SHUTDOWN_S, access_log=settings.access_log,
-                          server_header=False, proxy_headers=forwarded is not None,
-                          forwarded_allow_ips=forwarded)  # fmt: skip
+    return uvicorn.Config(
+        app,
+        host=host,
+        port=port,
+        workers=workers,
+        http=Connection,
+        timeout_graceful_shutdown=SHUTDOWN_S,
+        access_log=settings.access_log,
+        server_header=False,
+        proxy_headers=forwarded is not None,
+        forwarded_allow_ips=forwarded,
+    )
 
 
 def main(argv: list[str] | None = None, app: str = APP) -> None:
     """Serve ``app`` (the service; ``benchmarks.bare`` serves a bare ASGI app the same way)."""
     settings = Settings()
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--host", default=settings.host, help="default: HOST, else 127.0.0.1; "
-                    "empty: the default")  # fmt: skip
+    ap.add_argument(
+        "--host", default=settings.host, help="default: HOST, else 127.0.0.1; empty: the default"
+    )
     ap.add_argument("--port", type=int, default=settings.port, help="default: PORT, else 8000")
     a = ap.parse_args(argv)
     config = configure(app, a.host or settings.host, a.port, settings)
     os.environ["WEB_CONCURRENCY"] = str(config.workers)  # for the processes' own settings
     sock = listener(config.host, config.port)
     logging.getLogger("uvicorn.error").info(
-        "Serving on http://%s:%d (server processes: %d)", config.host, sock.getsockname()[1],
+        "Serving on http://%s:%d (server processes: %d)",
+        config.host,
+        sock.getsockname()[1],
         config.workers,
-    )  # fmt: skip
+    )
     if config.workers == 1:
         tune()
         Server(config, owner=True).run([sock])

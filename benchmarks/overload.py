@@ -60,14 +60,24 @@ def mix() -> list[tuple[str, dict, float | None]]:
     types; near time ratio 1, where the four-bars need IPOPT) and sweeps, each once per budget
     class; invalid and heavy requests."""
     analyze = {"mechanism": {"type": "drag_link_slider", "params": DRAG_LINK}}
-    synth = [default_body(t) for t in ("offset_slider_crank", "crank_shaper", "whitworth",
-                                       "crank_rocker_slider")]  # fmt: skip
-    synth += [{"time_ratio": tr, "stroke": 300.0, "min_transmission_angle_deg": b}
-              for tr, b in ((1.6, 40.0), (1.02, 30.0), (3.5, 20.0))]  # fmt: skip
+    synth = [
+        default_body(t)
+        for t in ("offset_slider_crank", "crank_shaper", "whitworth", "crank_rocker_slider")
+    ]
+    synth += [
+        {"time_ratio": tr, "stroke": 300.0, "min_transmission_angle_deg": b}
+        for tr, b in ((1.6, 40.0), (1.02, 30.0), (3.5, 20.0))
+    ]
     sweep = {**analyze, "vary": "coupler", "start": 0.14, "stop": 0.5, "points": 101}
-    bad = [{"mechanism": {"type": "crank_shaper", "params": {"crank": 300.0,
-            "pivot_distance": 240.0, "lever": 450.0}}}, {"mechanism": {"type": "scotch_yoke",
-            "params": {"crank": -1}}}]  # fmt: skip
+    bad = [
+        {
+            "mechanism": {
+                "type": "crank_shaper",
+                "params": {"crank": 300.0, "pivot_distance": 240.0, "lever": 450.0},
+            }
+        },
+        {"mechanism": {"type": "scotch_yoke", "params": {"crank": -1}}},
+    ]
     heavy = [
         ("/v1/analyze", {**analyze, "samples": 20_000, "include": ["pins"]}, None),
         ("/v1/sweep", {**sweep, "points": 2001, "time_budget_ms": 2000.0}, 2000.0),
@@ -183,22 +193,32 @@ def drive(
     """``clients`` keep-alive clients sending a mix (``mix()`` unless given; each client in its
     own seeded shuffle, over and over) for ``seconds`` (or until ``requests`` in all), and the
     /health prober; with the RSS of each server process before and after (MB)."""
-    payloads = [(path, json.dumps(b).encode(), (path, budget))
-                for path, b, budget in (bodies or mix())]  # fmt: skip
-    orders = [itertools.cycle(random.Random(k).sample(payloads, len(payloads)))
-              for k in range(clients)]  # fmt: skip
+    payloads = [
+        (path, json.dumps(b).encode(), (path, budget)) for path, b, budget in (bodies or mix())
+    ]
+    orders = [
+        itertools.cycle(random.Random(k).sample(payloads, len(payloads))) for k in range(clients)
+    ]
     before = rss_mb(port)
     d = load.drive(port, orders, seconds, total=requests, probe_s=0.05)
     after = rss_mb(port)
     done = [(*s.tag, str(s.status), s.ms) for s in d.sent]  # path, budget, status, ms
     statuses = {str(k): n for k, n in load.statuses(d.sent).items()}
     errors = sum(n for k, n in statuses.items() if not k.isdigit() or (k[0] == "5" and k != "503"))
-    return {"clients": clients, "requests": len(d.sent), "seconds": d.seconds,
-            "classes": [budget_class(done, b) for b in BUDGETS_MS],
-            "synthesis_wall_ms": quantiles([ms for p, _, k, ms in done
-                                            if p == "/v1/synthesize" and k == "200"]),
-            "health_ms": quantiles(d.health_ms), "statuses": statuses,
-            "errors": errors, "rss_mb_before": before, "rss_mb_after": after}  # fmt: skip
+    return {
+        "clients": clients,
+        "requests": len(d.sent),
+        "seconds": d.seconds,
+        "classes": [budget_class(done, b) for b in BUDGETS_MS],
+        "synthesis_wall_ms": quantiles(
+            [ms for p, _, k, ms in done if p == "/v1/synthesize" and k == "200"]
+        ),
+        "health_ms": quantiles(d.health_ms),
+        "statuses": statuses,
+        "errors": errors,
+        "rss_mb_before": before,
+        "rss_mb_after": after,
+    }
 
 
 def budget_class(done: list[tuple[str, float | None, str, float]], budget: float) -> dict:
@@ -208,11 +228,16 @@ def budget_class(done: list[tuple[str, float | None, str, float]], budget: float
     served = [ms for p, k, ms in mine if k == "200" and p == "/v1/synthesize"]
     refused = [ms for _, k, ms in mine if k == "503"]
     n, walls = max(len(mine), 1), quantiles(served)
-    return {"budget_ms": budget, "requests": len(mine),
-            "served": sum(k == "200" for _, k, _ in mine) / n, "refused": len(refused) / n,
-            "synth_p99_ms": walls["p99"], "synth_max_ms": walls["max"],
-            "wait_bound_ms": wait_bound_ms(budget),
-            "refusal_max_ms": max(refused, default=None)}  # fmt: skip
+    return {
+        "budget_ms": budget,
+        "requests": len(mine),
+        "served": sum(k == "200" for _, k, _ in mine) / n,
+        "refused": len(refused) / n,
+        "synth_p99_ms": walls["p99"],
+        "synth_max_ms": walls["max"],
+        "wait_bound_ms": wait_bound_ms(budget),
+        "refusal_max_ms": max(refused, default=None),
+    }
 
 
 _SERVER: dict[int, int] = {}  # port: the server's first process (``main``)
@@ -252,18 +277,32 @@ def main(argv: list[str] | None = None) -> dict:
         before = sum(rss_mb(port).values())
         memory = drive(port, 16, 600.0, requests=volume, bodies=loaded)
         after = sum(rss_mb(port).values())
-    flat = [{"mix": name, "clients": r["clients"], "requests": r["requests"],
-             "errors": r["errors"], "refused_503": r["statuses"].get("503", 0),
-             "health_p50_ms": r["health_ms"]["p50"], "health_p99_ms": r["health_ms"]["p99"],
-             "health_max_ms": r["health_ms"]["max"],
-             "rss_mb_before": " ".join(f"{v:.0f}" for v in r["rss_mb_before"].values()),
-             "rss_mb_after": " ".join(f"{v:.0f}" for v in r["rss_mb_after"].values())}
-            for name, rs in mixes.items() for r in rs]  # fmt: skip
+    flat = [
+        {
+            "mix": name,
+            "clients": r["clients"],
+            "requests": r["requests"],
+            "errors": r["errors"],
+            "refused_503": r["statuses"].get("503", 0),
+            "health_p50_ms": r["health_ms"]["p50"],
+            "health_p99_ms": r["health_ms"]["p99"],
+            "health_max_ms": r["health_ms"]["max"],
+            "rss_mb_before": " ".join(f"{v:.0f}" for v in r["rss_mb_before"].values()),
+            "rss_mb_after": " ".join(f"{v:.0f}" for v in r["rss_mb_after"].values()),
+        }
+        for name, rs in mixes.items()
+        for r in rs
+    ]
     print(table(flat, tuple(flat[0])))
     classes = [{"clients": r["clients"], **c} for r in rows for c in r["classes"]]
     print(table(classes, tuple(classes[0])))
-    growth = {"requests": memory["requests"], "rss_before_mb": before, "rss_after_mb": after,
-              "growth_mb": after - before, "errors": memory["errors"]}  # fmt: skip
+    growth = {
+        "requests": memory["requests"],
+        "rss_before_mb": before,
+        "rss_after_mb": after,
+        "growth_mb": after - before,
+        "errors": memory["errors"],
+    }
     print(table([growth], tuple(growth)))
     return report("overload", {"rows": rows, "mixes": mixes, "memory": growth}, quick=a.quick)
 

@@ -279,14 +279,18 @@ class Forces:
         k = int(np.argmax(lean))
         if mu * lean[k] >= 1:
             least = 1 / lean[k]
-            why = (f"it locks under a friction of {least:.6g} or more" if least > 1e-8
-                   else "a dead point: any friction locks it")  # fmt: skip
+            why = (
+                f"it locks under a friction of {least:.6g} or more"
+                if least > 1e-8
+                else "a dead point: any friction locks it"
+            )
             deg = round(float(np.degrees(x[k])), 9) % 360
             raise InvalidDesign(
                 f"the guide's friction {mu:g} locks the ram at crank angle {deg:.6g}°: the force "
                 f"that drives it leans further off its path than the friction angle there ({why})",
-                (), "friction",
-            )  # fmt: skip
+                (),
+                "friction",
+            )
 
     def bounded(self, theta: np.ndarray, pv: np.ndarray, z: np.ndarray) -> None:
         """Refuse a design whose forces ``z`` (at each θ, its numbers ``pv``) are unbounded
@@ -338,14 +342,16 @@ class Forces:
                 f"{at}: the guide's friction {mu:g} locks the ram there (the force that drives "
                 f"it leans off its path by the friction angle, atan {mu:g}), and the forces "
                 "the load needs grow without bound",
-                (), "friction",
-            )  # fmt: skip
+                (),
+                "friction",
+            )
         where = f"the {joint} joint's transmission angle 0°" if joint else "a transmission angle 0°"
         return InvalidDesign(
             f"{at}: a dead point ({where}), where the crank cannot move the ram and the forces "
             "the load needs grow without bound",
-            (), "dead_point",
-        )  # fmt: skip
+            (),
+            "dead_point",
+        )
 
     def _equations(
         self, theta: np.ndarray, pv: np.ndarray, order: int
