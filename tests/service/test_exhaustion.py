@@ -30,20 +30,13 @@ from api.gate import Hosts
 from api.serve import configure
 
 from ..support.server import descendants, free_port, serving
+from .test_faults import SYNTH  # ~0.3 s of SLSQP in a solver
 
 WRITE_TIMEOUT_S = 2.0
 REQUEST_TIMEOUT_S = 1.0
 MAX_UNSENT_MB = 24  # per process: four ~5 MB replies not yet read, not five
 # an analysis whose reply is ~5 MB, cheap to compute (the Scotch yoke's curves)
 BIG = json.dumps({"mechanism": {"type": "scotch_yoke", "params": {"crank": 1}}, "samples": 67_000})
-SYNTH = {
-    "time_ratio": 1.6,
-    "stroke": 300.0,
-    "min_transmission_angle_deg": 20.0,
-    "objective": "uniform_cutting_speed",
-    "mechanisms": [{"type": "crank_rocker_slider"}],
-    "time_budget_ms": 1000,
-}  # ~0.3 s of SLSQP in a solver
 
 
 @pytest.fixture(scope="module")
