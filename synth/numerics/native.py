@@ -28,7 +28,7 @@ FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
 BUILD_SECONDS = 120  # the most one compilation may take
 _lock = threading.Lock()  # one build at a time in a process (files: atomic renames)
 _failed: set[str] = set()  # libraries that could not be built here: not tried again
-SMALL = 16  # up to this many points a slot of their own number (``widths``)
+SMALL = 16  # up to this many points in one slot, padded to a power of two (``widths``)
 WIDEST = 64  # the widest slot; between, powers of two (wider was no faster: 64–256 measured)
 
 
@@ -125,12 +125,15 @@ class Mapped:
         out = np.empty((self.fn.nnz_out(0), n))
         k = 0
         for w in widths(n):
-            slot = self[w]
+            slot, m = self[w], min(w, n - k)  # m points, the rest padding (copies of the first)
             for a, into, one in zip(args, slot.args, self.shared, strict=True):
-                into[:] = a if one else a[k : k + w]
+                if one:
+                    into[:] = a
+                else:
+                    into[:m], into[m:] = a[k : k + m], a[k]
             slot.run()
-            out[:, k : k + w] = slot.out.T
-            k += w
+            out[:, k : k + m] = slot.out[:m].T
+            k += m
         return out
 
     def compiled(self) -> list[ca.Function]:
@@ -140,13 +143,14 @@ class Mapped:
 
 def widths(n: int) -> list[int]:
     """n points as the widths of the slots that take them: ``WIDEST`` at a time, then powers
-    of two, and the last ``SMALL`` or fewer in a slot of their own number (a few points are
-    what a Newton step asks for: no padding, no second call)."""
+    of two, the last ``SMALL`` or fewer in one slot of the next power of two (padded: a few
+    points are what a Newton step asks for, in one call; the fewest widths, so the fewest
+    slots a thread keeps)."""
     out = []
     while n > SMALL:
         out.append(min(WIDEST, 1 << (n.bit_length() - 1)))
         n -= out[-1]
-    return [*out, n] if n else out
+    return [*out, 1 << (n - 1).bit_length()] if n else out
 
 
 class Points:

@@ -15,11 +15,12 @@ import pytest
 import synth
 from synth.analysis.model import GRID, KINDS, Model
 from synth.mechanisms import all_types, get
-from synth.numerics.native import FLAGS, SMALL, WIDEST, Mapped
+from synth.numerics.native import FLAGS, WIDEST, Mapped
 from synth.synthesis import screen
 
 from ..support.designs import random_designs
 
+POWERS = {1 << k for k in range(WIDEST.bit_length())}  # 1, 2, 4 … WIDEST
 MODELS = [
     (mtype, frozenset(parts))
     for mtype in all_types()
@@ -81,8 +82,8 @@ def test_without_a_compiler_or_a_cache_the_virtual_machine_runs(monkeypatch, tmp
 
 def test_any_number_of_points_goes_through_the_same_few_slots():
     """A compiled function evaluated at any number of points (curves, screens, roots) keeps
-    slots of the fixed widths alone (1–16, 32, 64), and each point's numbers are its own
-    call's, to the bit."""
+    slots of the fixed widths alone (the powers of two up to 64), and each point's numbers
+    are its own call's, to the bit."""
     x, p = ca.SX.sym("x", 2), ca.SX.sym("p", 3)
     out = ca.vertcat(ca.sin(x[0]) * p[0] + x[1] / p[1], ca.exp(p[2] * x[0]))
     fn = ca.Function("f", [x, p], [out])
@@ -94,7 +95,7 @@ def test_any_number_of_points_goes_through_the_same_few_slots():
         got = mapped(points, params)
         one = np.hstack([fn(q, params).full() for q in points[:: max(1, int(n) // 7)]])
         assert got.shape == (2, n) and np.array_equal(got[:, :: max(1, int(n) // 7)], one)
-    assert set(mapped.slots) <= {*range(1, SMALL + 1), 32, WIDEST}
+    assert set(mapped.slots) <= POWERS
 
 
 def test_a_searched_objective_screens_through_the_same_few_slots():
@@ -104,4 +105,4 @@ def test_a_searched_objective_screens_through_the_same_few_slots():
         types = ["offset_slider_crank", "crank_shaper"]
         synth.synthesize(tr, 300.0, 10.0, mechanisms=types, objective="uniform_cutting_speed")
     widths = screen.slot_widths()
-    assert widths and widths <= {*range(1, SMALL + 1), 32, WIDEST}
+    assert widths and widths <= POWERS
