@@ -47,7 +47,15 @@ def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
     (dx, dy), _ = sk.dimension
     run = ((ex - sx) ** 2 + (ey - sy) ** 2) ** 0.5
     offset = ((dx - sx) * (sy - ey) + (dy - sy) * (ex - sx)) / run  # to the left of the run
-    size = {"dimtxt": sk.text_height, "dimasz": sk.text_height}
+    # the text a CAD program shows: the length itself (dimlfac 1: the EZDXF style scales by
+    # 100), to 6 decimals without trailing zeros (dimzin 8)
+    size = {
+        "dimtxt": sk.text_height,
+        "dimasz": sk.text_height,
+        "dimlfac": 1.0,
+        "dimdec": 6,
+        "dimzin": 8,
+    }
     dim = msp.add_aligned_dim(p1=d.stroke[0], p2=d.stroke[1], distance=offset,
                               dxfattribs={"layer": "STROKE"}, override=size)  # fmt: skip
     dim.render()

@@ -56,6 +56,9 @@ def test_a_dxf_reads_back_with_the_designs_lengths_and_stroke(mtype):
         (dim,) = msp.query("DIMENSION")
         stroke = bruteforce.simulate(mtype, p)["stroke"]
         assert dim.get_measurement() == pytest.approx(stroke, rel=1e-9)
+        # what a CAD program shows: the dimension block's text, the stroke to 6 decimals
+        (shown,) = [e.plain_text() for e in dim.get_geometry_block() if e.dxftype() == "MTEXT"]
+        assert shown == f"{stroke:.6f}".rstrip("0").rstrip(".")
         assert len(msp.query('*[layer=="PIVOTS"]')) > 0 and len(msp.query('*[layer=="GUIDE"]')) == 2
         fixed = [k for k, xy in synth.joints(mtype, p, [0.0, 90.0, 200.0]).items()
                  if np.ptp(xy, axis=0).max() == 0]  # fmt: skip
