@@ -29,8 +29,9 @@ from synth.analysis.sweep import MAX_POINTS
 from synth.drawing import FORMATS
 from synth.load import GAP, LENGTH_UNITS, RANGES
 from synth.mechanisms import Mechanism, Parameter, all_types, get
+from synth.objectives import all_objectives
 from synth.synthesis.driver import MAX_CANDIDATES, PER_TYPE
-from synth.targets import OBJECTIVES, PARETO
+from synth.targets import PARETO
 
 from .body_limit import MAX_BODY_BYTES
 from .config import DEFAULT_BUDGET_MS, Settings
@@ -364,9 +365,13 @@ class SynthesizeRequest(Extras):
         max_length=24,
         description="omitted: every quick-return type, nothing fixed",
     )
-    objective: Literal[tuple(OBJECTIVES)] = Field(  # type: ignore[valid-type]
+    objective: Literal[tuple(o.name for o in all_objectives())] = Field(  # type: ignore[valid-type]
         PARETO,
-        json_schema_extra={"x-titles": {**OBJECTIVES}},  # the playground's words for each
+        # the playground's words for each, and those whose value it shows beside each design
+        json_schema_extra={
+            "x-titles": {o.name: o.words for o in all_objectives()},
+            "x-searched": [o.name for o in all_objectives() if o.searched],
+        },
         description="pareto: per type, the trade-off front between the smallest design that "
         "meets the bound (min_size) and the best-transmitting one (max_transmission_angle), "
         "points spread evenly in angle, each the smallest design with at least its angle "

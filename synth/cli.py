@@ -36,9 +36,11 @@ from .drawing.export import export as _export
 from .errors import InvalidParameters, SynthError
 from .load import LENGTH_UNITS, Load
 from .mechanisms import all_types, get
+from .objectives import all_objectives
+from .objectives import get as objective_of
 from .results import Analysis, SweepResult, SynthesisResult
 from .synthesis import synthesize as _synthesize
-from .targets import OBJECTIVES, PARETO
+from .targets import PARETO
 
 INCLUDE = ("motion", "sensitivities", "envelope", "pins", "forces")
 CURVES = ("crank_angle_deg", "position", "velocity", "acceleration", "transmission_deg", "torque")
@@ -199,7 +201,7 @@ def main() -> None:
     metavar="NAME=LOW:HIGH",
     help="a free part's range, in each type given",
 )
-@click.option("--objective", type=click.Choice(list(OBJECTIVES)), default=PARETO,
+@click.option("--objective", type=click.Choice([o.name for o in all_objectives()]), default=PARETO,
               show_default=True, help="what the candidates are best at")  # fmt: skip
 @click.option("--max-candidates", type=int, help="at most this many in all")
 @click.option("--time-budget-ms", type=float, default=2000.0, show_default=True,
@@ -239,7 +241,7 @@ def _candidate_rows(r: SynthesisResult) -> list[dict[str, Any]]:
     return [{"rank": i + 1, "type": c.type, **{k: c.params.get(k) for k in names},
              "min_transmission_angle_deg": c.min_transmission_angle_deg,
              "objective_value": c.objective_value, "size": c.size, "method": c.method,
-             "active": " ".join(c.active)}
+             "active": " ".join(c.active), "ranked_by": c.ranked_by}
             for i, c in enumerate(r.candidates)]  # fmt: skip
 
 
@@ -249,7 +251,8 @@ def _candidate_text(r: SynthesisResult, objective: str) -> str:
         rows = [(i + 1, c.type, ", ".join(f"{k} {v:.6g}" for k, v in c.params.items()),
                  c.min_transmission_angle_deg, c.objective_value, " ".join(c.active) or "-")
                 for i, c in enumerate(r.candidates)]  # fmt: skip
-        measure = "size" if objective == PARETO else objective  # a front's candidates: their size
+        # a front's candidates: their size
+        measure = "size" if objective_of(objective).found == "front" else objective
         out.append(_table(("#", "type", "lengths", "μ min °", measure, "at limit"), rows))
         out += dict.fromkeys(f"{c.type}: {c.family.relation}"
                              for c in r.candidates if c.family)  # fmt: skip

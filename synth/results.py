@@ -334,6 +334,9 @@ class Candidate:
     front: FrontPoint | None = None  # objective pareto: its place on the front
     family: Family | None = None  # where the targets leave a family of equal designs
     loads: Loads | None = None  # with a load: what it asks of the drive and the bearings
+    # the rule that put it after the candidate before it: objective (its value; the first's),
+    # min_transmission_angle (the value tied, the larger first), size (the smaller), type
+    ranked_by: str = "objective"
 
 
 @dataclass(frozen=True)

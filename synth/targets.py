@@ -1,5 +1,5 @@
 """What a synthesis aims at, named once: the time ratio as the crank angle β, and the
-objectives a request may name.
+names of the objectives a request may name.
 
 A quick-return's slow stroke takes the crank through π + β and the quick one through π − β,
 so the time ratio is TR = (π + β)/(π − β) and β = π (TR − 1)/(TR + 1).
@@ -19,26 +19,14 @@ if TYPE_CHECKING:
 # a number or a CasADi symbol (the IPOPT formulation's time ratio)
 T = TypeVar("T", float, "ca.DM", "ca.SX", "ca.MX")
 
-# the objectives: the reduced solvers' and IPOPT's two, the front between them, the two on how
-# the slider moves (``synth.synthesis.motion``)
+# the objectives' names (``synth.objectives``: what each means): the reduced solvers' and
+# IPOPT's two, the front between them, the two on how the slider moves, the least peak torque
 MAX_TRANSMISSION = "max_transmission_angle"
 MIN_SIZE = "min_size"
 PARETO = "pareto"
 UNIFORM = "uniform_cutting_speed"
 PEAK = "min_peak_acceleration"
-MOTION_OBJECTIVES = (UNIFORM, PEAK)
-# and the least peak crank torque under a load (``synth.analysis.loads``), by the same search
 PEAK_TORQUE = "min_peak_torque"
-SEARCHED = (*MOTION_OBJECTIVES, PEAK_TORQUE)
-# every objective a request may name, the default first, each with the words a person reads
-OBJECTIVES = {
-    PARETO: "Trade-off front (size against transmission)",
-    MAX_TRANSMISSION: "Best transmission angle",
-    MIN_SIZE: "Smallest design",
-    UNIFORM: "Most uniform cutting speed",
-    PEAK: "Least peak acceleration",
-    PEAK_TORQUE: "Least peak torque (with a load)",
-}
 
 
 def beta(time_ratio: T) -> T:

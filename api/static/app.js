@@ -12,6 +12,7 @@ const SVGNS = "http://www.w3.org/2000/svg";
 const WORKING = "#1f5fbf", RETURN = "#d9730d", DEAD = "#b0131f";
 let TYPES = {}; // type -> /v1/mechanisms record
 const OBJECTIVE_TITLES = {}; // objective -> the words the service's schema gives it
+const SEARCHED = new Set(); // the objectives whose value is shown beside each design (the schema's)
 let current = null; // the design shown: {type, params, analysis, curves, bound}
 let timer = null;
 let frame = 0;
@@ -191,7 +192,7 @@ async function synthesize(choose = 0) {
     // what the service says of the design beyond its lengths: its measure for the objective,
     // the limits it rests on, the free choice its family leaves
     const notes = [];
-    if (!["pareto", "min_size", "max_transmission_angle"].includes(body.objective)) {
+    if (SEARCHED.has(body.objective)) {
       notes.push(`${OBJECTIVE_TITLES[body.objective] || body.objective}: ${short(c.objective_value)}`);
     }
     if (c.active.length) notes.push(`at its limit: ${c.active.join(", ")}`);
@@ -757,6 +758,7 @@ function buildObjectives(schema) {
   const o = schema.components.schemas.SynthesizeRequest.properties.objective;
   const titles = o["x-titles"] || {};
   Object.assign(OBJECTIVE_TITLES, titles);
+  for (const k of o["x-searched"] || []) SEARCHED.add(k);
   $("objective").replaceChildren(...o.enum.map((k) => el("option", { value: k }, titles[k] || k)));
   $("objective").value = o.default;
 }

@@ -34,26 +34,10 @@ from ..results import (
     SpeedFluctuation,
     Tolerance,
 )
-from ..targets import UNIFORM
 from .model import Model, model
 from .roots import TWO_PI, _rtsafe, stationary_points
 
 CUT = 0.1  # a tool cuts over the middle 80% of the working stroke: 10% run-in, 10% run-out
-
-
-def fluctuation(motion: Motion | None) -> float:
-    """The speed fluctuation a limit and ``uniform_cutting_speed`` mean: over the middle 80%."""
-    assert motion is not None
-    return motion.working_speed_fluctuation.middle
-
-
-def measure(motion: Motion | None, objective: str) -> float:
-    """The value a motion objective minimises."""
-    if objective == UNIFORM:
-        return fluctuation(motion)
-    assert motion is not None
-    p = motion.peak_acceleration
-    return max(p.working_stroke, p.return_stroke)
 
 
 class Strokes:

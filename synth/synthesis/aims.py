@@ -14,8 +14,8 @@ import numpy as np
 from ..analysis.terms import motion_terms, peak_torque_terms
 from ..load import Load
 from ..mechanisms import Mechanism
+from ..objectives import Objective
 from ..results import Candidate
-from ..targets import PEAK, PEAK_TORQUE, UNIFORM
 from . import screen
 from .search import Targets
 
@@ -48,10 +48,11 @@ class Aim:
 DRAWN_MOTION, DRAWN_TORQUE = (2, 4), (8, 8)
 
 
-# the terms ``local_optima`` picks from carry their derivatives (``gradient=True``)
+# the motion terms an objective bounds (``Objective.terms``), from ``quality.MotionTerms`` with
+# their derivatives (``gradient=True``)
 PICK: dict[str, Pick] = {
-    UNIFORM: lambda t: (t.middle, cast(np.ndarray, t.middle_dp)),
-    PEAK: lambda t: (
+    "speed": lambda t: (t.middle, cast(np.ndarray, t.middle_dp)),
+    "acceleration": lambda t: (
         np.concatenate([t.working, t.returning]),
         np.vstack([cast(np.ndarray, t.working_dp), cast(np.ndarray, t.returning_dp)]),
     ),
@@ -61,23 +62,26 @@ PICK: dict[str, Pick] = {
 def aim(
     m: Mechanism,
     variant: frozenset[str],
+    o: Objective,
     t: Targets,
     extras: dict[str, Any],
     limit: float | None,
     mine: list[Candidate],
 ) -> tuple[Aim, tuple[Pick, float] | None]:
-    """The objective's search over one variant, and its limit's terms and cap: for the least
-    peak torque, the torque's terms under the request's load (``extras``), in units of the
-    best verified start's peak (the search's numbers near 1), the limit the same terms'; for
-    a motion objective, its motion terms, the limit the fluctuation's."""
-    if t.objective != PEAK_TORQUE:
+    """The objective's search over one variant, and its limit's terms and cap: for the peak
+    torque's terms, under the request's load (``extras``), in units of the best verified
+    start's peak (the search's numbers near 1), the limit the same terms'; for motion terms,
+    the objective's, the limit its own (the fluctuation's: the middle's speed)."""
+    assert o.terms is not None  # a searched objective
+    if o.terms in PICK:
+        terms = o.terms
 
         def rank(pvs: np.ndarray) -> np.ndarray:
-            return screen.rank(m, variant, pvs, t.objective)
+            return screen.rank(m, variant, pvs, terms)
 
         motion = partial(motion_terms, m.type, gradient=True)
-        capped = None if limit is None else (PICK[UNIFORM], limit)
-        return Aim(motion, PICK[t.objective], rank, True, DRAWN_MOTION), capped
+        capped = None if limit is None or o.limit is None else (PICK[o.limit.terms], limit)
+        return Aim(motion, PICK[terms], rank, True, DRAWN_MOTION), capped
     load: Load = extras["load"]
     metres = load.metres * t.stroke  # the search's lengths are in strokes
     unit = min((abs(c.objective_value) for c in mine), default=1.0) or 1.0

@@ -1,17 +1,18 @@
 """A proposal made a candidate: verified by the forward analysis, with what the answer says
 about it (its objective value, the constraints and bounds it rests on, its family), and the
-orders in which the objectives rank proposals and candidates."""
+order in which an objective ranks the exact solvers' proposals."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
-from ..analysis.quality import measure
+from .. import objectives
 from ..analysis.verify import verify, verify_many
 from ..mechanisms import Mechanism
 from ..results import Analysis, Candidate, Family
-from ..targets import MAX_TRANSMISSION, MIN_SIZE, MOTION_OBJECTIVES, PEAK_TORQUE
 from .search import Proposal, Searched, Targets, Variant
 
 
@@ -41,21 +42,13 @@ def made(
     for v in variants:
         if v.parts == m.variant(params):
             limits = {k: tuple(x * t.stroke for x in v.problem.bounds[k]) for k in v.free}
-    return Candidate(
+    c = Candidate(
         type=m.type,
         params=params,
         time_ratio=a.time_ratio,
         stroke=a.stroke,
         min_transmission_angle_deg=mu,
-        objective_value=(
-            measure(a.motion, t.objective)
-            if t.objective in MOTION_OBJECTIVES
-            else _peak_torque(a)
-            if t.objective == PEAK_TORQUE
-            else mu
-            if t.objective == MAX_TRANSMISSION
-            else size
-        ),
+        objective_value=math.nan,  # the objective's measure of it, below
         method=p.method,
         residuals=residuals,
         verified=True,
@@ -69,11 +62,7 @@ def made(
         family=family(m, params, limits),
         loads=a.loads,
     )
-
-
-def _peak_torque(a: Analysis) -> float:
-    assert a.loads is not None  # the objective's request carries a load
-    return a.loads.torque.max
+    return replace(c, objective_value=objectives.get(t.objective).value(c))
 
 
 def family(
@@ -153,13 +142,7 @@ def firsts(
 
 
 def predicted_rank(objective: str) -> Callable[[Proposal], tuple[float, float, str]]:
-    if objective == MIN_SIZE:
+    """How the objective ranks the exact solvers' designs before they are verified."""
+    if objectives.get(objective).proposals == "size":
         return lambda p: (p.size, -p.angle_deg, p.type)
     return lambda p: (-round(p.angle_deg, 9), p.size, p.type)
-
-
-def rank(objective: str) -> Callable[[Candidate], tuple[float, float, str]]:
-    if objective == MIN_SIZE:
-        return lambda c: (c.size, -c.min_transmission_angle_deg, c.type)
-    # ties (e.g. slot drives, 90° for every design) go to the smaller mechanism
-    return lambda c: (-round(c.min_transmission_angle_deg, 9), c.size, c.type)

@@ -16,13 +16,15 @@ from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+from .. import objectives
 from ..analysis.kinematics import analyze, check_drawn, check_include
 from ..errors import InvalidDesign, InvalidParameters
 from ..load import Load
 from ..mechanisms import all_types, get
+from ..objectives import FLUCTUATION, REGISTRY, TORQUE
 from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
-from ..targets import MIN_SIZE, MOTION_OBJECTIVES, OBJECTIVES, PARETO, PEAK_TORQUE, SEARCHED
-from .candidate import candidate, predicted_rank, rank
+from ..targets import PARETO
+from .candidate import candidate, predicted_rank
 from .diagnose import diagnose
 from .front import pareto
 from .motion import motion
@@ -92,22 +94,21 @@ def synthesize(
                   max_candidates, time_budget_ms, include=include,
                   max_working_speed_fluctuation=max_working_speed_fluctuation,
                   load=load, max_peak_torque=max_peak_torque)  # fmt: skip
+    o = objectives.get(objective)
     per_type = max_candidates or PER_TYPE  # the most one type's front takes
     if max_candidates is None:
-        max_candidates = min(PER_TYPE * (len(specs) if objective == PARETO else 1), MAX_CANDIDATES)
+        max_candidates = min(PER_TYPE * (len(specs) if o.found == "front" else 1), MAX_CANDIDATES)
     deadline = t0 + time_budget_ms / 1000
     targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline, solver)
-    extras = {"include": include, "tolerance": tolerance}
-    if objective == PARETO:
+    # what the objective measures; with its load, every candidate's analysis has its loads
+    extras: dict[str, Any] = {"include": sorted({*include, *o.include}), "tolerance": tolerance}
+    if o.found == "front":
         cands, infeasible = pareto(specs, targets, max_candidates, per_type, extras)
-    elif objective in MOTION_OBJECTIVES:
-        extras["include"] = sorted({*include, "motion"})  # what the objective measures
+    elif o.searched:
+        limit = {FLUCTUATION: max_working_speed_fluctuation, TORQUE: max_peak_torque}
+        extras |= {"load": load} if o.needs_load else {}
         cands, infeasible = motion(
-            specs, targets, max_candidates, extras, max_working_speed_fluctuation
-        )
-    elif objective == PEAK_TORQUE:  # every candidate's analysis has its loads
-        cands, infeasible = motion(
-            specs, targets, max_candidates, {**extras, "load": load}, max_peak_torque
+            specs, targets, max_candidates, extras, limit.get(o.limit) if o.limit else None
         )
     else:
         cands, infeasible = _single(specs, targets, max_candidates, extras)
@@ -132,7 +133,8 @@ def _single(
         for i, (spec, s) in enumerate(zip(specs, searched, strict=True))
         if not any(c.spec == i for c in found) and not left[i]
     ]
-    return sorted((c.candidate for c in found), key=rank(t.objective))[:max_candidates], infeasible
+    ranked = objectives.get(t.objective).rank([c.candidate for c in found])
+    return ranked[:max_candidates], infeasible
 
 
 @dataclass(frozen=True)
@@ -204,8 +206,8 @@ def _catalogue() -> str:
     """The types (their parameters) and the objectives, for ``synthesize``'s help."""
     types = [f"    {t} ({get(t).title}): {', '.join(q.name for q in get(t).parameters)}"
              for t in all_types() if get(t).quick_return]  # fmt: skip
-    objectives = [f"    {k}: {words}" for k, words in OBJECTIVES.items()]
-    return "\n".join(["", "    Types (parameters):", *types, "", "    Objectives:", *objectives])
+    named = [f"    {o.name}: {o.words}" for o in objectives.all_objectives()]
+    return "\n".join(["", "    Types (parameters):", *types, "", "    Objectives:", *named])
 
 
 synthesize.__doc__ = (synthesize.__doc__ or "") + _catalogue()
@@ -274,7 +276,8 @@ def short(
     one type and at most ~15 ms for the six over time ratios 1.005–4.5 and bounds 0–70°
     (``docs/benchmarks.md``). Takes ``synthesize``'s arguments unchecked (and ignores the
     others); False for any it would refuse."""
-    if objective in SEARCHED or include or tolerance is not None or load is not None:
+    searched = objective not in REGISTRY or REGISTRY[objective].searched
+    if searched or include or tolerance is not None or load is not None:
         return False
     if not solver.accelerators:  # the generic path: IPOPT's multistart
         return False
@@ -302,7 +305,7 @@ def _check_targets(
             math.isfinite(bound) and 0 <= bound < 90,
             "an angle in [0°, 90°)",
         ),
-        ("objective", objective, objective in OBJECTIVES, "one of " + ", ".join(OBJECTIVES)),
+        ("objective", objective, objective in REGISTRY, "one of " + ", ".join(REGISTRY)),
         (
             "max_candidates",
             max_candidates,
@@ -314,10 +317,10 @@ def _check_targets(
     for name, value, ok, what in checks:
         if not ok:
             raise InvalidParameters(f"{name} must be {what}, got {value!r}", (name,))
-    if objective == MIN_SIZE and bound == 0:
+    if REGISTRY[objective].needs_bound and bound == 0:
         raise InvalidParameters(
-            "min_transmission_angle_deg must be > 0 with the objective min_size: without a "
-            "bound the smallest designs are linkages that lock (a 0° transmission angle)",
+            f"min_transmission_angle_deg must be > 0 with the objective {objective}: without "
+            "a bound the smallest designs are linkages that lock (a 0° transmission angle)",
             ("min_transmission_angle_deg",),
         )
 
@@ -343,26 +346,28 @@ def _check_limit(limit: float | None, objective: str) -> None:
             f"against the mean: 1 is a uniform speed), got {limit!r}",
             ("max_working_speed_fluctuation",),
         )
-    if objective not in MOTION_OBJECTIVES:
+    if REGISTRY[objective].limit is not FLUCTUATION:
+        takers = [o.name for o in objectives.all_objectives() if o.limit is FLUCTUATION]
         raise InvalidParameters(
             f"max_working_speed_fluctuation is taken with the objectives "
-            f"{' and '.join(MOTION_OBJECTIVES)}, not {objective}",
+            f"{' and '.join(takers)}, not {objective}",
             ("max_working_speed_fluctuation",),
         )
 
 
 def _check_torque(objective: str, load: Load | None, limit: float | None) -> None:
     """The least peak torque needs a load; a limit on the peak torque goes with it."""
-    if objective == PEAK_TORQUE and load is None:
-        msg = f"objective {PEAK_TORQUE} needs a load (the torque it minimises is the load's)"
+    if REGISTRY[objective].needs_load and load is None:
+        msg = f"objective {objective} needs a load (the torque it minimises is the load's)"
         raise InvalidParameters(msg, ("load",))
     if limit is None:
         return
     if not (math.isfinite(limit) and limit > 0):
         msg = f"max_peak_torque must be a finite torque > 0 (N·m), got {limit!r}"
         raise InvalidParameters(msg, ("max_peak_torque",))
-    if objective != PEAK_TORQUE:
-        msg = f"max_peak_torque is taken with the objective {PEAK_TORQUE}, not {objective}"
+    if REGISTRY[objective].limit is not TORQUE:
+        (taker,) = (o.name for o in objectives.all_objectives() if o.limit is TORQUE)
+        msg = f"max_peak_torque is taken with the objective {taker}, not {objective}"
         raise InvalidParameters(msg, ("max_peak_torque",))
 
 

@@ -8,10 +8,11 @@ from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any, cast
 
+from .. import objectives
 from ..mechanisms import get
 from ..results import Candidate, FrontPoint, Infeasible
 from ..targets import MAX_TRANSMISSION, MIN_SIZE
-from .candidate import firsts, predicted_rank, rank
+from .candidate import firsts, predicted_rank
 from .diagnose import diagnose
 from .search import Proposal, Searched, Spec, Targets, search
 
@@ -50,7 +51,8 @@ def pareto(
             infeasible.append(diagnose(m, specs[i], best_t, top))
         elif n:
             fronts.append(front)
-    fronts.sort(key=lambda f: rank(MAX_TRANSMISSION)(f[0]))
+    order = objectives.get(MAX_TRANSMISSION).order([f[0] for f in fronts])
+    fronts = [fronts[i] for i, _ in order]
     return [c for f in fronts for c in f], infeasible
 
 

@@ -45,11 +45,11 @@ from typing import Any
 
 import numpy as np
 
-from ..analysis.quality import fluctuation
+from .. import objectives
 from ..errors import SynthError
 from ..mechanisms import Mechanism, get
 from ..results import TOL, Candidate, Infeasible
-from ..targets import MAX_TRANSMISSION, MIN_SIZE, PEAK_TORQUE, UNIFORM
+from ..targets import MAX_TRANSMISSION, MIN_SIZE
 from . import aims, screen
 from .candidate import candidate
 from .diagnose import diagnose
@@ -82,6 +82,7 @@ MAX_ITER = 300
 AROUND = 3.0  # the box about the starts (each part within this factor of theirs) drawn again
 STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
 NEAR = 1e-4  # how close (stroke units, each parameter) to an earlier run's end a run ends
+ONE_OPTIMUM = 1e-3  # two runs' ends this close (stroke units), their values tied: one optimum
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
 SAMPLES = 256  # Halton points in the box, projected onto the equalities (``screen``): starts
 # beside the exact solvers' designs
@@ -318,6 +319,7 @@ def motion(
     verified, ranked by the measure (the ``limit`` met: the fluctuation's, or the torque's)."""
     found: list[Candidate] = []
     infeasible = []
+    o = objectives.get(t.objective)
     for i, spec in enumerate(specs):
         m = get(spec.type)
         if m.facts is None:  # its constraints are the closed forms' (``formulation``)
@@ -352,7 +354,7 @@ def motion(
             if not starts or not v.free:
                 continue
             targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
-            aim, capped = aims.aim(m, v.parts, t, extras, limit, mine)
+            aim, capped = aims.aim(m, v.parts, o, t, extras, limit, mine)
             optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
                                   v.problem.explicit, targets, aim, starts, capped,
                                   t.deadline, bool(spec.fixed))  # fmt: skip
@@ -362,20 +364,17 @@ def motion(
                 if c is not None:  # its family's smallest member, and it where that differs
                     smallest = _smallest_member(m, i, c, t, s.variants, extras)
                     mine += [smallest] if aim.scale_free else [c, smallest]
-        kept = [c for c in mine if limit is None or _limited(c, t) <= limit * (1 + TOL)]
+        cap = o.limit
+        kept = [
+            c for c in mine if cap is None or limit is None or cap.value(c) <= limit * (1 + TOL)
+        ]
         if not kept and not mine:
             infeasible.append(diagnose(m, spec, best_t, s))
         elif not kept:  # the limit left none
-            assert limit is not None
-            infeasible.append(_unreachable(m, spec, t, extras, limit, mine))
-        found += _distinct(kept, t.stroke)
-    found.sort(key=lambda c: (round(c.objective_value, 12), c.size, c.type))
-    return found[:max_candidates], infeasible
-
-
-def _limited(c: Candidate, t: Targets) -> float:
-    """What a request's limit bounds: the peak torque, or the speed's fluctuation."""
-    return c.objective_value if t.objective == PEAK_TORQUE else fluctuation(c.motion)
+            assert cap is not None and limit is not None
+            infeasible.append(_unreachable(m, spec, t, extras, cap, limit, mine))
+        found += _distinct(kept, t.stroke, o.tie)
+    return o.rank(found)[:max_candidates], infeasible
 
 
 def _unreachable(
@@ -383,28 +382,23 @@ def _unreachable(
     spec: Spec,
     t: Targets,
     extras: dict[str, Any],
+    capped: objectives.Limit,
     limit: float,
     mine: list[Candidate],
 ) -> Infeasible:
-    """Why no design of the type meets the limit, with the least the search finds."""
-    least = min(_limited(c, t) for c in mine)
-    if t.objective == PEAK_TORQUE:
-        return Infeasible(
-            m.type, "PEAK_TORQUE_UNREACHABLE",
-            f"{m.type}'s peak crank torque under the load is at least {least:.6g} N·m (the "
-            f"least the search finds) at time ratio {t.time_ratio:g}, stroke {t.stroke:g} and "
-            f"bound {t.bound_deg:g}°, above the limit {limit:g} N·m",
-        )  # fmt: skip
-    if t.objective != UNIFORM:  # how uniform it can be: that objective's optimum
-        alone = motion([spec], replace(t, objective=UNIFORM), 1, extras, None)[0]
+    """Why no design of the type meets the limit, with the least the search finds (where the
+    request's objective is not the one that finds it, that one's optimum too)."""
+    least = min(capped.value(c) for c in mine)
+    if t.objective != capped.least:
+        alone = motion([spec], replace(t, objective=capped.least), 1, extras, None)[0]
         least = min([least] + [c.objective_value for c in alone])
     return Infeasible(
-        m.type, "FLUCTUATION_UNREACHABLE",
-        f"{m.type}'s speed fluctuation over the middle 80% of the working stroke is at "
-        f"least {least:.6g} (the least the search finds) at time ratio "
-        f"{t.time_ratio:g}, stroke {t.stroke:g} and bound {t.bound_deg:g}°, above the "
-        f"limit {limit:g}",
-    )  # fmt: skip
+        m.type,
+        capped.code,
+        f"{m.type}'s {capped.words} is at least {least:.6g}{capped.unit} (the least the "
+        f"search finds) at time ratio {t.time_ratio:g}, stroke {t.stroke:g} and bound "
+        f"{t.bound_deg:g}°, above the limit {limit:g}{capped.unit}",
+    )
 
 
 def _smallest_member(
@@ -429,10 +423,20 @@ def _smallest_member(
     return smaller or c
 
 
-def _distinct(cands: list[Candidate], stroke: float) -> list[Candidate]:
-    """One candidate per design (the first of those within ``SAME`` × stroke of each other)."""
+def _distinct(cands: list[Candidate], stroke: float, tie: float) -> list[Candidate]:
+    """One candidate per design, the better of two that are one: within ``SAME`` × stroke of
+    each other, or within ``ONE_OPTIMUM`` × stroke with values within ``tie`` (relative: one
+    optimum that two runs ended short of by their tolerance, not two designs the objective
+    cannot tell apart)."""
     out: list[Candidate] = []
     for c in sorted(cands, key=lambda c: c.objective_value):
-        if not any(same(c.params, o.params, stroke) for o in out):
+        if not any(same(c.params, o.params, stroke) or _one(c, o, stroke, tie) for o in out):
             out.append(c)
     return out
+
+
+def _one(a: Candidate, b: Candidate, stroke: float, tie: float) -> bool:
+    x, y = a.objective_value, b.objective_value
+    if a.params.keys() != b.params.keys() or abs(x - y) > tie * max(x, y):
+        return False
+    return all(abs(a.params[k] - b.params[k]) <= ONE_OPTIMUM * stroke for k in a.params)

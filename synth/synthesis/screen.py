@@ -25,7 +25,6 @@ from ..analysis.quality import CUT
 from ..load import Load
 from ..mechanisms import Mechanism, kinetics
 from ..numerics.native import Mapped
-from ..targets import UNIFORM
 from .formulation import Formulation
 
 STEPS = 12  # Newton steps a projection takes
@@ -129,12 +128,13 @@ def _held(
     return res, np.where(held[..., None], jac, 0.0)
 
 
-def rank(m: Mechanism, variant: frozenset[str], pvs: np.ndarray, objective: str) -> np.ndarray:
-    """Each design's motion measure (``objective``), approximately, from a grid of crank
-    angles; inf for a design whose slider does not run one stroke each way on it."""
+def rank(m: Mechanism, variant: frozenset[str], pvs: np.ndarray, terms: str) -> np.ndarray:
+    """Each design's motion measure (``terms``: the middle's speed, or the acceleration),
+    approximately, from a grid of crank angles; inf for a design whose slider does not run
+    one stroke each way on it."""
     g = _sampled(m, variant, pvs)
     with np.errstate(all="ignore"):  # a design that does not run: inf below
-        measure = _measure(objective, g.s, g.v, g.a, g.working, g.stroke)
+        measure = _measure(terms, g.s, g.v, g.a, g.working, g.stroke)
     return np.where(g.fine & np.isfinite(measure), measure, np.inf)
 
 
@@ -199,7 +199,7 @@ def _sampled(m: Mechanism, variant: frozenset[str], pvs: np.ndarray) -> _Grid:
 
 
 def _measure(
-    objective: str,
+    terms: str,
     s: np.ndarray,
     v: np.ndarray,
     a: np.ndarray,
@@ -208,7 +208,7 @@ def _measure(
 ) -> np.ndarray:
     """The measure from s, s′ and s″ sampled from the working stroke's start."""
     rows = np.arange(len(s))
-    if objective != UNIFORM:
+    if terms == "acceleration":
         measure = np.maximum(_peak(a, working), _peak(a, ~working)) / stroke
     else:  # the middle of the working stroke: its share of the travel, and of the crank's turn
         travel = np.where(working, np.abs(s - s[:, :1]) / stroke[:, None], 2.0)

@@ -7,7 +7,7 @@ import pydoc
 import pytest
 
 import synth
-from synth.targets import OBJECTIVES
+from synth.objectives import REGISTRY
 
 TARGETS = (1.8, 250.0, 40.0)
 
@@ -65,7 +65,7 @@ def test_results_read_as_attributes_and_as_before():
 def test_help_names_the_types_the_spec_keys_and_the_objectives():
     text = pydoc.render_doc(synth.synthesize, renderer=pydoc.plaintext)
     quick = [t for t in synth.mechanisms.all_types() if synth.mechanisms.get(t).quick_return]
-    for word in (*quick, *OBJECTIVES, "type", "fixed", "bounds"):
+    for word in (*quick, *REGISTRY, "type", "fixed", "bounds"):
         assert word in text, word
     for t in quick:  # each type with its parameters
         line = next(x for x in text.splitlines() if x.strip().startswith(t))

@@ -8,6 +8,7 @@ optimality against an independent global search over the design space
 local optima need a referee of more effort (about 2.5 minutes each).
 """
 
+import itertools
 import math
 import os
 
@@ -55,7 +56,8 @@ def test_motion_optimum_is_not_beaten_by_a_global_search(mtype, objective):
     assert_meets(c, 1.6, 1.0, 20.0)
     assert c.objective_value == pytest.approx(brute(c, objective), rel=1e-9)
     values = [x.objective_value for x in r.candidates]
-    assert values == sorted(values)
+    # best first, but for ties (within 1e-6: the larger transmission angle first)
+    assert all(b >= a * (1 - 1e-6) for a, b in itertools.pairwise(values))
     ref = motion_referee.search(mtype, objective, 1.6, 20.0, **EFFORT.get(mtype, {}))
     assert ref.params is not None
     beat = (c.objective_value - ref.value) / ref.value
