@@ -99,8 +99,8 @@ def _load(text: str | None) -> Load | None:
         raise click.BadParameter("a JSON object, e.g. '{\"length_unit\": \"mm\", ...}'",
                                  param_hint="--load")  # fmt: skip
     try:
-        return Load(**fields)
-    except TypeError as e:
+        return Load.of(fields)
+    except InvalidParameters as e:
         raise click.BadParameter(str(e), param_hint="--load") from None
 
 

@@ -7,7 +7,8 @@ answer are SI (``synth.analysis.loads``; ``docs/model.md``, *Loads*).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import MISSING, dataclass, fields
 from typing import Any
 
 from .errors import InvalidParameters
@@ -52,6 +53,25 @@ class Load:
     force_profile: tuple[tuple[float, float], ...] | None = None
     guide_friction: float = 0.0
     gravity_deg: float | None = None
+
+    @classmethod
+    def of(cls, load: Load | Mapping[str, Any] | None) -> Load | None:
+        """A load as a ``Load``: one already, or the API's load object (a mapping of its
+        fields); InvalidParameters naming a field that is not one of them or is missing."""
+        if load is None or isinstance(load, Load):
+            return load
+        if not isinstance(load, Mapping):
+            msg = f"load must be a Load or a mapping of its fields, got {type(load).__name__}"
+            raise InvalidParameters(msg, ("load",))
+        known = {f.name: f for f in fields(cls)}
+        for k in load:
+            if k not in known:
+                msg = f"load has no field {k!r}; its fields are {', '.join(known)}"
+                raise InvalidParameters(msg, ("load", str(k)))
+        for k, f in known.items():
+            if k not in load and f.default is MISSING:
+                raise InvalidParameters(f"load needs {k}", ("load", k))
+        return cls(**load)
 
     def __post_init__(self) -> None:
         if self.length_unit not in LENGTH_UNITS:

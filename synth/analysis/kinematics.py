@@ -57,7 +57,7 @@ def analyze(
     samples: int | None = None,
     include: Collection[str] = (),
     tolerance: Tolerance | None = None,
-    load: Load | None = None,
+    load: Load | Mapping[str, Any] | None = None,
 ) -> Analysis:
     """Analyse one design over a crank revolution (the semantics of POST /v1/analyze).
 
@@ -76,6 +76,7 @@ def analyze(
     >>> round(a.time_ratio, 5), round(a.stroke, 9)
     (2.73524, 300.0)
     """
+    load = Load.of(load)  # a Load, or the API's load object
     deg = _asked(mechanism, include, crank_angles_deg, samples, load is not None)
     m, p, variant, f, pv, found = _prepared(mechanism, params)  # checked there
     crank_speed = loads.speed(m, load, crank_speed, crank_acceleration)

@@ -54,7 +54,7 @@ def synthesize(
     include: Collection[str] = (),
     tolerance: Tolerance | None = None,
     max_working_speed_fluctuation: float | None = None,
-    load: Load | None = None,
+    load: Load | Mapping[str, Any] | None = None,
     max_peak_torque: float | None = None,
     solver: Solver = DEFAULT,
 ) -> SynthesisResult:
@@ -90,6 +90,7 @@ def synthesize(
     [120.0, 450.0]
     """
     t0 = time.monotonic()
+    load = Load.of(load)  # a Load, or the API's load object
     specs = check(time_ratio, stroke, min_transmission_angle_deg, mechanisms, objective,
                   max_candidates, time_budget_ms, include=include,
                   max_working_speed_fluctuation=max_working_speed_fluctuation,

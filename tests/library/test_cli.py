@@ -96,6 +96,10 @@ def test_bad_input_exits_2_with_the_librarys_message(args, library):
         (("synthesize", "--stroke", "250"), ["--time-ratio"]),
         (("analyze", "whitworth", "-p", "crank"), ["--param", "name=value"]),
         (("analyze", "whitworth", "-p", "crank=1", "--load", "{"), ["--load", "not JSON"]),
+        (
+            ("analyze", "whitworth", "-p", "crank=1", "--load", '{"length_unit": "mm", "rpm": 4}'),
+            ["--load", "no field 'rpm'", "crank_rpm"],
+        ),
         (("analyze", "whitworth", "--frobnicate"), ["--frobnicate"]),
         (("analyze", "whitworthh"), ["whitworthh"]),
     ],

@@ -70,3 +70,21 @@ def test_help_names_the_types_the_spec_keys_and_the_objectives():
     for t in quick:  # each type with its parameters
         line = next(x for x in text.splitlines() if x.strip().startswith(t))
         assert all(q.name in line for q in synth.mechanisms.get(t).parameters)
+
+
+def test_a_load_may_be_the_apis_load_object():
+    """``load`` as the API's object (a mapping) is the same load; a misspelt or missing
+    field is refused naming it."""
+    fields = {"length_unit": "mm", "crank_rpm": 40, "cutting_force": 2000, "slider_mass": 60}
+    params = {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200}
+    as_dict = synth.analyze("whitworth", params, load=fields)
+    assert as_dict.loads == synth.analyze("whitworth", params, load=synth.Load(**fields)).loads
+    r = synth.synthesize(1.5, 300.0, 10.0, ["whitworth"], objective="min_peak_torque", load=fields)
+    assert r.candidates and r.candidates[0].loads is not None
+    for bad, loc in (
+        ({**fields, "rpm": 40}, ("load", "rpm")),
+        ({"crank_rpm": 40}, ("load", "length_unit")),
+    ):
+        with pytest.raises(synth.InvalidParameters) as e:
+            synth.analyze("whitworth", params, load=bad)
+        assert e.value.loc == loc and loc[1] in str(e.value)
