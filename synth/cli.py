@@ -38,7 +38,7 @@ from .load import LENGTH_UNITS, Load
 from .mechanisms import all_types, get
 from .objectives import all_objectives
 from .objectives import get as objective_of
-from .results import Analysis, SweepResult, SynthesisResult
+from .results import Analysis, Loads, Sensitivities, SweepResult, SynthesisResult
 from .synthesis import synthesize as _synthesize
 from .targets import PARETO
 
@@ -241,19 +241,32 @@ def _candidate_rows(r: SynthesisResult) -> list[dict[str, Any]]:
     return [{"rank": i + 1, "type": c.type, **{k: c.params.get(k) for k in names},
              "min_transmission_angle_deg": c.min_transmission_angle_deg,
              "objective_value": c.objective_value, "size": c.size, "method": c.method,
-             "active": " ".join(c.active), "ranked_by": c.ranked_by}
+             "active": " ".join(c.active), "ranked_by": c.ranked_by, **_drive(c.loads)}
             for i, c in enumerate(r.candidates)]  # fmt: skip
+
+
+def _drive(q: Loads | None) -> dict[str, float]:
+    """What a load asks of the drive, as columns (none without a load)."""
+    if q is None:
+        return {}
+    return {
+        "peak_torque_Nm": q.torque.max,
+        "motor_W": q.power.rated,
+        "flywheel_kgm2": q.flywheel.inertia,
+    }
 
 
 def _candidate_text(r: SynthesisResult, objective: str) -> str:
     out = []
     if r.candidates:
         rows = [(i + 1, c.type, ", ".join(f"{k} {v:.6g}" for k, v in c.params.items()),
-                 c.min_transmission_angle_deg, c.objective_value, " ".join(c.active) or "-")
+                 c.min_transmission_angle_deg, c.objective_value, " ".join(c.active) or "-",
+                 *_drive(c.loads).values())
                 for i, c in enumerate(r.candidates)]  # fmt: skip
         # a front's candidates: their size
         measure = "size" if objective_of(objective).found == "front" else objective
-        out.append(_table(("#", "type", "lengths", "μ min °", measure, "at limit"), rows))
+        loaded = ("peak torque N·m", "motor W", "flywheel kg·m²") if r.candidates[0].loads else ()
+        out.append(_table(("#", "type", "lengths", "μ min °", measure, "at limit", *loaded), rows))
         out += dict.fromkeys(f"{c.type}: {c.family.relation}"
                              for c in r.candidates if c.family)  # fmt: skip
     for why in r.infeasible:
@@ -319,15 +332,38 @@ def _analysis_text(a: Analysis) -> str:
         m = a.motion
         lines.append(f"cutting-speed fluctuation {m.working_speed_fluctuation.middle:.6g}, "
                      f"peak acceleration {m.peak_acceleration.working_stroke:.6g} (working) "
-                     f"{m.peak_acceleration.return_stroke:.6g} (return), ×ω²")  # fmt: skip
+                     f"{m.peak_acceleration.return_stroke:.6g} (return), in ω²·stroke")  # fmt: skip
+    if a.envelope is not None:
+        e = a.envelope
+        box = f"x {e.x[0]:.6g} to {e.x[1]:.6g}, y {e.y[0]:.6g} to {e.y[1]:.6g}"
+        size = f"{e.width:.6g} × {e.height:.6g}"
+        lines.append(f"envelope {box} ({size}), link lengths {e.link_length_sum:.6g}")
+    if a.sensitivities is not None:
+        lines += _sensitivities(a.sensitivities)
     if a.loads is not None:
         q = a.loads
         lines.append(f"crank torque {q.torque.min:.6g} to {q.torque.max:.6g} N·m (mean "
                      f"{q.torque.mean:.6g}), motor {q.power.rated:.6g} W, flywheel "
                      f"{q.flywheel.inertia:.6g} kg·m²")  # fmt: skip
+        forces = [f"{k} {f.max:.6g} N at {f.at_deg:.6g}°" for k, f in q.joints.items()]
+        lines.append(f"largest forces: {', '.join(forces)}; guide {q.guide.max:.6g} N")
     if a.curves is not None:
         lines.append(f"curves at {len(a.curves.crank_angle_deg)} angles: --csv or --json")
     return "\n".join(lines)
+
+
+def _sensitivities(s: Sensitivities) -> list[str]:
+    """A row per parameter: the derivatives of the time ratio, the stroke and the minimum
+    transmission angle, and with a tolerance their worst-case deviations."""
+    angle = s.min_transmission_angle_deg or {}
+    rows = [(k, s.time_ratio[k], s.stroke[k], angle.get(k)) for k in s.time_ratio]
+    out = [_table(("d/d", "time ratio", "stroke", "μ min °"), rows)]
+    if s.deviation is not None:
+        out.append(
+            "worst-case deviation: "
+            + ", ".join(f"{k} {v:.6g}" for k, v in s.deviation.items() if v is not None)
+        )
+    return out
 
 
 @main.command(help="One parameter varied, the rest held (POST /v1/sweep).")

@@ -133,6 +133,53 @@ def test_analyze_with_a_load_gives_the_loads():
     assert reply["loads"]["torque"]["max"] == direct.loads.torque.max
 
 
+def test_a_loaded_synthesis_prints_what_the_drive_needs():
+    """The table and the CSV carry each candidate's peak torque, motor and flywheel, as the
+    library's analysis of the printed design gives them."""
+    load = {"length_unit": "mm", "crank_rpm": 40, "cutting_force": 2000, "slider_mass": 60}
+    args = (
+        "synthesize",
+        "--time-ratio",
+        "1.5",
+        "--stroke",
+        "300",
+        "--bound",
+        "20",
+        "--type",
+        "whitworth",
+        "--objective",
+        "min_peak_torque",
+        "--load",
+        json.dumps(load),
+    )
+    text = run(*args).stdout.splitlines()
+    header = text[0].split("  ")
+    assert {"peak torque N·m", "motor W", "flywheel kg·m²"} <= {h.strip() for h in header}
+    (row,) = list(csv.DictReader(io.StringIO(run(*args, "--csv").stdout)))[:1]
+    params = {k: float(row[k]) for k in ("crank", "pivot_distance", "lever", "connecting_rod")}
+    q = synth.analyze("whitworth", params, load=load).loads
+    assert float(row["peak_torque_Nm"]) == pytest.approx(q.torque.max, rel=1e-9)
+    assert float(row["flywheel_kgm2"]) == pytest.approx(q.flywheel.inertia, rel=1e-9)
+    assert f"{q.torque.max:.6g}" in text[1] and f"{q.flywheel.inertia:.6g}" in text[1]
+
+
+def test_analyze_prints_what_include_asks_for():
+    """The envelope and the sensitivities in the text; the stroke's derivative in the lever,
+    by central differences of the analysed stroke."""
+    text = run("analyze", "whitworth", *WHITWORTH, "--include", "envelope",
+               "--include", "sensitivities").stdout  # fmt: skip
+    p = {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0}
+    e = synth.analyze("whitworth", p, include=["envelope"]).envelope
+    assert f"({e.width:.6g} × {e.height:.6g})" in text
+    h = 1e-4
+    up, down = ({**p, "lever": 150.0 + d} for d in (h, -h))
+    slope = (synth.analyze("whitworth", up).stroke - synth.analyze("whitworth", down).stroke) / (
+        2 * h
+    )
+    (lever,) = [line.split() for line in text.splitlines() if line.startswith("lever ")]
+    assert float(lever[2]) == pytest.approx(slope, rel=1e-6)
+
+
 def test_sweep_csv_and_json():
     args = ("sweep", "crank_shaper", "-p", "crank=120", "-p", "pivot_distance=240",
             "-p", "lever=450", "--vary", "crank", "--start", "100", "--stop", "300",
