@@ -20,7 +20,7 @@ from ..mechanisms.reduced import differ
 from ..results import TOL, Infeasible
 from ..targets import MAX_TRANSMISSION, time_ratio
 from . import scans
-from .search import Searched, Spec, Targets, Variant, ipopt, predict, scaled, whole
+from .search import Searched, Spec, Targets, Variant, bounds, ipopt, predict, scaled, whole
 
 SCAN_TOL = 1e-6  # relative: a design at the scan's time ratio
 # β of the range's ends: the one the target lies beyond tighter than the verification (it tells
@@ -44,7 +44,7 @@ def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
             "TRANSMISSION_UNREACHABLE",
             f"{m.type} reaches at most a minimum transmission angle of {best:.4f}° at time "
             f"ratio {t.time_ratio:g} and stroke {t.stroke:g}{_with(spec)}, below the bound "
-            f"{t.bound_deg:g}°",
+            f"{t.bound_deg:g}°{_defaults(m, spec, t.stroke)}",
             best_transmission_angle_deg=best,
         )
     if time.monotonic() >= t.deadline:  # then what follows would end so: not begun
@@ -216,6 +216,18 @@ def _fixed_design(m: Mechanism, spec: Spec, t: Targets) -> str:
         f"minimum transmission angle of {a.transmission.min_deg:.4f}°; the targets are "
         f"{t.time_ratio:g}, {t.stroke:g} and ≥ {t.bound_deg:g}°"
     )
+
+
+def _defaults(m: Mechanism, spec: Spec, stroke: float) -> str:
+    """Where the search kept free lengths within their default bounds: those bounds, which a
+    request's ``bounds`` widen."""
+    free = [q.name for q in m.parameters if q.name not in spec.fixed and q.name not in spec.bounds]
+    if not free:
+        return ""
+    ranges = ", ".join(
+        f"{k} {lo:g} to {hi:g}" for k in free for lo, hi in [bounds(m, k, spec, stroke)]
+    )
+    return f", with its free lengths within their default bounds ({ranges}; bounds widen them)"
 
 
 def _with(spec: Spec) -> str:

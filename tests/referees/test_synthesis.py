@@ -186,6 +186,18 @@ def test_transmission_bound_above_any_design():
     assert "27.008" in why.reason and "below the bound 50°" in why.reason
 
 
+def test_a_refusal_a_default_bound_set_says_so_and_bounds_widen_it():
+    """The best angle within the default bounds is not the type's best: the reason names
+    those bounds, and a wider one finds the designs (a longer rod)."""
+    (why,) = synth.synthesize(1.6, 300.0, 80.0, mechanisms=["whitworth"]).infeasible
+    assert why.code == "TRANSMISSION_UNREACHABLE" and "75.5225°" in why.reason
+    assert "default bounds" in why.reason and "connecting_rod 30 to 600" in why.reason
+    spec = {"type": "whitworth", "bounds": {"connecting_rod": [30.0, 2000.0]}}
+    c = synth.synthesize(1.6, 300.0, 80.0, mechanisms=[spec]).candidates[0]
+    assert_meets(c, 1.6, 300.0, 80.0)
+    assert c.params["connecting_rod"] > 600.0
+
+
 def test_the_best_angle_in_a_refusal_is_over_every_variant():
     """The reason's best angle is the best of the slot drive and the rod variant (it was the
     rod variant's alone: 0.95° where a 12.9° slot drive exists); found by the benchmarks."""
