@@ -292,7 +292,7 @@ class Interval:
 
     def __call__(self, lo: Sequence[npt.ArrayLike], hi: Sequence[npt.ArrayLike]) -> Enclosure:
         """The enclosure over each box: input i's bounds ``lo[i]``, ``hi[i]``."""
-        boxes, n = _boxes(lo, hi, self.nnz_in)
+        boxes, n = bounds(lo, hi, self.nnz_in)
         w: list[Any] = [None] * self.size
         masks: dict[int, Mask] = {}
         for k, (i, nz) in self.inputs:
@@ -340,7 +340,7 @@ class Centred:
 
     def __call__(self, lo: Sequence[npt.ArrayLike], hi: Sequence[npt.ArrayLike]) -> Enclosure:
         """The intersected enclosure over each box (as ``Interval``'s call)."""
-        boxes, n = _boxes(lo, hi, self.naive.nnz_in)
+        boxes, n = bounds(lo, hi, self.naive.nnz_in)
         mid = {i: np.clip(0.5 * boxes[i][0] + 0.5 * boxes[i][1], *boxes[i]) for i in self.wrt}
         both = self.joint([a for a, _ in boxes], [b for _, b in boxes])
         flags = (both.partial[:-1], both.branched[:-1], both.jumps[:-1])
@@ -418,8 +418,9 @@ def _rewrite(nodes: list[Node], op: int, args: tuple[int, ...]) -> Node:
     if op == ca.OP_MUL and args[0] == args[1]:
         return op, args[:1], (_sq, PLAIN)
     if op in (ca.OP_POW, ca.OP_CONSTPOW):
-        if nodes[args[1]][0] == ca.OP_CONST:
-            return op, args[:1], _power(nodes[args[1]][2])
+        if nodes[args[1]][0] == ca.OP_CONST:  # the exponent's node kept: compiled_interval reads it
+            step, kind = _power(nodes[args[1]][2])
+            return op, args, (lambda x, _: step(x), kind)
         return op, args, TABLE[ca.OP_POW]
     if op == ca.OP_ADD and nodes[args[0]][0] == nodes[args[1]][0] == ca.OP_IF_ELSE_ZERO:
         (c, a), (e, b) = nodes[args[0]][1], nodes[args[1]][1]
@@ -430,7 +431,7 @@ def _rewrite(nodes: list[Node], op: int, args: tuple[int, ...]) -> Node:
     return op, args, TABLE[op]
 
 
-def _boxes(
+def bounds(
     lo: Sequence[npt.ArrayLike], hi: Sequence[npt.ArrayLike], nnz: list[int]
 ) -> tuple[list[tuple[np.ndarray, np.ndarray]], int]:
     """Each input's bounds as (boxes or 1, nonzeros) arrays, checked, and the boxes' number."""
