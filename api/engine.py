@@ -68,10 +68,11 @@ def _call(op: str, kwargs: dict[str, Any], then: Callable[[Any], Any] | None = N
 def _warm(lane: str, barrier: threading.Barrier | None = None) -> int:
     """Build in this thread (a worker process's) what requests on its ``lane`` reach and would
     otherwise build at their first use, ~25 ms each (``synth.synthesis.warm``): on the
-    solvers' lane the compiled analysis of every type, variant and kind (~1 s), on the short
-    lane what its budgeted work (a synthesis the exact solvers answer alone) uses. ``barrier``:
-    a lane's threads each take one of these calls (none starts before every thread has its
-    own), so each builds its own. The process."""
+    solvers' lane the compiled analysis of every type, variant and kind and what a searched
+    objective's request with nothing fixed builds (~1 s), on the short lane what its budgeted
+    work (a synthesis the exact solvers answer alone) uses. ``barrier``: a lane's threads
+    each take one of these calls (none starts before every thread has its own), so each
+    builds its own. The process."""
     if barrier is not None:  # (a thread that does not come: each warms after WARM_WAIT_S)
         with suppress(threading.BrokenBarrierError):
             barrier.wait(WARM_WAIT_S)

@@ -14,11 +14,15 @@ are never shared between threads):
 
 ``compile_all`` puts every native library in the disk cache (an image's build step, ``make``'s
 install step; ``python -m synth.synthesis.warm``). ``warm`` builds in the calling thread the
-compiled analysis of every type and variant: ~25 ms each, hundreds of ms at a request's first
-use, so a service does it before it reports ready (0.9 s a thread). The solvers and the motion
-search's formulations are built on first use instead: ~5 ms each, a request's deadline looked
-at around each, where all of them would take ~7 s a thread, and from a disk cache 2.5 s and
-180 MB (docs/benchmarks.md, "Start-up").
+compiled analysis of every type and variant (~25 ms each, hundreds of ms at a request's first
+use) and what a searched objective's request with nothing fixed builds (``searched``: the
+motion search's structures for each variant's full free set: one per type and variant, ~40 ms
+and ~1 MB in all), so a service does it before it reports ready (~1 s a thread): a first
+searched request then builds only slots of a few widths (~1–10 ms). Such a request builds no
+solver: every variant it leaves open is answered exactly by its type's reduced solver. The
+solvers, and the motion search's structures for other free sets (parts fixed), are built at
+first use: ~5 ms each, a request's deadline looked at around each, where all of them would take
+~7 s a thread, and from a disk cache 2.5 s and 180 MB (docs/benchmarks.md, "Start-up").
 """
 
 from __future__ import annotations
@@ -34,7 +38,7 @@ from multiprocessing import get_context
 from ..analysis import model
 from ..mechanisms import Mechanism, all_types, get, rod
 from ..mechanisms.fourbar.construction import construction
-from ..numerics.native import cache
+from ..numerics.native import WIDEST, cache, widths
 from . import screen
 from .formulation import DIAGNOSTICS, SOLVED, relevant
 from .motion import formulation
@@ -42,6 +46,8 @@ from .motion import formulation
 OBJECTIVES = (*SOLVED, *DIAGNOSTICS)  # those a request's search and diagnosis solve by IPOPT
 # what the motion search and the sweep import on first use (~0.3 s)
 IMPORTS = ("scipy.linalg", "scipy.optimize")
+# the widths of the slots a compiled function's points go through (``native.widths``)
+WIDTHS = tuple(sorted({w for n in range(1, WIDEST + 1) for w in widths(n)}))
 
 
 @dataclass(frozen=True)
@@ -77,7 +83,8 @@ def counts() -> dict[str, int]:
 def warm(kinds: Collection[str] = model.KINDS, searches: bool = True) -> None:
     """Build in this thread the compiled analysis of every type and variant (``kinds`` of it;
     with every kind, the loads' too), the four-bar construction and the connecting rod; with
-    ``searches``, import what the searches import on first use."""
+    ``searches``, import what the searches import on first use and build what a searched
+    request with nothing fixed reaches (``searched``)."""
     if searches:
         for name in IMPORTS:
             importlib.import_module(name)
@@ -88,8 +95,25 @@ def warm(kinds: Collection[str] = model.KINDS, searches: bool = True) -> None:
             else:
                 for kind in kinds:
                     model.model(m, variant, kind)
+            if searches:
+                searched(m, variant)
     construction()
     rod.compiled()
+
+
+def searched(m: Mechanism, variant: frozenset[str]) -> None:
+    """Build in this thread the motion search's formulation of a variant with every parameter
+    free (a request that fixes none: the searched objectives' default), its compiled
+    constraints and their slots of every width (``WIDTHS``). Besides these such a request
+    uses the analysis (``warm``'s) and no IPOPT solver: the exact solvers answer every variant
+    it leaves open."""
+    free = relevant(m, variant)
+    if m.facts is None or not free:  # no motion search (``motion.motion``), or nothing to vary
+        return
+    key = (m.type, variant, free)  # ``motion.local_optima``'s
+    constraints = screen.compiled_constraints(formulation(m, variant, free), key)
+    for w in WIDTHS:
+        constraints[w]
 
 
 def variants(m: Mechanism) -> list[frozenset[str]]:
