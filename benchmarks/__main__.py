@@ -5,10 +5,10 @@ python -m benchmarks [--quick]
 
 import sys
 
-from . import analysis, atlas, overload, service, startup, synthesis
+from . import analysis, atlas, overload, searched, service, startup, synthesis
 
 if __name__ == "__main__":
     quick = ["--quick"] if "--quick" in sys.argv[1:] else []
-    for bench in (analysis, synthesis, service, overload, startup, atlas):
+    for bench in (analysis, synthesis, searched, service, overload, startup, atlas):
         print(f"\n## {bench.__name__}\n", flush=True)
         bench.main(quick)

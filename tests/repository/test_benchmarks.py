@@ -3,7 +3,7 @@ what they report holds (ours solves every feasible target it is given and refuse
 infeasible one, to 1e-12, never worse than the generic multistart; the service answers every
 request). Timings are printed, never asserted."""
 
-from benchmarks import analysis, overload, service, startup, synthesis
+from benchmarks import analysis, overload, searched, service, startup, synthesis
 from synth.mechanisms import all_types
 
 
@@ -86,3 +86,12 @@ def test_startup_benchmark_quick():
     assert {r["start"] for r in out["ready"]} == {"warm_cache", "no_warm_up"}
     assert all(r["median_s"] > 0 for r in out["imports"] + out["ready"])
     assert [r["request"] for r in out["first_requests"]] == [w for w, _ in startup.FIRST]
+
+
+def test_searched_benchmark_quick():
+    """The searched objectives' benchmark: every request answered, each best value within
+    1e-9 of the independent global search's or better."""
+    out = searched.main(["--quick"])
+    assert out["summary"] and all(r["answered"] == 1.0 for r in out["summary"]), out["summary"]
+    for r in out["referee"]:
+        assert r["ours_excess"] <= 1e-9, r
