@@ -2,17 +2,41 @@
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import hashlib
 import json
 import os
 import platform
 import subprocess
+import sys
+from collections.abc import Iterator
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
 RESULTS = Path(__file__).parent / "results"
 PACKAGES = ("casadi", "numpy", "scipy", "fastapi", "uvicorn", "pydantic", "pylinkage", "matplotlib")
+# the quick-return types, in the order the benchmarks' tables give them
+TYPES = (
+    "offset_slider_crank",
+    "whitworth",
+    "crank_shaper",
+    "drag_link_slider",
+    "crank_rocker_slider",
+)
+SPIN = "while True:\n    pass\n"
+
+
+@contextlib.contextmanager
+def spinning(n: int = 2) -> Iterator[None]:
+    """``n`` processes keeping the cores busy meanwhile, ended by their ids after."""
+    procs = [subprocess.Popen([sys.executable, "-c", SPIN]) for _ in range(n)]
+    try:
+        yield
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait()
 
 
 def machine() -> dict:

@@ -43,10 +43,8 @@ import json
 import os
 import re
 import statistics
-import subprocess
 import sys
 import time
-from contextlib import contextmanager
 from dataclasses import replace
 from typing import Any
 
@@ -57,15 +55,8 @@ from synth.synthesis.motion import ACROSS_DEG
 
 from . import targets as bench_targets
 from .analysis import DESIGNS
-from .common import RESULTS, machine, table
+from .common import RESULTS, TYPES, machine, spinning, table
 
-TYPES = (
-    "offset_slider_crank",
-    "whitworth",
-    "crank_shaper",
-    "drag_link_slider",
-    "crank_rocker_slider",
-)
 RATIOS, BOUNDS = (1.3, 1.6, 2.0, 2.5), (0.0, 20.0, 40.0)
 STROKE = 300.0
 SEED = 39  # the subset's
@@ -325,21 +316,6 @@ def referee_sample(pairs: list[tuple[str, str]], budget_ms: float) -> list[dict[
     return rows
 
 
-SPIN = "while True:\n    pass\n"
-
-
-@contextmanager
-def busy(on: bool, n: int = 2):
-    """``n`` processes spinning meanwhile (``on``), ended (by their ids) after."""
-    procs = [subprocess.Popen([sys.executable, "-c", SPIN]) for _ in range(n if on else 0)]
-    try:
-        yield
-    finally:
-        for p in procs:
-            p.kill()
-            p.wait()
-
-
 def mode(budget_ms: float, is_busy: bool) -> str:
     return f"{'busy' if is_busy else 'quiet'}, budget {budget_ms:g} ms"
 
@@ -407,7 +383,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     budget = UNBOUNDED_MS if a.unbounded else a.budget_ms
     items = targets(a.quick)
     info = machine()
-    with busy(a.busy):
+    with spinning(2 if a.busy else 0):
         records = run(items, budget)
     which = a.referee or ("quick" if a.quick else "sample")
     referee = referee_sample(SAMPLES[which], budget)

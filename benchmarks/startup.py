@@ -42,7 +42,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from .common import cpu_seconds, descendants, report, table
+from .common import TYPES, cpu_seconds, descendants, report, table
 from .server import HEALTH_S, ROOT, call, free_port
 
 STARTS = 5
@@ -107,13 +107,6 @@ SEARCHED = {
         "load": {**LOAD, "slider_mass": 20.0},
     },
 }
-TYPES = (
-    "offset_slider_crank",
-    "whitworth",
-    "crank_shaper",
-    "drag_link_slider",
-    "crank_rocker_slider",
-)
 SEARCH_BUDGET_MS = 60_000.0
 # a fresh server's first request of each searched objective, every type with nothing fixed, on
 # a budget that cuts it short (``tests/service/test_startup.py``)

@@ -99,9 +99,9 @@ def test_it_never_needs_more_torque_than_the_best_transmitting_design(mtype):
         if not best.candidates:
             continue
         peaks = [c.objective_value for c in ours.candidates]
-        # best first (a tie, to 1e-12, goes to the smaller design)
-        assert all(b >= a * (1 - 1e-12) for a, b in itertools.pairwise(peaks))
-        assert peaks[0] <= best.candidates[0].loads.torque.max * (1 + 1e-12)
+        # best first, but for ties (within 1e-6: the larger transmission angle first)
+        assert all(b >= a * (1 - 1e-6) for a, b in itertools.pairwise(peaks))
+        assert min(peaks) <= best.candidates[0].loads.torque.max * (1 + 1e-12)
 
 
 def test_a_limit_it_cannot_meet_is_refused_with_the_least_found():

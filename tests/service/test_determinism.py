@@ -10,7 +10,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import json
 import subprocess
 import sys
@@ -20,6 +19,8 @@ import urllib.error
 import urllib.request
 
 import pytest
+
+from benchmarks.common import spinning
 
 from ..support.server import serving
 
@@ -124,7 +125,6 @@ for k in json.loads(sys.argv[2]):
     del reply[k]
 print(json.dumps(reply, sort_keys=True))
 """
-SPIN = "while True:\n    pass\n"
 
 
 def arguments(case: tuple, budget_ms: float) -> dict:
@@ -163,18 +163,6 @@ def replies(requests: list[dict], at_once: int = 2) -> list[dict]:
         assert p.returncode == 0, f"request {requests[k]} failed"
         out[k] = json.loads(text)
     return out
-
-
-@contextlib.contextmanager
-def spinning(n: int = 2):
-    """``n`` processes keeping the cores busy meanwhile, ended by their ids after."""
-    procs = [subprocess.Popen([sys.executable, "-c", SPIN]) for _ in range(n)]
-    try:
-        yield
-    finally:
-        for p in procs:
-            p.kill()
-            p.wait()
 
 
 def quiet_and_loaded(requests: list[dict]) -> tuple[list[dict], list[dict]]:
