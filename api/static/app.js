@@ -195,6 +195,9 @@ async function synthesize(choose = 0) {
     if (SEARCHED.has(body.objective)) {
       notes.push(`${OBJECTIVE_TITLES[body.objective] || body.objective}: ${short(c.objective_value)}`);
     }
+    if (c.ranked_by !== "objective") {  // tied with the one above: which rule placed it after
+      notes.push(`tied with the design above; after it by ${c.ranked_by.replaceAll("_", " ")}`);
+    }
     if (c.active.length) notes.push(`at its limit: ${c.active.join(", ")}`);
     if (c.family) notes.push(c.family.relation);
     for (const n of notes) links.append(el("small", { class: "note" }, n));

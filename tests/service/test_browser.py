@@ -543,6 +543,27 @@ def test_candidates_say_what_the_service_says_of_them(page):
     )
 
 
+def test_tied_candidates_say_which_rule_placed_them(page):
+    """A new user's crank shaper: designs that need the same peak torque to six figures come
+    slot drive (90°) first, and the next says it is tied and placed by its angle."""
+    pg = page.page
+    only(pg, "crank_shaper")
+    for k, v in (("time_ratio", "1.7"), ("stroke", "250"), ("bound", "35")):
+        pg.fill(f"#{k}", v)
+    pg.click("#y-load summary")
+    for k, v in (("crank_rpm", "30"), ("cutting_force", "3000"), ("slider_mass", "40")):
+        pg.fill(f"#y-load-{k}", v)
+    pg.select_option("#objective", "min_peak_torque")
+    pg.click("#run")
+    pg.wait_for_function("document.querySelectorAll('#candidates tbody tr').length > 1")
+    rows = pg.locator("#candidates tbody tr")
+    assert rows.nth(0).locator("td").nth(1).inner_text() == "90"
+    assert "tied" not in rows.nth(0).inner_text()
+    assert (
+        "tied with the design above; after it by min transmission angle" in rows.nth(1).inner_text()
+    )
+
+
 def test_the_drawing_has_its_frame_ram_and_named_pins(page):
     """The fixed pivots hatched, the ram's block on its guide, the stroke dimensioned, every
     pin named; the block and the names move with the frames."""
