@@ -219,6 +219,7 @@ async function synthesize(choose = 0) {
   $("candidates").classList.toggle("with-loads", Boolean(body.load));
   frontPlot(cands, body);
   if (cands.length) choose_(cands, Math.min(choose, cands.length - 1), body);
+  else $("detail").hidden = true; // only refusals: no design of the last answer stays beside them
 }
 
 function choose_(cands, i, body) {
@@ -235,7 +236,7 @@ function synthState() {
     objective: $("objective").value,
     types: [...document.querySelectorAll("input[name=type]:checked")].map((x) => x.value).join(",") };
   for (const f of $("types").querySelectorAll("input[type=number]")) if (f.value !== "") s[f.id] = f.value;
-  return s;
+  return { ...s, ...loadState("y") };
 }
 
 function loadSynthState(q) {
@@ -249,6 +250,7 @@ function loadSynthState(q) {
     const f = $(k);
     if (f && f.closest("#types") && f.type === "number") { f.value = v; f.closest("details").open = true; }
   }
+  setLoadState("y", q);
 }
 
 // ---- the analysis and sweep views ---------------------------------------------------------
@@ -327,6 +329,19 @@ function loadBox(prefix) {
   return box;
 }
 
+function loadState(prefix) {
+  // a view's load fields for its address, while its box is open (else none)
+  if (!$(`${prefix}-load`).open) return {};
+  return Object.fromEntries([...$(`${prefix}-load`).querySelectorAll("input, select")].map((f) => [f.id, f.value]));
+}
+
+function setLoadState(prefix, q) {
+  // the load fields an address gives, the box opened for them
+  for (const [k, v] of q) {
+    if (k.startsWith(`${prefix}-load-`) && $(k)) { $(k).value = v; $(`${prefix}-load`).open = true; }
+  }
+}
+
 function loadOf(prefix) {
   // a view's load, while its box is open (else none)
   if (!$(`${prefix}-load`).open) return null;
@@ -351,7 +366,7 @@ async function analyzeView() {
   const form = $("analyze-form");
   clearErrors(form);
   const d = designOf("a");
-  saveState("analyze", { type: d.type, ...d.params });
+  saveState("analyze", { type: d.type, ...d.params, ...loadState("a") });
   await busy(form, () => showDesign(d.type, d.params, 0,
     (detail) => showErrors(detail, analysisFieldId, "a-form-error"), loadOf("a"), num("a-rpm")));
 }
@@ -749,6 +764,7 @@ async function route(run) {
     $(`${prefix}-type`).value = t;
     const given = query ? Object.fromEntries(q) : null;
     await paramInputs(prefix, t, given);
+    if (prefix === "a") setLoadState("a", q);
     if (prefix === "s" && given) {
       for (const k of ["start", "stop", "points"]) if (given[`__${k}`]) $(`s-${k}`).value = given[`__${k}`];
     }

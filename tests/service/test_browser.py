@@ -203,6 +203,27 @@ def test_the_address_holds_the_state(site):
     again.close()
 
 
+def test_the_address_holds_the_load(site):
+    """A shared link with a load opens the load as it was sent: the candidates carry its
+    torque (the with-loads table), the cutting force as typed."""
+    first = Page(site)
+    pg = first.page
+    project(pg)
+    pg.click("#y-load summary")
+    pg.fill("#y-load-cutting_force", "1234")
+    pg.click("#run")
+    pg.wait_for_selector("#candidates.with-loads tbody tr")
+    pg.wait_for_function("location.hash.includes('y-load-cutting_force=1234')")
+    url = pg.url
+    first.close()
+    again = Page(site, at=url[len(site[1]) :])
+    pg = again.page
+    pg.wait_for_selector("#candidates.with-loads tbody tr")
+    assert pg.input_value("#y-load-cutting_force") == "1234"
+    assert pg.locator("#y-load").get_attribute("open") is not None
+    again.close()
+
+
 def test_analysis_and_sweep_views(page):
     pg = page.page
     pg.click("#tab-analyze")
@@ -562,6 +583,19 @@ def test_tied_candidates_say_which_rule_placed_them(page):
     assert (
         "tied with the design above; after it by min transmission angle" in rows.nth(1).inner_text()
     )
+
+
+def test_a_refusal_leaves_no_design_of_the_answer_before(page):
+    """After designs, a request no design meets shows its refusals alone: the design shown
+    before (its drawing, its loads) goes."""
+    pg = page.page
+    project(pg)
+    pg.wait_for_selector("#detail", state="visible")
+    pg.fill("#bound", "80")
+    pg.click("#run")
+    pg.wait_for_selector("#refusals li")
+    assert pg.locator("#candidates tbody tr").count() == 0
+    assert pg.locator("#detail").is_hidden()
 
 
 def test_the_drawing_has_its_frame_ram_and_named_pins(page):
