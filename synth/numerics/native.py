@@ -30,6 +30,7 @@ _lock = threading.Lock()  # one build at a time in a process (files: atomic rena
 _failed: set[str] = set()  # libraries that could not be built here: not tried again
 SMALL = 16  # up to this many points in one slot, padded to a power of two (``widths``)
 WIDEST = 64  # the widest slot; between, powers of two (wider was no faster: 64–256 measured)
+WIDTHS = tuple(1 << k for k in range(WIDEST.bit_length()))  # every slot's: 1, 2, 4 … WIDEST
 
 
 def cache() -> Path:

@@ -95,14 +95,21 @@ FAIL = 1e3  # a design the analysis rejects, for the line search: far above ever
 _local = threading.local()
 
 
+Key = tuple[str, frozenset[str], tuple[str, ...]]
+
+
+def kept_by(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Key:
+    """What a variant's free set is kept by: its formulation here, its compiled constraints in
+    ``screen``."""
+    return (m.type, variant, free)
+
+
 def formulation(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Formulation:
     """The type's formulation for a variant and its free parameters (its constraints; the
     objective unused), once per thread and structure (CasADi functions are not shared
     between threads here, as the solvers are not)."""
-    cache: dict[tuple[str, frozenset[str], tuple[str, ...]], Formulation] = (
-        _local.__dict__.setdefault("formulations", {})
-    )
-    key = (m.type, variant, free)
+    cache: dict[Key, Formulation] = _local.__dict__.setdefault("formulations", {})
+    key = kept_by(m, variant, free)
     if key not in cache:
         cache[key] = formulate(m, variant, free, MIN_SIZE)
     return cache[key]
@@ -136,7 +143,7 @@ def local_optima(
     if time.monotonic() >= deadline:  # nothing built for a search that cannot run
         return
     form = formulation(m, variant, free)
-    key = (m.type, variant, free)  # the formulation's, for ``screen``'s compiled constraints
+    key = kept_by(m, variant, free)
     pv = np.concatenate([[fixed[k] for k in form.fixed], targets])
     n = len(free)
 
@@ -437,6 +444,4 @@ def _distinct(cands: list[Candidate], stroke: float, tie: float) -> list[Candida
 
 def _one(a: Candidate, b: Candidate, stroke: float, tie: float) -> bool:
     x, y = a.objective_value, b.objective_value
-    if a.params.keys() != b.params.keys() or abs(x - y) > tie * max(x, y):
-        return False
-    return all(abs(a.params[k] - b.params[k]) <= ONE_OPTIMUM * stroke for k in a.params)
+    return abs(x - y) <= tie * max(x, y) and same(a.params, b.params, stroke, ONE_OPTIMUM)

@@ -331,5 +331,6 @@ def bounds(m: Mechanism, name: str, spec: Spec, stroke: float) -> tuple[float, f
     return lo * stroke, hi * scale
 
 
-def same(a: dict[str, float], b: dict[str, float], stroke: float) -> bool:
-    return a.keys() == b.keys() and all(abs(a[k] - b[k]) <= SAME * stroke for k in a)
+def same(a: dict[str, float], b: dict[str, float], stroke: float, within: float = SAME) -> bool:
+    """Whether two designs are one: each parameter within ``within`` × stroke."""
+    return a.keys() == b.keys() and all(abs(a[k] - b[k]) <= within * stroke for k in a)

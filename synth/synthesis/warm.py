@@ -38,16 +38,14 @@ from multiprocessing import get_context
 from ..analysis import model
 from ..mechanisms import Mechanism, all_types, get, rod
 from ..mechanisms.fourbar.construction import construction
-from ..numerics.native import WIDEST, cache, widths
+from ..numerics.native import WIDTHS, cache
 from . import screen
 from .formulation import DIAGNOSTICS, SOLVED, relevant
-from .motion import formulation
+from .motion import formulation, kept_by
 
 OBJECTIVES = (*SOLVED, *DIAGNOSTICS)  # those a request's search and diagnosis solve by IPOPT
 # what the motion search and the sweep import on first use (~0.3 s)
 IMPORTS = ("scipy.linalg", "scipy.optimize")
-# the widths of the slots a compiled function's points go through (``native.widths``)
-WIDTHS = tuple(sorted({w for n in range(1, WIDEST + 1) for w in widths(n)}))
 
 
 @dataclass(frozen=True)
@@ -104,14 +102,15 @@ def warm(kinds: Collection[str] = model.KINDS, searches: bool = True) -> None:
 def searched(m: Mechanism, variant: frozenset[str]) -> None:
     """Build in this thread the motion search's formulation of a variant with every parameter
     free (a request that fixes none: the searched objectives' default), its compiled
-    constraints and their slots of every width (``WIDTHS``). Besides these such a request
+    constraints and their slots of every width (``native.WIDTHS``). Besides these such a request
     uses the analysis (``warm``'s) and no IPOPT solver: the exact solvers answer every variant
     it leaves open."""
     free = relevant(m, variant)
     if m.facts is None or not free:  # no motion search (``motion.motion``), or nothing to vary
         return
-    key = (m.type, variant, free)  # ``motion.local_optima``'s
-    constraints = screen.compiled_constraints(formulation(m, variant, free), key)
+    constraints = screen.compiled_constraints(
+        formulation(m, variant, free), kept_by(m, variant, free)
+    )
     for w in WIDTHS:
         constraints[w]
 

@@ -19,6 +19,8 @@ from concurrent.futures import ProcessPoolExecutor
 from itertools import cycle
 from multiprocessing import get_context
 
+from benchmarks import analysis
+
 from ..support.server import serving
 
 CLIENTS = 48
@@ -26,26 +28,8 @@ SECONDS = 20.0
 PROBE_S = (0.02, 0.05)  # the prober's pause between two asks, drawn in this range
 HEALTH_P99_MS, HEALTH_MAX_MS = 50.0, 200.0
 
-DESIGNS = {
-    "offset_slider_crank": {"crank": 1.0, "coupler": 3.0, "offset": 0.5},
-    "crank_shaper": {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0},
-    "whitworth": {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0},
-    "crank_rocker_slider": {
-        "ground": 5.0,
-        "crank": 1.0,
-        "coupler": 4.5,
-        "rocker": 3.0,
-        "rocker_arm": 4.0,
-    },
-    "drag_link_slider": {
-        "ground": 0.1,
-        "crank": 0.225,
-        "coupler": 0.250428,
-        "follower": 0.275,
-        "follower_arm": 0.15,
-        "connecting_rod": 0.3,
-    },
-}
+# the reference designs (the benchmarks'), each type but the yoke's for the loaded analyses
+DESIGNS = {t: p for t, p in analysis.DESIGNS.items() if t != "scotch_yoke"}
 LOAD = {
     "length_unit": "mm",
     "crank_rpm": 40.0,
@@ -53,7 +37,7 @@ LOAD = {
     "slider_mass": 60.0,
     "link_mass_per_length": 8.0,
 }
-TYPES = ("scotch_yoke", *DESIGNS)
+TYPES = tuple(analysis.DESIGNS)
 KINDS = ("curves", "loaded", "exact")
 
 

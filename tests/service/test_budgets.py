@@ -22,18 +22,12 @@ from pathlib import Path
 import pytest
 
 from ..support.server import alive, descendants, serving
+from .test_admission import LOAD  # a shaper's: 2 kN, a 60 kg ram, links of 8 kg/m
 
 REQUESTS = int(os.environ.get("SYNTH_BUDGET_REQUESTS", "200"))
 CLIENTS = 3
 SLACK_MS = 50.0
 BUDGETS_MS = (100.0, 200.0, 300.0, 500.0, 800.0, 1000.0, 1500.0, 2000.0)
-LOAD = {
-    "length_unit": "mm",
-    "crank_rpm": 40.0,
-    "cutting_force": 2000.0,
-    "slider_mass": 60.0,
-    "link_mass_per_length": 8.0,
-}
 TARGETS = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0}
 TORQUE = {**TARGETS, "objective": "min_peak_torque", "load": LOAD}  # every type: ~3 s
 

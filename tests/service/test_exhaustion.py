@@ -15,8 +15,6 @@ import signal
 import socket
 import threading
 import time
-import urllib.error
-import urllib.request
 from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
@@ -30,7 +28,7 @@ from api.gate import Hosts
 from api.serve import configure
 
 from ..support.server import descendants, free_port, serving
-from .test_faults import SYNTH  # ~0.3 s of SLSQP in a solver
+from .test_faults import SYNTH, post  # SYNTH: ~0.3 s of SLSQP in a solver
 
 WRITE_TIMEOUT_S = 2.0
 REQUEST_TIMEOUT_S = 1.0
@@ -317,22 +315,6 @@ def test_an_unexpected_error_is_a_json_500_that_closes_its_connection_as_it_says
 # --- SIGTERM ---------------------------------------------------------------------------------
 
 
-def post(port: int, path: str, body: dict) -> int | str:
-    req = urllib.request.Request(
-        f"http://127.0.0.1:{port}{path}",
-        json.dumps(body).encode(),
-        {"Content-Type": "application/json"},
-    )
-    try:
-        with urllib.request.urlopen(req, timeout=30) as r:
-            r.read()
-            return r.status
-    except urllib.error.HTTPError as e:
-        return e.code
-    except OSError as e:
-        return type(e).__name__
-
-
 def probe(port: int) -> str:
     """A new connection's fate: "refused", "reset", "answered", or "hung" (nothing in 1 s)."""
     try:
@@ -360,11 +342,11 @@ def test_after_sigterm_a_new_connection_is_refused_at_once_and_those_in_flight_a
     (uvicorn's supervisor kept it open while its processes drained)."""
     # no warm-up (a quicker start): the first synthesis builds what the others use
     with serving(WEB_CONCURRENCY=processes, SYNTH_WORKERS="2", SYNTH_WARM="0") as (port, proc):
-        assert post(port, "/v1/synthesize", SYNTH) == 200  # a solver ready
+        assert post(port, "/v1/synthesize", SYNTH, timeout=30) == 200  # a solver ready
         outcomes: list[int | str] = []
 
         def synthesis() -> None:
-            outcomes.append(post(port, "/v1/synthesize", SYNTH))
+            outcomes.append(post(port, "/v1/synthesize", SYNTH, timeout=30))
 
         flying = [threading.Thread(target=synthesis) for _ in range(2)]
         for t in flying:
