@@ -241,7 +241,8 @@ def _candidate_rows(r: SynthesisResult) -> list[dict[str, Any]]:
     return [{"rank": i + 1, "type": c.type, **{k: c.params.get(k) for k in names},
              "min_transmission_angle_deg": c.min_transmission_angle_deg,
              "objective_value": c.objective_value, "size": c.size, "method": c.method,
-             "active": " ".join(c.active), "ranked_by": c.ranked_by, **_drive(c.loads)}
+             "active": " ".join(c.active), "ranked_by": c.ranked_by, "certified": c.certified,
+             "gap": c.gap, **_drive(c.loads)}
             for i, c in enumerate(r.candidates)]  # fmt: skip
 
 
@@ -269,6 +270,9 @@ def _candidate_text(r: SynthesisResult, objective: str) -> str:
         out.append(_table(("#", "type", "lengths", "μ min °", measure, "at limit", *loaded), rows))
         out += dict.fromkeys(f"{c.type}: {c.family.relation}"
                              for c in r.candidates if c.family)  # fmt: skip
+        for i, c in enumerate(r.candidates):
+            if c.certified and c.gap is not None:
+                out.append(f"#{i + 1} is certified the best {c.type} (gap {c.gap:.1e})")
     for why in r.infeasible:
         out.append(f"{why.type}: no design ({why.code}): {why.reason}")
     if not r.complete:

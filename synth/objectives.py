@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 from typing import Literal
 
 from .errors import InvalidParameters
-from .results import Candidate
+from .results import TOL, Candidate
 from .targets import MAX_TRANSMISSION, MIN_SIZE, PARETO, PEAK, PEAK_TORQUE, UNIFORM
 
 # the rules that order designs, in the words a reply gives (``Candidate.ranked_by``)
@@ -103,6 +103,11 @@ class Objective:
     @property
     def searched(self) -> bool:
         return self.found == "searched"
+
+    def allows(self, c: Candidate, limit: float | None) -> bool:
+        """Whether a candidate meets the request's ``limit`` on this objective's limited
+        measure (to the verification's tolerance), if the request sets one."""
+        return self.limit is None or limit is None or self.limit.value(c) <= limit * (1 + TOL)
 
     def rank(self, cands: Sequence[Candidate]) -> list[Candidate]:
         """The candidates best first (``order``), each with its ``ranked_by``."""

@@ -195,6 +195,8 @@ async function synthesize(choose = 0) {
     if (SEARCHED.has(body.objective)) {
       notes.push(`${OBJECTIVE_TITLES[body.objective] || body.objective}: ${short(c.objective_value)}`);
     }
+    if (c.certified) notes.push(`certified the best of its type (gap ${c.gap.toExponential(1)})`);
+    else if (c.gap !== null) notes.push(`at most ${short(100 * c.gap, 3)}% above the best possible`);
     if (c.ranked_by !== "objective") {  // tied with the one above: which rule placed it after
       notes.push(`tied with the design above; after it by ${c.ranked_by.replaceAll("_", " ")}`);
     }

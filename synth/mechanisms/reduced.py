@@ -95,6 +95,22 @@ class Reduced:
     at: tuple[tuple[float, ...], ...] = ()  # where the solver found them, its coordinates
 
 
+@dataclass(frozen=True)
+class Space:
+    """Every design of a variant that meets the time ratio and stroke, as a function of a few
+    free numbers u over the box [``lo``, ``hi``]: ``design(u, c)`` (CasADi symbols: u, and
+    ``constants`` the request sets, such as β) gives each relevant parameter in stroke units.
+    The designs of the box that meet the other constraints (transmission, validity, the
+    request's bounds) are then all the variant's feasible designs, up to a free scale and a
+    mirror that leave the motion as it is: a global search over the box is one over the
+    variant (``synth.synthesis.certify``)."""
+
+    lo: tuple[float, ...]
+    hi: tuple[float, ...]
+    constants: tuple[float, ...]
+    design: Callable[[Any, Any], dict[str, Any]]
+
+
 def unreachable(what: str) -> Unreachable:
     """Fixed parts that no design with the targets can have, with the reason."""
     return Unreachable("FIXED_PARTS_CONTRADICT_TARGETS", what)

@@ -17,7 +17,7 @@ from ..errors import InvalidDesign, InvalidParameters, UnknownMechanism
 from ..numerics import ROUNDING
 
 if TYPE_CHECKING:
-    from .reduced import Problem, Reduced
+    from .reduced import Problem, Reduced, Space
 
 Params = Mapping[str, Any]  # parameter name -> float, DM, SX or MX
 
@@ -142,6 +142,9 @@ class Mechanism:
     # None where it cannot take the problem (IPOPT on the formulation then solves it); raises
     # Unreachable for fixed parts that contradict the targets
     reduced: Callable[[Problem], Reduced | None] | None = None
+    # the designs that meet the time ratio and stroke as functions of a few free numbers
+    # (synth.mechanisms.reduced.Space), None where the problem has fixed parts it cannot take
+    space: Callable[[Problem], Space | None] | None = None
     # the pin positions {name: (x, y)} at crank angle θ, named as in the module docstring, the
     # slider's pin last, in CasADi maths (for drawings, and the envelope the frame must hold)
     joints: Callable[[Params, Any], dict[str, tuple[Any, Any]]] | None = None

@@ -7,31 +7,27 @@ request's load) and ``max_peak_torque`` (a limit on it). What each search bounds
 ``aims.Aim``.
 
 No closed form gives these measures: they are extremes over the crank's turn, found by root
-finding (``synth.analysis.quality``, ``synth.analysis.loads``). So the designs come from a
-local NLP over each structural variant's free parameters (stroke units), solved by SLSQP:
+finding (``synth.analysis.quality``, ``synth.analysis.loads``). Where a variant's designs are
+a box of free numbers and the measure is one the certified search takes (``certify``), it
+answers, with its certificate. Otherwise the designs come from a local NLP over each
+variant's free parameters (stroke units), solved by SLSQP:
 
-- the time ratio, stroke, transmission bound, validity conditions and the closed forms' domain
-  are the type's formulation (``synth.synthesis.formulation``: CasADi, exact derivatives),
-  the bounds the request's;
-- the measures come from the analysis (exact values by root finding): each is the largest
-  of a few terms (the speed, acceleration or torque at each place along the turn where it
-  may peak), so the NLP takes it in epigraph form; the terms' derivatives are exact too
-  (``quality.motion_terms``, ``loads.peak_terms``: the envelope theorem at a peak, the
-  implicit function theorem at a dead centre or a window's end);
-- its starts are the designs the exact solvers found for the same request (every variant's
-  best-transmitting and smallest designs, at ``ACROSS_DEG`` without a bound: each meets the
-  targets) and ``SAMPLES`` points of the box projected onto the time-ratio and stroke
-  equalities (where fixed parts leave too few of them designs, ``SAMPLES`` more of the box
-  about the starts, within ``AROUND``), all ranked by their measure on a grid of crank
-  angles (``screen``: batched, a few milliseconds); it runs from the ``STARTS`` best of the
-  exact solvers' designs and the best points, as many as the objective's ``Aim.drawn`` says,
-  until the request's deadline, at most ``MAX_ITER`` iterations each. No
-  other clock decides anything: the answer does not depend on the machine's load unless the
-  deadline cuts it short (and then the answer says so).
+- the constraints are the type's formulation (``synth.synthesis.formulation``: CasADi, exact
+  derivatives), the bounds the request's;
+- each measure is the largest of a few terms (the speed, acceleration or torque at each place
+  along the turn where it may peak), so the NLP takes it in epigraph form, with the terms'
+  exact derivatives (``quality.motion_terms``, ``loads.peak_terms``: the envelope theorem at
+  a peak, the implicit function theorem at a dead centre or a window's end);
+- its starts are the exact solvers' designs for the request (best-transmitting and smallest,
+  at ``ACROSS_DEG`` without a bound) and ``SAMPLES`` points of the box projected onto the
+  equalities (with fixed parts and few such points, ``SAMPLES`` more within ``AROUND`` of
+  the starts), ranked by their measure on a grid of crank angles (``screen``); it runs from
+  the ``STARTS`` best of the former and as many of the latter as ``Aim.drawn`` says, at most
+  ``MAX_ITER`` iterations each. No clock but the request's deadline decides anything (and a
+  reply it cuts short says so).
 
-The answer is a local optimum, verified like every candidate;
-``tests/referees/test_motion_search.py`` checks it against an independent global search.
-"""
+Its answer, a local optimum, is verified like every candidate, and checked against an
+independent global search by ``tests/referees/test_motion_search.py``."""
 
 from __future__ import annotations
 
@@ -48,9 +44,9 @@ import numpy as np
 from .. import objectives
 from ..errors import SynthError
 from ..mechanisms import Mechanism, get
-from ..results import TOL, Candidate, Infeasible
+from ..results import Candidate, Infeasible
 from ..targets import MAX_TRANSMISSION, MIN_SIZE
-from . import aims, screen
+from . import aims, certify, screen
 from .candidate import candidate
 from .diagnose import diagnose
 from .formulation import TIE, Formulation, formulate
@@ -82,6 +78,7 @@ MAX_ITER = 300
 AROUND = 3.0  # the box about the starts (each part within this factor of theirs) drawn again
 STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
 NEAR = 1e-4  # how close (stroke units, each parameter) to an earlier run's end a run ends
+BNB = "branch_and_bound"  # the certified search's candidates' method
 ONE_OPTIMUM = 1e-3  # two runs' ends this close (stroke units), their values tied: one optimum
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
 SAMPLES = 256  # Halton points in the box, projected onto the equalities (``screen``): starts
@@ -131,15 +128,13 @@ def local_optima(
 ) -> Iterator[dict[str, float]]:
     """Local optima of the ``aim``'s measure over one variant, each as its run ends (verified
     by the caller before the next), from ``starts`` (designs, stroke units); ``targets`` is
-    (time ratio, cos of the transmission bound). The measure is a maximum of terms, so it is
-    minimised in epigraph form: t, with t ≥ each of the ``TERMS`` largest terms (a peak that
-    moves to another place along the turn is then one constraint handing over to another,
-    not a kink), with the terms' exact derivatives; a ``limit`` (terms, cap) bounds its terms
-    alike. Designs in stroke units. A default bound (not in ``explicit``) gives way to a start
-    beyond it, as the exact solvers' does to a length the targets set on their own.
-    ``fixed_parts``: whether the request fixes parts (more starts drawn, and about the starts
-    where the box has few). The deadline is looked at before each evaluation of the measure
-    at a new design (a few ms, ~15 with a load): a run it cuts short ends at its last iterate."""
+    (time ratio, cos of the transmission bound). The measure, a maximum of terms, is minimised
+    in epigraph form: t ≥ each of the ``TERMS`` largest terms (a peak moving along the turn is
+    one constraint handing over to another, not a kink); a ``limit`` (terms, cap) bounds its
+    terms alike. A default bound (not in ``explicit``) gives way to a start beyond it.
+    ``fixed_parts``: more starts drawn, and about the starts where the box has few. The
+    deadline is looked at before each evaluation of the measure at a new design (a few ms,
+    ~15 with a load): a run it cuts short ends at its last iterate."""
     if time.monotonic() >= deadline:  # nothing built for a search that cannot run
         return
     form = formulation(m, variant, free)
@@ -361,6 +356,16 @@ def motion(
             if not starts or not v.free:
                 continue
             targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
+            form = formulation(m, v.parts, v.free)
+            cert = certify.search(m, v, form, o.terms, targets, t.deadline)
+            if cert is not None:  # the optimum without the limit: with it too, if it meets it
+                q = proposal(m, i, whole(spec, scaled(cert.design, t.stroke), v.parts), BNB, t)
+                c = None if q is None else candidate(m, q, t, s.variants, extras)
+                mine = [
+                    cert.mark(x) if m.variant(x.params) == v.parts else x for x in [*mine, c] if x
+                ]
+                if c is not None and o.allows(c, limit):
+                    continue
             aim, capped = aims.aim(m, v.parts, o, t, extras, limit, mine)
             optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
                                   v.problem.explicit, targets, aim, starts, capped,
@@ -371,15 +376,12 @@ def motion(
                 if c is not None:  # its family's smallest member, and it where that differs
                     smallest = _smallest_member(m, i, c, t, s.variants, extras)
                     mine += [smallest] if aim.scale_free else [c, smallest]
-        cap = o.limit
-        kept = [
-            c for c in mine if cap is None or limit is None or cap.value(c) <= limit * (1 + TOL)
-        ]
+        kept = [c for c in mine if o.allows(c, limit)]
         if not kept and not mine:
             infeasible.append(diagnose(m, spec, best_t, s))
         elif not kept:  # the limit left none
-            assert cap is not None and limit is not None
-            infeasible.append(_unreachable(m, spec, t, extras, cap, limit, mine))
+            assert o.limit is not None and limit is not None
+            infeasible.append(_unreachable(m, spec, t, extras, o.limit, limit, mine))
         found += _distinct(kept, t.stroke, o.tie)
     return o.rank(found)[:max_candidates], infeasible
 

@@ -10,7 +10,8 @@ are never shared between threads):
   request leaves free: it may fix any of the others) and objective (the two the search
   solves, the two diagnostics);
 - the motion search's formulation and its compiled constraints (``motion.formulation``,
-  ``screen``): per type, variant and free set.
+  ``screen``): per type, variant and free set;
+- the certified search's enclosures (``certify``): per type with a space and variant.
 
 ``compile_all`` puts every native library in the disk cache (an image's build step, ``make``'s
 install step; ``python -m synth.synthesis.warm``). ``warm`` builds in the calling thread the
@@ -39,7 +40,7 @@ from ..analysis import model
 from ..mechanisms import Mechanism, all_types, get, rod
 from ..mechanisms.fourbar.construction import construction
 from ..numerics.native import WIDTHS, cache
-from . import screen
+from . import certify, screen
 from .formulation import DIAGNOSTICS, SOLVED, relevant
 from .motion import formulation, kept_by
 
@@ -108,11 +109,11 @@ def searched(m: Mechanism, variant: frozenset[str]) -> None:
     free = relevant(m, variant)
     if m.facts is None or not free:  # no motion search (``motion.motion``), or nothing to vary
         return
-    constraints = screen.compiled_constraints(
-        formulation(m, variant, free), kept_by(m, variant, free)
-    )
+    form = formulation(m, variant, free)
+    constraints = screen.compiled_constraints(form, kept_by(m, variant, free))
     for w in WIDTHS:
         constraints[w]
+    certify.prepared(m, variant, form)
 
 
 def variants(m: Mechanism) -> list[frozenset[str]]:
@@ -148,6 +149,12 @@ def compile_all(part: int = 0, parts: int = 1) -> int:
     for fn in fns:
         if fn.class_name() != "External":
             raise RuntimeError(f"{fn.name()}: no C compiler or cache (synth.numerics.native)")
+    if part == 0:  # the certified search's enclosures (synth.numerics.compiled_interval)
+        for m in map(get, all_types()):
+            for v in variants(m):
+                b = certify.prepared(m, v, formulation(m, v, relevant(m, v)))
+                if b is not None and None in (b.bound.library, b.rows.library):
+                    raise RuntimeError(f"{m.type}: the certified search's enclosures not built")
     return n
 
 

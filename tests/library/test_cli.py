@@ -58,6 +58,19 @@ def test_synthesize_table_and_csv():
         assert b["stroke"] == pytest.approx(450.0, rel=1e-9)
 
 
+def test_a_certified_optimum_says_so_in_the_table_and_the_csv():
+    args = ("synthesize", "--time-ratio", "1.6", "--stroke", "300", "--bound", "20", "--type",
+            "whitworth", "--objective", "min_peak_acceleration")  # fmt: skip
+    table = run(*args)
+    assert table.returncode == 0, table.stderr
+    line = next(x for x in table.stdout.splitlines() if "certified" in x)
+    assert line.startswith("#1 is certified the best whitworth (gap ")
+    assert float(line.split("gap ")[1].rstrip(")")) <= 1e-9
+    rows = list(csv.DictReader(io.StringIO(run(*args, "--csv").stdout)))
+    assert rows[0]["certified"] == "True" and float(rows[0]["gap"]) <= 1e-9
+    assert all(row["certified"] == "False" for row in rows[1:])
+
+
 def test_every_type_refusing_exits_1_with_the_reasons():
     r = run("synthesize", "--time-ratio", "1.8", "--stroke", "250", "--bound", "89",
             "--type", "whitworth", "--type", "offset_slider_crank")  # fmt: skip

@@ -33,6 +33,7 @@ from ..geometry import leg, sqrt, where
 from ..reduced import (
     Problem,
     Reduced,
+    Space,
     clip,
     intersect,
     judge,
@@ -127,6 +128,23 @@ def reduced(p: Problem) -> Reduced:
             seen.append(q)
             designs.append(_design(p, q, sign, s, c))
     return Reduced(designs)
+
+
+def space(p: Problem) -> Space | None:
+    """The dead-centre construction as ``reduced`` states it: every design is one q in
+    (0, cos β) = (0, c² − s²), up to the offset's sign (a mirror: the same motion). β the
+    constant; the offset's sign the one the bounds allow."""
+    if p.fixed or p.beta <= math.pi / 2 * TOL:
+        return None
+    sign = 1.0 if p.box("offset")[1] > 0 else -1.0
+
+    def design(u: Any, k: Any) -> dict[str, Any]:
+        beta, q = k[0], u[0]
+        s, c = ca.sin(beta / 2), ca.cos(beta / 2)
+        crank, coupler = ca.sqrt(c * c - q) / (2 * c), ca.sqrt(s * s + q) / (2 * s)
+        return {"crank": crank, "coupler": coupler, "offset": k[1] * q / ca.sin(beta)}
+
+    return Space((0.0,), (math.cos(p.beta),), (p.beta, sign), design)
 
 
 def _design(p: Problem, q: float, sign: int, s: float, c: float) -> dict[str, float]:
@@ -290,6 +308,7 @@ register(
         transmission=transmission,
         facts=facts,
         reduced=reduced,
+        space=space,
         joints=joints,
         frame=lambda variant: FRAME,
         drawing=(("crank", "O2", "B"), ("coupler", "B", "C")),

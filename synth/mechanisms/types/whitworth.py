@@ -31,7 +31,7 @@ import casadi as ca
 from ...errors import Unreachable
 from ...targets import MIN_SIZE
 from ..geometry import ahead, leg, lever, sqrt, where
-from ..reduced import STRICT, Problem, Reduced
+from ..reduced import STRICT, Problem, Reduced, Space
 from ..registry import (
     GROUND,
     RAM,
@@ -127,6 +127,21 @@ def reduced(p: Problem) -> Reduced:
     return Reduced([{**design, **p.fixed}])
 
 
+def space(p: Problem) -> Space | None:
+    """As ``reduced`` states it: the crank, a free scale, the smallest allowed, the pivot
+    distance set by it and the time ratio, the lever half the stroke; the rod is the free
+    number, over its bounds."""
+    crank = None if p.fixed or p.beta <= 0 else _scale(p, math.sin(p.beta / 2))
+    if crank is None:
+        return None
+
+    def design(u: Any, k: Any) -> dict[str, Any]:
+        return {"crank": k[0], "pivot_distance": k[1], "lever": 0.5, "connecting_rod": u[0]}
+
+    lo, hi = p.box("connecting_rod")
+    return Space((lo,), (hi,), (crank, crank * math.sin(p.beta / 2)), design)
+
+
 # the crank pin's block slides in the lever's slot, on the line from O4 through B; the lever's
 # arm O4P points the other way (the slot's own length is left out of the lever's mass)
 FRAME = Frame(
@@ -178,6 +193,7 @@ register(
         transmission=transmission,
         facts=facts,
         reduced=reduced,
+        space=space,
         scale=Scale(
             "crank",
             ("pivot_distance",),

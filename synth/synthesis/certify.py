@@ -1,0 +1,290 @@
+"""Certified global optima of a peak measure over a variant whose designs are a box of a few
+free numbers u (``Mechanism.space``): branch-and-bound with rigorous lower bounds.
+
+The measure is the largest |f(θ, u)| over the crank's turn (``SUPPORTED``: f the slider's
+acceleration, stroke units, ω = 1: ``min_peak_acceleration``). On each box U of the free
+numbers:
+
+- **lower bound**: for any angles θ_k, every u in U has max_θ |f| ≥ max_k inf_U |f(θ_k, ·)|;
+  the inner infimum is bounded below by the centred interval enclosure of f in u
+  (``numerics.interval``, compiled), so the bound is rigorous whatever the angles. They are
+  ``GRID`` fixed angles and the incumbent's peak angles moved by Newton's method to the box's
+  centre, where the bound is tight (excess O(h²) at one peak, O(h) where two peaks are equal);
+- **feasibility**: the formulation's inequality rows (transmission, validity, the closed
+  forms' domain) and the request's box on each parameter, enclosed over U: a box that surely
+  breaks one holds no design and goes;
+- **upper bound**: the measure at the box's corners and, at each level, at the centres of
+  the ``PROBES`` boxes of least bound, where they meet every constraint (the analysis's
+  compiled motion rows on a grid of crank angles, then Newton's method at each local peak);
+  the least so far is the incumbent;
+- a box whose bound is within ``CLOSE`` of the incumbent goes (its bound kept); the others are
+  cut into ``SPLIT`` parts across their widest side.
+
+The search is done when no box is left: then every design of the variant measures at least
+the least bound kept, and the certificate is the gap between the incumbent and it. After
+``LEVELS`` levels, or with more than ``LIVE`` boxes alive, it stops with the gap it reached.
+Its work is the same on any machine: the deadline only stops it (the answer says so).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import threading
+import time
+from dataclasses import dataclass, replace
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..analysis.model import rows
+from ..mechanisms import Mechanism
+from ..mechanisms.reduced import Space
+from ..numerics.compiled_interval import CompiledCentred
+from ..numerics.native import WIDEST, Mapped
+from ..results import Candidate
+from ..targets import MAX_TRANSMISSION
+from .formulation import Formulation, relevant
+from .search import Spec, Targets, Variant, build_problem
+
+SUPPORTED = ("acceleration",)  # the objectives' terms (``Objective.terms``) searched here
+TOL = 1e-9  # the relative gap certified
+# the relative gap the search closes: the incumbent nears the optimum as the bound does, so a
+# tighter gap than the certificate's brings it to 1e-10 of the optimum's value (much closer,
+# and the enclosures' rounding, ~1e-11 of the value, keeps ever more boxes about it alive)
+CLOSE = 1e-10
+EPS = float(np.finfo(float).eps)
+PEAK_GRID = 128  # angles that bracket a design's peaks (the analysis's grid)
+PEAKS = 3  # the largest local peaks of a box's centre at which its bound is taken
+PROBES = 2  # the least-bound boxes whose centres are measured in full at each level
+NEWTON = 6  # Newton steps that polish a peak's angle
+SPLIT = 8  # the parts a box is cut into (fewer levels: each costs a few calls)
+LEVELS = 30  # levels at most (1-D: 8^-30 of the box)
+LIVE = 512  # boxes alive at most
+_local = threading.local()
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """A search's answer: the best design it measured (stroke units), its measure, the least
+    lower bound over every design of the variant, whether the search finished (not stopped
+    by the deadline), and what it took."""
+
+    design: dict[str, float]
+    value: float
+    bound: float
+    complete: bool
+    levels: int
+    boxes: int
+
+    def mark(self, c: Candidate) -> Candidate:
+        """A verified candidate of the variant with its gap to the bound: certified where it
+        is within ``TOL`` of it (its measure as the analysis verified it)."""
+        v = c.objective_value
+        if not (v > 0 and math.isfinite(self.bound)):
+            return c
+        gap = max(0.0, (v - self.bound) / v)
+        return replace(c, certified=bool(self.complete and gap <= TOL), gap=float(gap))
+
+
+class Built:
+    """What a search over one variant's space needs, built once per thread and structure: f
+    enclosed over boxes of u (``bound``), the constraint rows with the free parameters
+    enclosed (``rows``) and at points (``at``), and the design's parameters at points."""
+
+    def __init__(self, m: Mechanism, variant: frozenset[str], form: Formulation, sp: Space):
+        th = ca.SX.sym("theta")
+        u, k = ca.SX.sym("u", len(sp.lo)), ca.SX.sym("k", len(sp.constants))
+        pv = ca.SX.sym("pv", form.nlp["p"].numel())
+        p = {**dict.fromkeys(variant, 0.0), **sp.design(u, k)}
+        p.update({n: x for n, x in m.defaults(p).items() if n not in p})
+        f = rows(m, p, th, "motion")[0][1]  # s″
+        name = "_".join((m.type, *sorted(variant)))
+        fn = ca.Function(f"{name}_certify_bound", [th, u, k], [f], {"cse": True})
+        self.bound = CompiledCentred(fn, wrt=[1], continuous=True)
+        f1 = ca.jacobian(f, th)
+        derivatives = ca.vertcat(f, f1, ca.jacobian(f1, th))
+        # at many (angle, point) pairs: f alone (a grid), and f, f′, f″ (Newton's method)
+        self.values = Mapped(fn, (False, False, True), looped=(WIDEST,))
+        self.derivatives = Mapped(
+            ca.Function(f"{name}_certify_newton", [th, u, k], [derivatives], {"cse": True}),
+            (False, False, True),
+            looped=(WIDEST,),
+        )
+        x = ca.vertcat(*(p[q] for q in form.free))
+        g = ca.Function("g", [form.nlp["x"], form.nlp["p"]], [form.nlp["g"]])(x, pv)
+        self.inequality = form.lbg != form.ubg
+        out = ca.vertcat(g[np.flatnonzero(self.inequality).tolist()], x)
+        rows_fn = ca.Function(f"{name}_certify_rows", [u, k, pv], [out], {"cse": True})
+        self.rows, self.at = CompiledCentred(rows_fn, wrt=[0]), rows_fn
+        self.design = ca.Function("design", [u, k], [ca.vertcat(*(p[q] for q in m.names))])
+
+
+def built(m: Mechanism, variant: frozenset[str], form: Formulation, sp: Space) -> Built:
+    cache: dict[Any, Built] = _local.__dict__.setdefault("built", {})
+    key = (m.type, variant, form.free, len(sp.lo), len(sp.constants))
+    if key not in cache:
+        cache[key] = Built(m, variant, form, sp)
+    return cache[key]
+
+
+def prepared(m: Mechanism, variant: frozenset[str], form: Formulation) -> Built | None:
+    """What a search over the variant with nothing fixed builds (a service's warm-up; the
+    disk cache's libraries), None for a type without a space."""
+    if m.space is None:
+        return None
+    names = relevant(m, variant)
+    t = Targets(1.6, 1.0, 0.0, MAX_TRANSMISSION, math.inf)
+    sp = m.space(build_problem(m, variant, names, {}, Spec(m.type), t))
+    return None if sp is None else built(m, variant, form, sp)
+
+
+def search(
+    m: Mechanism,
+    v: Variant,
+    form: Formulation,
+    terms: str | None,
+    targets: tuple[float, float],
+    deadline: float,
+) -> Certificate | None:
+    """The certified least of the ``terms``' peak over the variant ``v`` (``targets``: the
+    time ratio and cos of the transmission bound), or None where this search cannot take it:
+    another measure, no space, or fixed parts."""
+    takes = terms in SUPPORTED and m.space is not None and not v.fixed
+    sp = m.space(v.problem) if takes and m.space is not None else None
+    if sp is None:
+        return None
+    b = built(m, v.parts, form, sp)
+    k = np.array(sp.constants)
+    pv = np.array(targets, dtype=float)
+    lb = np.concatenate([form.lbg[b.inequality], [v.problem.bounds[q][0] for q in form.free]])
+    ub = np.concatenate([form.ubg[b.inequality], [v.problem.bounds[q][1] for q in form.free]])
+    lo, hi = np.array([sp.lo]), np.array([sp.hi])
+    width = hi[0] - lo[0]
+    top, best = math.inf, None
+    least, levels, boxes, stopped = math.inf, 0, 0, False
+    near = lo[0], hi[0]
+
+    def probe(points: np.ndarray, value: np.ndarray, order: np.ndarray) -> None:
+        """The best of the points whose approximate ``value`` is least, and those first in
+        ``order``, measured in full: the incumbent if it is a design and the best so far."""
+        nonlocal top, best
+        g = np.asarray(b.at.map(len(points))(points.T, k, pv)).T
+        ok = np.all((g >= lb) & (g <= ub), axis=1)  # designs
+        picked = [*order[ok[order]][:PROBES], int(np.argmin(np.where(ok, value, math.inf)))]
+        for j in dict.fromkeys(picked):
+            if ok[j] and value[j] < top:
+                full = _measure(b, points[j : j + 1], k)[0][0]
+                if full < top:
+                    top, best = full, points[j]
+
+    corners = np.array(list(itertools.product(*zip(sp.lo, sp.hi, strict=True))))
+    probe(corners, *_measure(b, corners, k)[:1], np.arange(len(corners)))  # one at a bound
+    while len(lo) and levels < LEVELS and len(lo) <= LIVE:
+        if time.monotonic() >= deadline:
+            stopped = True
+            break
+        levels, boxes = levels + 1, boxes + len(lo)
+        e = b.rows([lo, k, pv], [hi, k, pv])
+        possible = ~np.any((e.hi[0] < lb) | (e.lo[0] > ub), axis=1)
+        lo, hi = lo[possible], hi[possible]
+        if not len(lo):
+            break
+        centres = 0.5 * (lo + hi)
+        value, angles = _measure(b, centres, k)
+        lower = _lower(b, lo, hi, angles, k)
+        probe(centres, value, np.argsort(lower, kind="stable"))
+        keep = lower < top * (1 - CLOSE)
+        least = min([least, *lower[~keep]])
+        if (lower <= top).any():  # where a design as good as the incumbent may be
+            near = lo[lower <= top].min(axis=0), hi[lower <= top].max(axis=0)
+        lo, hi = _split(lo[keep], hi[keep], width)
+    if best is None:
+        return None
+    if len(sp.lo) == 1 and not stopped:
+        top, best = _polish(b, k, pv, (lb, ub), near, top, best)
+    if len(lo):  # stopped with boxes alive: their bounds count
+        least = min([least, *_lower(b, lo, hi, _measure(b, 0.5 * (lo + hi), k)[1], k)])
+    design = dict(zip(m.names, np.asarray(b.design(best, k)).ravel().tolist(), strict=True))
+    return Certificate(design, top, min(least, top), not stopped, levels, boxes)
+
+
+def _polish(
+    b: Built,
+    k: np.ndarray,
+    pv: np.ndarray,
+    limits: tuple[np.ndarray, np.ndarray],
+    near: tuple[np.ndarray, np.ndarray],
+    top: float,
+    best: np.ndarray,
+) -> tuple[float, np.ndarray]:
+    """The incumbent moved to the least of the measure over ``near`` (one free number), where
+    every design as good lies: Brent's bounded minimiser to the last few ulps of u, a point
+    that is no design counting as twice the incumbent's measure."""
+    from scipy.optimize import minimize_scalar
+
+    def measure(x: float) -> float:
+        u = np.array([x])
+        g = np.asarray(b.at(u, k, pv)).ravel()
+        if not np.all((g >= limits[0]) & (g <= limits[1])):
+            return 2 * top
+        return float(_measure(b, u[None], k)[0][0])
+
+    lo, hi = float(near[0][0]), float(near[1][0])
+    res = minimize_scalar(measure, bounds=(lo, hi), method="bounded",
+                          options={"xatol": 4 * EPS * max(abs(lo), abs(hi))})  # fmt: skip
+    value = measure(float(res.x))
+    return (value, np.array([res.x])) if value < top else (top, best)
+
+
+def _split(lo: np.ndarray, hi: np.ndarray, width: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each box cut into ``SPLIT`` equal parts across its widest side (relative to the
+    first box's)."""
+    side = np.argmax((hi - lo) / width, axis=1)
+    ix = np.arange(len(lo))
+    cuts = lo[ix, side] + (hi[ix, side] - lo[ix, side]) * np.arange(SPLIT + 1)[:, None] / SPLIT
+    cuts[-1] = hi[ix, side]
+    los, his = np.tile(lo, (SPLIT, 1)), np.tile(hi, (SPLIT, 1))  # part j of box i: row j n + i
+    at = (np.arange(SPLIT * len(lo)), np.tile(side, SPLIT))
+    los[at], his[at] = cuts[:-1].ravel(), cuts[1:].ravel()
+    return los, his
+
+
+def _lower(b: Built, lo: np.ndarray, hi: np.ndarray, angles: np.ndarray, k: np.ndarray) -> Any:
+    """max_j inf_U |f(θ_j, ·)| of each box U, at the angles of the peaks at its centre."""
+    n, per = angles.shape
+    t = angles.reshape(-1, 1)
+    e = b.bound([t, np.repeat(lo, per, axis=0), k], [t, np.repeat(hi, per, axis=0), k])
+    least = np.fmax(np.fmax(e.lo[0][:, 0], -e.hi[0][:, 0]), 0.0)  # inf |f| (NaN: 0)
+    return least.reshape(n, per).max(axis=1)
+
+
+def _peaks(
+    b: Built, points: np.ndarray, k: np.ndarray, angles: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each point's largest |f| at its local peaks near ``angles`` (a row each), and their
+    angles: ``NEWTON`` steps of Newton's method on f′ = 0 (a step that does not stay small is
+    not taken)."""
+    n, per = angles.shape
+    theta, own = angles.ravel(), np.repeat(points, per, axis=0)
+    for _ in range(NEWTON):
+        f = b.derivatives(theta[:, None], own, k)
+        with np.errstate(all="ignore"):
+            step = f[1] / f[2]
+        theta = np.where(np.abs(step) < 0.1, theta - step, theta)
+    w = np.abs(b.values(theta[:, None], own, k)[0]).reshape(n, per)
+    return w.max(axis=1), theta.reshape(n, per)
+
+
+def _measure(b: Built, points: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The measure at each point (rows), and the angles of its ``PEAKS`` largest local peaks
+    of |f| (rows): a grid of ``PEAK_GRID`` angles, then ``_peaks`` from the grid's."""
+    n = len(points)
+    grid = np.arange(PEAK_GRID) * (2 * np.pi / PEAK_GRID)
+    v = np.abs(b.values(np.tile(grid, n)[:, None], np.repeat(points, PEAK_GRID, axis=0), k)[0])
+    v = v.reshape(n, PEAK_GRID)
+    local = np.where((v >= np.roll(v, 1, axis=1)) & (v >= np.roll(v, -1, axis=1)), v, -1.0)
+    top = grid[np.argsort(-local, axis=1, kind="stable")[:, :PEAKS]]
+    value, angles = _peaks(b, points, k, top)
+    return np.maximum(value, v.max(axis=1)), angles
