@@ -48,6 +48,7 @@ from ..targets import MAX_TRANSMISSION
 from .formulation import Formulation, relevant
 from .search import Spec, Targets, Variant, build_problem
 
+METHOD = "branch_and_bound"  # its candidates' method
 SUPPORTED = ("acceleration",)  # the objectives' terms (``Objective.terms``) searched here
 TOL = 1e-9  # the relative gap certified
 # the relative gap the search closes: the incumbent nears the optimum as the bound does, so a
@@ -61,7 +62,7 @@ PROBES = 2  # the least-bound boxes whose centres are measured in full at each l
 NEWTON = 6  # Newton steps that polish a peak's angle
 SPLIT = 8  # the parts a box is cut into (fewer levels: each costs a few calls)
 LEVELS = 30  # levels at most (1-D: 8^-30 of the box)
-LIVE = 512  # boxes alive at most
+LIVE = 4096  # boxes alive at most
 _local = threading.local()
 
 
@@ -78,14 +79,16 @@ class Certificate:
     levels: int
     boxes: int
 
-    def mark(self, c: Candidate) -> Candidate:
-        """A verified candidate of the variant with its gap to the bound: certified where it
-        is within ``TOL`` of it (its measure as the analysis verified it)."""
-        v = c.objective_value
-        if not (v > 0 and math.isfinite(self.bound)):
-            return c
-        gap = max(0.0, (v - self.bound) / v)
-        return replace(c, certified=bool(self.complete and gap <= TOL), gap=float(gap))
+
+def mark(c: Candidate, bound: float) -> Candidate:
+    """A verified candidate with its gap to ``bound``, a lower bound on every design of its
+    type: certified where it is within ``TOL`` of it (its measure as the analysis verified
+    it)."""
+    v = c.objective_value
+    if not (v > 0 and math.isfinite(bound)):
+        return c
+    gap = max(0.0, (v - bound) / v)
+    return replace(c, certified=bool(gap <= TOL), gap=float(gap))
 
 
 class Built:
@@ -197,6 +200,9 @@ def search(
         probe(centres, value, np.argsort(lower, kind="stable"))
         keep = lower < top * (1 - CLOSE)
         least = min([least, *lower[~keep]])
+        point = np.all(lo == hi, axis=1)  # a box that is a point: its bound is all there is
+        least = min([least, *lower[keep & point]])
+        keep &= ~point
         if (lower <= top).any():  # where a design as good as the incumbent may be
             near = lo[lower <= top].min(axis=0), hi[lower <= top].max(axis=0)
         lo, hi = _split(lo[keep], hi[keep], width)
@@ -241,6 +247,8 @@ def _polish(
 def _split(lo: np.ndarray, hi: np.ndarray, width: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Each box cut into ``SPLIT`` equal parts across its widest side (relative to the
     first box's)."""
+    if not len(lo):
+        return lo, hi
     side = np.argmax((hi - lo) / width, axis=1)
     ix = np.arange(len(lo))
     cuts = lo[ix, side] + (hi[ix, side] - lo[ix, side]) * np.arange(SPLIT + 1)[:, None] / SPLIT

@@ -69,20 +69,16 @@ def minimize(*args: Any, **kwargs: Any) -> Any:
     return minimize(*args, **kwargs)
 
 
-# SLSQP runs per variant from the best ranked of each source of starts: the exact solvers'
-# designs (STARTS), and projected points of the box, where the four-bars' other basins lie
-# (``Aim.drawn``: more with parts fixed, where the exact solvers' designs are fewer and the
-# basins more apart)
+# SLSQP runs per variant from the best ranked exact solvers' designs (STARTS) and projected
+# points of the box, where the four-bars' other basins lie (``Aim.drawn``)
 STARTS = 2
 MAX_ITER = 300
 AROUND = 3.0  # the box about the starts (each part within this factor of theirs) drawn again
 STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
 NEAR = 1e-4  # how close (stroke units, each parameter) to an earlier run's end a run ends
-BNB = "branch_and_bound"  # the certified search's candidates' method
 ONE_OPTIMUM = 1e-3  # two runs' ends this close (stroke units), their values tied: one optimum
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
-SAMPLES = 256  # Halton points in the box, projected onto the equalities (``screen``): starts
-# beside the exact solvers' designs
+SAMPLES = 256  # Halton points of the box projected onto the equalities (``screen``): starts
 # the least 1 − cos μ a search for motion keeps at every joint, whatever the bound: as a rod
 # comes to stand across its slider's path (μ → 0) the slider's speed there grows without
 # bound in a spike narrower than the analysis's grid, so a measure there is no design's
@@ -102,9 +98,8 @@ def kept_by(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Key
 
 
 def formulation(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Formulation:
-    """The type's formulation for a variant and its free parameters (its constraints; the
-    objective unused), once per thread and structure (CasADi functions are not shared
-    between threads here, as the solvers are not)."""
+    """The type's formulation for a variant and its free parameters (its constraints), once
+    per thread and structure (CasADi functions are never shared between threads)."""
     cache: dict[Key, Formulation] = _local.__dict__.setdefault("formulations", {})
     key = kept_by(m, variant, free)
     if key not in cache:
@@ -315,10 +310,9 @@ def motion(
     extras: dict[str, Any],
     limit: float | None,
 ) -> tuple[list[Candidate], list[Infeasible]]:
-    """A searched objective (a motion measure, or the peak torque): per type and variant,
-    SLSQP (``local_optima``) from the designs the exact solvers give for the request
-    (best-transmitting and smallest), the most promising first; the optima and those designs,
-    verified, ranked by the measure (the ``limit`` met: the fluctuation's, or the torque's)."""
+    """A searched objective (a motion measure, or the peak torque): per type and variant, the
+    certified search (``certify``) or SLSQP (``local_optima``) from the exact solvers' designs;
+    the optima and those designs, verified, ranked by the measure (the ``limit`` met)."""
     found: list[Candidate] = []
     infeasible = []
     o = objectives.get(t.objective)
@@ -347,23 +341,29 @@ def motion(
             c = candidate(m, p, t, s.variants, extras)
             if c is not None:
                 mine.append(c)
+        bounds: list[float] | None = []  # each variant's certified least; None: one has none
         for v in s.variants:
             starts = [
                 {k: x / t.stroke for k, x in c.params.items()}
                 for c in sorted(mine, key=lambda c: c.objective_value)
                 if m.variant(c.params) == v.parts
             ]
-            if not starts or not v.free:
+            if not starts or not v.free:  # none (proved, if the solver is exact), or one
+                bounds = bounds if v.exact and not starts else None
                 continue
             targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
             form = formulation(m, v.parts, v.free)
             cert = certify.search(m, v, form, o.terms, targets, t.deadline)
+            if cert is None or not cert.complete:
+                bounds = None
+            elif bounds is not None:
+                bounds.append(cert.bound)
             if cert is not None:  # the optimum without the limit: with it too, if it meets it
-                q = proposal(m, i, whole(spec, scaled(cert.design, t.stroke), v.parts), BNB, t)
+                q = proposal(
+                    m, i, whole(spec, scaled(cert.design, t.stroke), v.parts), certify.METHOD, t
+                )
                 c = None if q is None else candidate(m, q, t, s.variants, extras)
-                mine = [
-                    cert.mark(x) if m.variant(x.params) == v.parts else x for x in [*mine, c] if x
-                ]
+                mine += [c] if c is not None else []
                 if c is not None and o.allows(c, limit):
                     continue
             aim, capped = aims.aim(m, v.parts, o, t, extras, limit, mine)
@@ -376,6 +376,8 @@ def motion(
                 if c is not None:  # its family's smallest member, and it where that differs
                     smallest = _smallest_member(m, i, c, t, s.variants, extras)
                     mine += [smallest] if aim.scale_free else [c, smallest]
+        if bounds:  # every variant's least certified (a limit only raises the optimum)
+            mine = [certify.mark(c, min(bounds)) for c in mine]
         kept = [c for c in mine if o.allows(c, limit)]
         if not kept and not mine:
             infeasible.append(diagnose(m, spec, best_t, s))
@@ -433,10 +435,9 @@ def _smallest_member(
 
 
 def _distinct(cands: list[Candidate], stroke: float, tie: float) -> list[Candidate]:
-    """One candidate per design, the better of two that are one: within ``SAME`` × stroke of
-    each other, or within ``ONE_OPTIMUM`` × stroke with values within ``tie`` (relative: one
-    optimum that two runs ended short of by their tolerance, not two designs the objective
-    cannot tell apart)."""
+    """One candidate per design, the better of two that are one: within ``SAME`` × stroke, or
+    within ``ONE_OPTIMUM`` × stroke with values within ``tie`` (one optimum two runs ended
+    short of, not two designs the objective cannot tell apart)."""
     out: list[Candidate] = []
     for c in sorted(cands, key=lambda c: c.objective_value):
         if not any(same(c.params, o.params, stroke) or _one(c, o, stroke, tie) for o in out):
