@@ -2,7 +2,7 @@
 certified, and how far its answer is from an independent global search.
 
     python -m benchmarks.searched [--quick] [--budget-ms MS | --unbounded] [--busy]
-                                  [--referee none|sample|all]
+                                  [--referee none|sample|all] [--types TYPE ...]
 
 In process, warm. Per type of ``TYPES`` and searched objective of ``VARIANTS`` (the two motion
 objectives, each also under the fluctuation limit ``LIMIT``; the least peak torque under
@@ -370,6 +370,9 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     ap.add_argument("--unbounded", action="store_true", help=f"a budget of {UNBOUNDED_MS:g} ms")
     ap.add_argument("--busy", action="store_true", help="two processes spin meanwhile")
     ap.add_argument(
+        "--types", nargs="+", choices=TYPES, help="these types only (printed, not recorded)"
+    )
+    ap.add_argument(
         "--referee",
         choices=("none", "sample", "all"),
         default=None,
@@ -377,12 +380,13 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
     )
     a = ap.parse_args(argv)
     budget = UNBOUNDED_MS if a.unbounded else a.budget_ms
-    items = targets(a.quick)
+    items = [x for x in targets(a.quick) if a.types is None or x["type"] in a.types]
     info = machine()
     with spinning(2 if a.busy else 0):
         records = run(items, budget)
     which = a.referee or ("quick" if a.quick else "sample")
-    referee = referee_sample(SAMPLES[which], budget)
+    pairs = [p for p in SAMPLES[which] if a.types is None or p[0] in a.types]
+    referee = referee_sample(pairs, budget)
     info["load_average_at_end"] = os.getloadavg()
     result = {
         "machine": info,
@@ -405,7 +409,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         "requests": records,
     }
     print(f"{mode(budget, a.busy)}\n\n{text(result)}")
-    if not a.quick:
+    if not (a.quick or a.types):
         write(mode(budget, a.busy), result)
     return result
 

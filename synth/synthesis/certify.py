@@ -44,8 +44,8 @@ from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred
 from ..numerics.native import WIDEST, Mapped
 from ..results import Candidate
-from ..targets import MAX_TRANSMISSION
-from .formulation import Formulation, relevant
+from ..targets import MAX_TRANSMISSION, MIN_SIZE
+from .formulation import formulate, relevant
 from .search import Spec, Targets, Variant, build_problem
 
 METHOD = "branch_and_bound"  # its candidates' method
@@ -96,7 +96,9 @@ class Built:
     enclosed over boxes of u (``bound``), the constraint rows with the free parameters
     enclosed (``rows``) and at points (``at``), and the design's parameters at points."""
 
-    def __init__(self, m: Mechanism, variant: frozenset[str], form: Formulation, sp: Space):
+    def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space):
+        # every relevant parameter free: a request's fixed parts are the space's business
+        self.form = form = formulate(m, variant, relevant(m, variant), MIN_SIZE)
         th = ca.SX.sym("theta")
         u, k = ca.SX.sym("u", len(sp.lo)), ca.SX.sym("k", len(sp.constants))
         pv = ca.SX.sym("pv", form.nlp["p"].numel())
@@ -124,15 +126,15 @@ class Built:
         self.design = ca.Function("design", [u, k], [ca.vertcat(*(p[q] for q in m.names))])
 
 
-def built(m: Mechanism, variant: frozenset[str], form: Formulation, sp: Space) -> Built:
+def built(m: Mechanism, variant: frozenset[str], sp: Space) -> Built:
     cache: dict[Any, Built] = _local.__dict__.setdefault("built", {})
-    key = (m.type, variant, form.free, len(sp.lo), len(sp.constants))
+    key = (m.type, variant)
     if key not in cache:
-        cache[key] = Built(m, variant, form, sp)
+        cache[key] = Built(m, variant, sp)
     return cache[key]
 
 
-def prepared(m: Mechanism, variant: frozenset[str], form: Formulation) -> Built | None:
+def prepared(m: Mechanism, variant: frozenset[str]) -> Built | None:
     """What a search over the variant with nothing fixed builds (a service's warm-up; the
     disk cache's libraries), None for a type without a space."""
     if m.space is None:
@@ -140,29 +142,29 @@ def prepared(m: Mechanism, variant: frozenset[str], form: Formulation) -> Built 
     names = relevant(m, variant)
     t = Targets(1.6, 1.0, 0.0, MAX_TRANSMISSION, math.inf)
     sp = m.space(build_problem(m, variant, names, {}, Spec(m.type), t))
-    return None if sp is None else built(m, variant, form, sp)
+    return None if sp is None else built(m, variant, sp)
 
 
 def search(
     m: Mechanism,
     v: Variant,
-    form: Formulation,
     terms: str | None,
     targets: tuple[float, float],
     deadline: float,
 ) -> Certificate | None:
     """The certified least of the ``terms``' peak over the variant ``v`` (``targets``: the
-    time ratio and cos of the transmission bound), or None where this search cannot take it:
-    another measure, no space, or fixed parts."""
-    takes = terms in SUPPORTED and m.space is not None and not v.fixed
-    sp = m.space(v.problem) if takes and m.space is not None else None
+    time ratio and cos of the transmission bound), or None where this search cannot take it
+    (another measure, or no space)."""
+    sp = m.space(v.problem) if terms in SUPPORTED and m.space is not None else None
     if sp is None:
         return None
-    b = built(m, v.parts, form, sp)
+    b = built(m, v.parts, sp)
     k = np.array(sp.constants)
     pv = np.array(targets, dtype=float)
-    lb = np.concatenate([form.lbg[b.inequality], [v.problem.bounds[q][0] for q in form.free]])
-    ub = np.concatenate([form.ubg[b.inequality], [v.problem.bounds[q][1] for q in form.free]])
+    # the request's bounds on its free parameters (its fixed ones are the space's own)
+    box = [v.problem.bounds.get(q, (-math.inf, math.inf)) for q in b.form.free]
+    lb = np.concatenate([b.form.lbg[b.inequality], [x[0] for x in box]])
+    ub = np.concatenate([b.form.ubg[b.inequality], [x[1] for x in box]])
     lo, hi = np.array([sp.lo]), np.array([sp.hi])
     width = hi[0] - lo[0]
     top, best = math.inf, None

@@ -352,8 +352,7 @@ def motion(
                 bounds = bounds if v.exact and not starts else None
                 continue
             targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
-            form = formulation(m, v.parts, v.free)
-            cert = certify.search(m, v, form, o.terms, targets, t.deadline)
+            cert = certify.search(m, v, o.terms, targets, t.deadline)
             if cert is None or not cert.complete:
                 bounds = None
             elif bounds is not None:

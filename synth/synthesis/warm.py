@@ -113,7 +113,7 @@ def searched(m: Mechanism, variant: frozenset[str]) -> None:
     constraints = screen.compiled_constraints(form, kept_by(m, variant, free))
     for w in WIDTHS:
         constraints[w]
-    certify.prepared(m, variant, form)
+    certify.prepared(m, variant)
 
 
 def variants(m: Mechanism) -> list[frozenset[str]]:
@@ -152,7 +152,7 @@ def compile_all(part: int = 0, parts: int = 1) -> int:
     if part == 0:  # the certified search's enclosures (synth.numerics.compiled_interval)
         for m in map(get, all_types()):
             for v in variants(m):
-                b = certify.prepared(m, v, formulation(m, v, relevant(m, v)))
+                b = certify.prepared(m, v)
                 if b is not None and None in (b.bound.library, b.rows.library):
                     raise RuntimeError(f"{m.type}: the certified search's enclosures not built")
     return n

@@ -144,3 +144,24 @@ def test_a_search_stopped_short_is_not_certified(monkeypatch):
     assert best.candidates[0].certified
     # the short search's bound holds still
     assert best.candidates[0].objective_value >= c.objective_value * (1 - c.gap) * (1 - 1e-12)
+
+
+@pytest.mark.parametrize(
+    ("mtype", "fixed"),
+    [("offset_slider_crank", {"coupler": 0.9}), ("whitworth", {"crank": 0.3}),
+     ("whitworth", {"connecting_rod": 1.5})],  # fmt: skip
+)
+def test_with_a_part_fixed_the_answer_is_certified_too(mtype, fixed):
+    """One part fixed: the slider-crank's design is then the one its coupler sets, the
+    Whitworth's family the same motion as with nothing fixed (its crank a free scale) or its
+    rod's one design: the certified value is the brute force's of that design, and no less
+    than the best of the type with nothing fixed."""
+    r = synth.synthesize(1.6, 1.0, 20.0, [{"type": mtype, "fixed": fixed}], objective=PEAK)
+    c = r.candidates[0]
+    assert c.certified and c.gap <= certify.TOL
+    assert all(c.params[k] == v for k, v in fixed.items())
+    assert c.objective_value == pytest.approx(peak(mtype, c.params), rel=1e-9)
+    free = synth.synthesize(1.6, 1.0, 20.0, [{"type": mtype}], objective=PEAK).candidates[0]
+    assert c.objective_value >= free.objective_value * (1 - 1e-12)
+    if "crank" in fixed:  # a scale: the same optimum
+        assert c.objective_value == pytest.approx(free.objective_value, rel=1e-12)

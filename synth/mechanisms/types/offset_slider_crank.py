@@ -132,11 +132,15 @@ def reduced(p: Problem) -> Reduced:
 
 def space(p: Problem) -> Space | None:
     """The dead-centre construction as ``reduced`` states it: every design is one q in
-    (0, cos β) = (0, c² − s²), up to the offset's sign (a mirror: the same motion). β the
-    constant; the offset's sign the one the bounds allow."""
-    if p.fixed or p.beta <= math.pi / 2 * TOL:
+    (0, cos β) = (0, c² − s²), up to the offset's sign (a mirror: the same motion), β the
+    constant; a fixed part sets q (the box a point), and the offset's sign is the fixed
+    offset's, else the one its bounds allow."""
+    if p.beta <= math.pi / 2 * TOL:
         return None
-    sign = 1.0 if p.box("offset")[1] > 0 else -1.0
+    s, c = p.half
+    fixed = _fixed_q(p, s, c)
+    sign = fixed[1] if fixed else (1.0 if p.box("offset")[1] > 0 else -1.0)
+    lo, hi = (fixed[0], fixed[0]) if fixed else (0.0, math.cos(p.beta))
 
     def design(u: Any, k: Any) -> dict[str, Any]:
         beta, q = k[0], u[0]
@@ -144,7 +148,7 @@ def space(p: Problem) -> Space | None:
         crank, coupler = ca.sqrt(c * c - q) / (2 * c), ca.sqrt(s * s + q) / (2 * s)
         return {"crank": crank, "coupler": coupler, "offset": k[1] * q / ca.sin(beta)}
 
-    return Space((0.0,), (math.cos(p.beta),), (p.beta, sign), design)
+    return Space((lo,), (hi,), (p.beta, sign), design)
 
 
 def _design(p: Problem, q: float, sign: int, s: float, c: float) -> dict[str, float]:

@@ -128,18 +128,21 @@ def reduced(p: Problem) -> Reduced:
 
 
 def space(p: Problem) -> Space | None:
-    """As ``reduced`` states it: the crank, a free scale, the smallest allowed, the pivot
-    distance set by it and the time ratio, the lever half the stroke; the rod is the free
-    number, over its bounds."""
-    crank = None if p.fixed or p.beta <= 0 else _scale(p, math.sin(p.beta / 2))
+    """As ``reduced`` states it: the crank, a free scale (the smallest allowed, or as a fixed
+    crank or pivot distance sets it), the pivot distance set by it and the time ratio, the
+    lever half the stroke; the rod is the free number, over its bounds (fixed: a point)."""
+    f = p.fixed
+    ratio = f["pivot_distance"] / f["crank"] if {"crank", "pivot_distance"} <= f.keys() else None
+    ratio = ratio or math.sin(p.beta / 2)
+    crank = None if p.beta <= 0 else _scale(p, ratio)
     if crank is None:
         return None
 
     def design(u: Any, k: Any) -> dict[str, Any]:
-        return {"crank": k[0], "pivot_distance": k[1], "lever": 0.5, "connecting_rod": u[0]}
+        return {"crank": k[0], "pivot_distance": k[1], "lever": k[2], "connecting_rod": u[0]}
 
-    lo, hi = p.box("connecting_rod")
-    return Space((lo,), (hi,), (crank, crank * math.sin(p.beta / 2)), design)
+    lo, hi = (f["connecting_rod"],) * 2 if "connecting_rod" in f else p.box("connecting_rod")
+    return Space((lo,), (hi,), (crank, crank * ratio, f.get("lever", 0.5)), design)
 
 
 # the crank pin's block slides in the lever's slot, on the line from O4 through B; the lever's
