@@ -50,7 +50,7 @@ class Model:
         th = ca.SX.sym("theta")
         pv = ca.SX.sym("p", len(m.parameters))
         p = {q.name: (0.0 if q.name in variant else pv[i]) for i, q in enumerate(m.parameters)}
-        g, self.names, self.axes = rows(m, p, th, kind)
+        g, self.names, self.axes = _rows(m, p, th, kind)
         g1 = ca.jacobian(g, th)
         g2 = ca.jacobian(g1, th)
         self.kind = kind
@@ -83,7 +83,7 @@ class Model:
         return _Batched(f"{self.name}_dp", th, pv, ca.vec(ca.jacobian(g, pv)))
 
 
-def rows(
+def _rows(
     m: Mechanism, p: dict[str, Any], th: ca.SX, kind: str
 ) -> tuple[ca.SX, tuple[str, ...], np.ndarray]:
     """A kind's rows (see ``Model``), their names and their axes."""

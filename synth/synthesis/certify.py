@@ -38,28 +38,25 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..analysis.model import rows
 from ..mechanisms import Mechanism
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred
-from ..numerics.native import WIDEST, Mapped
 from ..results import Candidate
 from ..targets import MAX_TRANSMISSION, MIN_SIZE
 from .formulation import formulate, relevant
+from .measures import Acceleration, Kinematics, Speed
 from .search import Spec, Targets, Variant, build_problem
 
 METHOD = "branch_and_bound"  # its candidates' method
-SUPPORTED = ("acceleration",)  # the objectives' terms (``Objective.terms``) searched here
+# the objectives' terms (``Objective.terms``) searched here, and their measures
+MEASURES: dict[str, Any] = {"acceleration": Acceleration, "speed": Speed}
 TOL = 1e-9  # the relative gap certified
 # the relative gap the search closes: the incumbent nears the optimum as the bound does, so a
 # tighter gap than the certificate's brings it to 1e-10 of the optimum's value (much closer,
 # and the enclosures' rounding, ~1e-11 of the value, keeps ever more boxes about it alive)
 CLOSE = 1e-10
 EPS = float(np.finfo(float).eps)
-PEAK_GRID = 128  # angles that bracket a design's peaks (the analysis's grid)
-PEAKS = 3  # the largest local peaks of a box's centre at which its bound is taken
 PROBES = 2  # the least-bound boxes whose centres are measured in full at each level
-NEWTON = 6  # Newton steps that polish a peak's angle
 SPLIT = 8  # the parts a box is cut into (fewer levels: each costs a few calls)
 LEVELS = 30  # levels at most (1-D: 8^-30 of the box)
 LIVE = 4096  # boxes alive at most
@@ -92,36 +89,24 @@ def mark(c: Candidate, bound: float) -> Candidate:
 
 
 class Built:
-    """What a search over one variant's space needs, built once per thread and structure: f
-    enclosed over boxes of u (``bound``), the constraint rows with the free parameters
+    """What a search over one variant's space needs, built once per thread and structure: its
+    kinematics (``measures.Kinematics``), the constraint rows with the free parameters
     enclosed (``rows``) and at points (``at``), and the design's parameters at points."""
 
     def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space):
         # every relevant parameter free: a request's fixed parts are the space's business
         self.form = form = formulate(m, variant, relevant(m, variant), MIN_SIZE)
-        th = ca.SX.sym("theta")
+        name = "_".join((m.type, *sorted(variant), "certify"))
+        self.kin = Kinematics(m, variant, sp, name)
         u, k = ca.SX.sym("u", len(sp.lo)), ca.SX.sym("k", len(sp.constants))
         pv = ca.SX.sym("pv", form.nlp["p"].numel())
         p = {**dict.fromkeys(variant, 0.0), **sp.design(u, k)}
         p.update({n: x for n, x in m.defaults(p).items() if n not in p})
-        f = rows(m, p, th, "motion")[0][1]  # s″
-        name = "_".join((m.type, *sorted(variant)))
-        fn = ca.Function(f"{name}_certify_bound", [th, u, k], [f], {"cse": True})
-        self.bound = CompiledCentred(fn, wrt=[1], continuous=True)
-        f1 = ca.jacobian(f, th)
-        derivatives = ca.vertcat(f, f1, ca.jacobian(f1, th))
-        # at many (angle, point) pairs: f alone (a grid), and f, f′, f″ (Newton's method)
-        self.values = Mapped(fn, (False, False, True), looped=(WIDEST,))
-        self.derivatives = Mapped(
-            ca.Function(f"{name}_certify_newton", [th, u, k], [derivatives], {"cse": True}),
-            (False, False, True),
-            looped=(WIDEST,),
-        )
         x = ca.vertcat(*(p[q] for q in form.free))
         g = ca.Function("g", [form.nlp["x"], form.nlp["p"]], [form.nlp["g"]])(x, pv)
         self.inequality = form.lbg != form.ubg
         out = ca.vertcat(g[np.flatnonzero(self.inequality).tolist()], x)
-        rows_fn = ca.Function(f"{name}_certify_rows", [u, k, pv], [out], {"cse": True})
+        rows_fn = ca.Function(f"{name}_rows", [u, k, pv], [out], {"cse": True})
         self.rows, self.at = CompiledCentred(rows_fn, wrt=[0]), rows_fn
         self.design = ca.Function("design", [u, k], [ca.vertcat(*(p[q] for q in m.names))])
 
@@ -155,10 +140,11 @@ def search(
     """The certified least of the ``terms``' peak over the variant ``v`` (``targets``: the
     time ratio and cos of the transmission bound), or None where this search cannot take it
     (another measure, or no space)."""
-    sp = m.space(v.problem) if terms in SUPPORTED and m.space is not None else None
-    if sp is None:
+    sp = m.space(v.problem) if terms in MEASURES and m.space is not None else None
+    if sp is None or terms is None:
         return None
     b = built(m, v.parts, sp)
+    measure, lower_bound = MEASURES[terms].measure, MEASURES[terms].lower
     k = np.array(sp.constants)
     pv = np.array(targets, dtype=float)
     # the request's bounds on its free parameters (its fixed ones are the space's own)
@@ -180,12 +166,12 @@ def search(
         picked = [*order[ok[order]][:PROBES], int(np.argmin(np.where(ok, value, math.inf)))]
         for j in dict.fromkeys(picked):
             if ok[j] and value[j] < top:
-                full = _measure(b, points[j : j + 1], k)[0][0]
+                full = measure(b.kin, points[j : j + 1], k)[0][0]
                 if full < top:
                     top, best = full, points[j]
 
     corners = np.array(list(itertools.product(*zip(sp.lo, sp.hi, strict=True))))
-    probe(corners, *_measure(b, corners, k)[:1], np.arange(len(corners)))  # one at a bound
+    probe(corners, measure(b.kin, corners, k)[0], np.arange(len(corners)))  # one at a bound
     while len(lo) and levels < LEVELS and len(lo) <= LIVE:
         if time.monotonic() >= deadline:
             stopped = True
@@ -197,8 +183,8 @@ def search(
         if not len(lo):
             break
         centres = 0.5 * (lo + hi)
-        value, angles = _measure(b, centres, k)
-        lower = _lower(b, lo, hi, angles, k)
+        value, info = measure(b.kin, centres, k)
+        lower = lower_bound(b.kin, lo, hi, info, k)
         probe(centres, value, np.argsort(lower, kind="stable"))
         keep = lower < top * (1 - CLOSE)
         least = min([least, *lower[~keep]])
@@ -211,15 +197,17 @@ def search(
     if best is None:
         return None
     if len(sp.lo) == 1 and not stopped:
-        top, best = _polish(b, k, pv, (lb, ub), near, top, best)
+        top, best = _polish(b, measure, k, pv, (lb, ub), near, top, best)
     if len(lo):  # stopped with boxes alive: their bounds count
-        least = min([least, *_lower(b, lo, hi, _measure(b, 0.5 * (lo + hi), k)[1], k)])
+        info = measure(b.kin, 0.5 * (lo + hi), k)[1]
+        least = min([least, *lower_bound(b.kin, lo, hi, info, k)])
     design = dict(zip(m.names, np.asarray(b.design(best, k)).ravel().tolist(), strict=True))
     return Certificate(design, top, min(least, top), not stopped, levels, boxes)
 
 
 def _polish(
     b: Built,
+    measure: Any,
     k: np.ndarray,
     pv: np.ndarray,
     limits: tuple[np.ndarray, np.ndarray],
@@ -232,17 +220,17 @@ def _polish(
     that is no design counting as twice the incumbent's measure."""
     from scipy.optimize import minimize_scalar
 
-    def measure(x: float) -> float:
+    def at(x: float) -> float:
         u = np.array([x])
         g = np.asarray(b.at(u, k, pv)).ravel()
         if not np.all((g >= limits[0]) & (g <= limits[1])):
             return 2 * top
-        return float(_measure(b, u[None], k)[0][0])
+        return float(measure(b.kin, u[None], k)[0][0])
 
     lo, hi = float(near[0][0]), float(near[1][0])
-    res = minimize_scalar(measure, bounds=(lo, hi), method="bounded",
-                          options={"xatol": 4 * EPS * max(abs(lo), abs(hi))})  # fmt: skip
-    value = measure(float(res.x))
+    xatol = 4 * EPS * max(abs(lo), abs(hi))
+    res = minimize_scalar(at, bounds=(lo, hi), method="bounded", options={"xatol": xatol})
+    value = at(float(res.x))
     return (value, np.array([res.x])) if value < top else (top, best)
 
 
@@ -259,42 +247,3 @@ def _split(lo: np.ndarray, hi: np.ndarray, width: np.ndarray) -> tuple[np.ndarra
     at = (np.arange(SPLIT * len(lo)), np.tile(side, SPLIT))
     los[at], his[at] = cuts[:-1].ravel(), cuts[1:].ravel()
     return los, his
-
-
-def _lower(b: Built, lo: np.ndarray, hi: np.ndarray, angles: np.ndarray, k: np.ndarray) -> Any:
-    """max_j inf_U |f(θ_j, ·)| of each box U, at the angles of the peaks at its centre."""
-    n, per = angles.shape
-    t = angles.reshape(-1, 1)
-    e = b.bound([t, np.repeat(lo, per, axis=0), k], [t, np.repeat(hi, per, axis=0), k])
-    least = np.fmax(np.fmax(e.lo[0][:, 0], -e.hi[0][:, 0]), 0.0)  # inf |f| (NaN: 0)
-    return least.reshape(n, per).max(axis=1)
-
-
-def _peaks(
-    b: Built, points: np.ndarray, k: np.ndarray, angles: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Each point's largest |f| at its local peaks near ``angles`` (a row each), and their
-    angles: ``NEWTON`` steps of Newton's method on f′ = 0 (a step that does not stay small is
-    not taken)."""
-    n, per = angles.shape
-    theta, own = angles.ravel(), np.repeat(points, per, axis=0)
-    for _ in range(NEWTON):
-        f = b.derivatives(theta[:, None], own, k)
-        with np.errstate(all="ignore"):
-            step = f[1] / f[2]
-        theta = np.where(np.abs(step) < 0.1, theta - step, theta)
-    w = np.abs(b.values(theta[:, None], own, k)[0]).reshape(n, per)
-    return w.max(axis=1), theta.reshape(n, per)
-
-
-def _measure(b: Built, points: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The measure at each point (rows), and the angles of its ``PEAKS`` largest local peaks
-    of |f| (rows): a grid of ``PEAK_GRID`` angles, then ``_peaks`` from the grid's."""
-    n = len(points)
-    grid = np.arange(PEAK_GRID) * (2 * np.pi / PEAK_GRID)
-    v = np.abs(b.values(np.tile(grid, n)[:, None], np.repeat(points, PEAK_GRID, axis=0), k)[0])
-    v = v.reshape(n, PEAK_GRID)
-    local = np.where((v >= np.roll(v, 1, axis=1)) & (v >= np.roll(v, -1, axis=1)), v, -1.0)
-    top = grid[np.argsort(-local, axis=1, kind="stable")[:, :PEAKS]]
-    value, angles = _peaks(b, points, k, top)
-    return np.maximum(value, v.max(axis=1)), angles

@@ -153,7 +153,7 @@ def compile_all(part: int = 0, parts: int = 1) -> int:
         for m in map(get, all_types()):
             for v in variants(m):
                 b = certify.prepared(m, v)
-                if b is not None and None in (b.bound.library, b.rows.library):
+                if b is not None and None in (*b.kin.libraries(), b.rows.library):
                     raise RuntimeError(f"{m.type}: the certified search's enclosures not built")
     return n
 

@@ -585,6 +585,23 @@ def test_tied_candidates_say_which_rule_placed_them(page):
     )
 
 
+def test_a_certified_optimum_says_so_and_the_others_how_far_they_are(page):
+    """The Whitworth's least peak acceleration: the first row says it is certified the best
+    of its type, with its gap; the next how far above the best possible it is."""
+    pg = page.page
+    only(pg, "whitworth")
+    pg.select_option("#objective", "min_peak_acceleration")
+    pg.click("#run")
+    pg.wait_for_function("document.querySelectorAll('#candidates tbody tr').length > 1")
+    rows = pg.locator("#candidates tbody tr")
+    first = rows.nth(0).inner_text()
+    assert "certified the best of its type (gap " in first
+    gap = float(first.split("(gap ")[1].split(")")[0])
+    assert 0 <= gap <= 1e-9
+    assert "above the best possible" in rows.nth(1).inner_text()
+    assert "certified" not in rows.nth(1).inner_text()
+
+
 def test_a_refusal_leaves_no_design_of_the_answer_before(page):
     """After designs, a request no design meets shows its refusals alone: the design shown
     before (its drawing, its loads) goes."""
