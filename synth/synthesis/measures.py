@@ -13,10 +13,13 @@ Both come from the type's position s(θ, u) and its θ-derivatives (``Kinematics
   proved to hold it for every u (the sign of s′ or of s − level differs, for every u, at
   its ends: the design's motion has one dead centre of each kind, so that root is the
   one); the stroke's and the levels' intervals follow from s over the dead centres'. Every
-  angle between the window's start interval and its end interval is in every window, so
-  inf_U |s′| there bounds the peak below; the window's travel is at least the gap between
-  those intervals, the stroke at most its interval's top. A box where a proof fails gets
-  the bound 0 (it is cut further).
+  angle θⱼ between the window's start interval and its end interval is in every window, and
+  G(u) = |s′(θⱼ, u)| (θb − θa)/(0.8 S) is at most the measure. The bound is the better of
+  G at the box's centre less its gradient's enclosure over the box times the half-widths
+  (the angles moving by the implicit function theorem over their proved intervals: O(h²)
+  at a smooth optimum), and the factors' own bounds (inf_U |s′(θⱼ, ·)|, the gap between the
+  window's intervals, the top of the stroke's: O(h), better on a wide box). A box where a
+  proof fails gets the bound 0 (it is cut further).
 
 A design that is not one (no two dead centres on the grid) measures ∞.
 """
@@ -241,7 +244,7 @@ class Speed:
         """The bound of each box from its centre's dead centres, window ends and peaks (see
         the module's docstring); 0 where a proof fails."""
         c, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
-        proved, dead, ends, _ = prove(kin, lo, hi, info, k)
+        proved, dead, ends, stroke = prove(kin, lo, hi, info, k)
         at_c, _, ends_c, stroke_c = prove(kin, c, c, info, k)  # tight, about the centre's own
         core = ends[1][:, :1], ends[0][:, 1:]  # in every window of the box
         peaks = info["peaks"]
@@ -272,6 +275,12 @@ class Speed:
         with np.errstate(all="ignore"):
             out = g - np.sum(steep * half[:, None, :], axis=2)
         out = np.where(np.isfinite(out), out, 0.0).max(axis=1)
+        # on a wide box the gradient's enclosure is loose: each factor's own bound may do
+        # better (the least speed, the least travel, the greatest stroke; first order)
+        least = least_abs(enclose(kin.velocity, (angles, angles), lo, hi, k)).max(axis=1)
+        with np.errstate(all="ignore"):
+            plain = least * (core[1] - core[0])[:, 0] / ((1 - 2 * CUT) * stroke) * (1 - 1e-14)
+        out = np.maximum(out, np.where(np.isfinite(plain), plain, 0.0))
         return np.where(proved & at_c & (core[1][:, 0] > core[0][:, 0]), np.maximum(out, 0), 0.0)
 
 
