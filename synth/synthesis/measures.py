@@ -115,7 +115,8 @@ def window(m: Mechanism, p: Any, th: Any, u: Any, k: Any, name: str) -> ca.Funct
 
     def of(i: int) -> tuple[Any, Any, Any, Any, Any]:  # s, s′, s″, ∂s/∂u, ∂s′/∂u at angle i
         r = at[i]
-        return r[0], r[1], r[2], r[3 : 3 + 2 * d : 2].T, r[4 : 4 + 2 * d : 2].T
+        ds, dv = ([r[start + 2 * i] for i in range(d)] for start in (3, 4))
+        return r[0], r[1], r[2], ca.horzcat(*ds), ca.horzcat(*dv)
 
     (_, vj, _, _, _), a, b, s0, s1 = (of(i) for i in range(5))
     stroke = s1[0] - s0[0]
