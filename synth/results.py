@@ -338,8 +338,8 @@ class Candidate:
     # min_transmission_angle (the value tied, the larger first), size (the smaller), type
     ranked_by: str = "objective"
     # a searched objective's certificate: the relative gap between this design's value and a
-    # rigorous lower bound on every design of its variant (None: no bound was computed), and
-    # whether the search finished with the gap within 1e-9 (the design a certified optimum)
+    # rigorous lower bound on every design of its type the request allows (None: no bound
+    # was computed), and whether that gap is within 1e-9 (the design a certified optimum)
     certified: bool = False
     gap: float | None = None
 

@@ -143,7 +143,7 @@ class Mechanism:
     # Unreachable for fixed parts that contradict the targets
     reduced: Callable[[Problem], Reduced | None] | None = None
     # the designs that meet the time ratio and stroke as functions of a few free numbers
-    # (synth.mechanisms.reduced.Space), None where the problem has fixed parts it cannot take
+    # (synth.mechanisms.reduced.Space), None where it cannot take the problem
     space: Callable[[Problem], Space | None] | None = None
     # the pin positions {name: (x, y)} at crank angle θ, named as in the module docstring, the
     # slider's pin last, in CasADi maths (for drawings, and the envelope the frame must hold)

@@ -1,29 +1,23 @@
-"""Certified global optima of a peak measure over a variant whose designs are a box of a few
-free numbers u (``Mechanism.space``): branch-and-bound with rigorous lower bounds.
+"""Certified global optima of a searched measure over a variant whose designs are a box of a
+few free numbers u (``Mechanism.space``): branch-and-bound with rigorous lower bounds. The
+measures, and their bounds over a box, are ``measures``' (``MEASURES``, by the objective's
+terms). At each level, over the boxes alive:
 
-The measure is the largest |f(θ, u)| over the crank's turn (``SUPPORTED``: f the slider's
-acceleration, stroke units, ω = 1: ``min_peak_acceleration``). On each box U of the free
-numbers:
-
-- **lower bound**: for any angles θ_k, every u in U has max_θ |f| ≥ max_k inf_U |f(θ_k, ·)|;
-  the inner infimum is bounded below by the centred interval enclosure of f in u
-  (``numerics.interval``, compiled), so the bound is rigorous whatever the angles. They are
-  ``GRID`` fixed angles and the incumbent's peak angles moved by Newton's method to the box's
-  centre, where the bound is tight (excess O(h²) at one peak, O(h) where two peaks are equal);
 - **feasibility**: the formulation's inequality rows (transmission, validity, the closed
-  forms' domain) and the request's box on each parameter, enclosed over U: a box that surely
-  breaks one holds no design and goes;
-- **upper bound**: the measure at the box's corners and, at each level, at the centres of
-  the ``PROBES`` boxes of least bound, where they meet every constraint (the analysis's
-  compiled motion rows on a grid of crank angles, then Newton's method at each local peak);
-  the least so far is the incumbent;
-- a box whose bound is within ``CLOSE`` of the incumbent goes (its bound kept); the others are
-  cut into ``SPLIT`` parts across their widest side.
+  forms' domain) and the request's box on each parameter, enclosed over each box
+  (``numerics.interval``'s centred form, compiled): a box that surely breaks one goes;
+- **bound**: the measure's lower bound over each box, from its centre's measurement;
+- **incumbent**: the measure in full at the centres of the ``PROBES`` boxes of least bound
+  and of the least measured, where they meet every constraint (and first at the box's
+  corners: an optimum at a bound); the least so far;
+- a box whose bound is within ``CLOSE`` of the incumbent goes (its bound kept); the others
+  are cut into ``SPLIT`` parts across their widest side.
 
 The search is done when no box is left: then every design of the variant measures at least
-the least bound kept, and the certificate is the gap between the incumbent and it. After
-``LEVELS`` levels, or with more than ``LIVE`` boxes alive, it stops with the gap it reached.
-Its work is the same on any machine: the deadline only stops it (the answer says so).
+the least bound kept, and a bounded Brent search over where a better one may lie polishes the
+incumbent (one free number). After ``LEVELS`` levels, or with more than ``LIVE`` boxes alive,
+it stops with the bound it reached. Its work is the same on any machine: the deadline only
+stops it (the answer then says so, uncertified).
 """
 
 from __future__ import annotations
