@@ -52,7 +52,8 @@ TAU = 2 * math.pi
 class Kinematics:
     """A variant's space compiled: s and its first four θ-derivatives, and the u-derivatives
     of s and s′, at many (angle, point) pairs (``rows``, ``du``); s, s′ and s″ enclosed over
-    boxes of (θ, u) (``position``, ``velocity``, ``acceleration``: centred in θ and u)."""
+    boxes of (θ, u) (``position``, ``velocity``, ``acceleration``: centred in θ and u), and
+    the speed window's gradient (``window``: naive)."""
 
     def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space, name: str) -> None:
         th = ca.SX.sym("theta")
@@ -115,7 +116,7 @@ def window(m: Mechanism, p: Any, th: Any, u: Any, k: Any, name: str) -> ca.Funct
 
     def of(i: int) -> tuple[Any, Any, Any, Any, Any]:  # s, s′, s″, ∂s/∂u, ∂s′/∂u at angle i
         r = at[i]
-        ds, dv = ([r[start + 2 * i] for i in range(d)] for start in (3, 4))
+        ds, dv = ([r[start + 2 * j] for j in range(d)] for start in (3, 4))
         return r[0], r[1], r[2], ca.horzcat(*ds), ca.horzcat(*dv)
 
     (_, vj, _, _, _), a, b, s0, s1 = (of(i) for i in range(5))
