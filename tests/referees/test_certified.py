@@ -3,11 +3,12 @@ uniform cutting speed) against designs drawn and measured from outside.
 
 A certified candidate claims that no design of its type at the targets measures below
 value × (1 − gap). Here the designs that meet the targets are drawn by their own geometry (the
-offset slider-crank's textbook stroke and time-ratio formulas solved for the rod and offset at
-each crank; the Whitworth's pivot ratio and lever, each rod), checked and measured by the
-brute-force simulation (tests/support/bruteforce.py, motion_bruteforce.py): none that meets the
-bound may measure below the claim, and the draw must come close to the certified value (else
-it would be too sparse to judge). The certified design itself is measured by brute force too.
+offset slider-crank's textbook construction: the crank pivot on the circle that sees the stroke
+under β; the Whitworth's pivot ratio and lever, each rod), within the request's box, checked
+and measured by the brute-force simulation (tests/support/bruteforce.py, motion_bruteforce.py),
+coarse and then twice densely about the best drawn: none that meets the bound may measure below
+the claim, and the draw must come close to the certified value (else it would be too sparse to
+judge). The certified design itself is measured by brute force too.
 """
 
 from __future__ import annotations
