@@ -13,13 +13,9 @@ they lose to the best bound (the enclosure's overestimate). Then the cost of a b
 angles) when 1, 100 or 10 000 boxes are evaluated at once, numpy's forms and the compiled ones
 (synth.numerics.compiled_interval) in the same run, medians.
 
-Last, a throwaway branch-and-bound: the least peak |s″| over the dead-centre construction's q
-(``offset_slider_crank.reduced``: crank, coupler, offset of q at time ratio 1.6, stroke 300)
-where μ_min ≥ 20°, certified to a relative gap of 1e-9: each level bounds every live box from
-below by the centred enclosure at the peak angles at its centre (Newton from the incumbent's)
-and at 0 or 32 fixed angles (``grid``), measures the peak exactly (a grid, then Newton) at
-the centre of the box with the least bound (the incumbent, the upper bound), drops the boxes
-whose bound is within the gap of it and halves the rest. Not part of ``make bench``.
+Last (``--search``: alone), the certified search these bounds serve, the product's
+(``synth.synthesis.certify``), on the least peak |s″| at time ratio 1.6 and 20°: its levels,
+boxes, gap and time. Not part of ``make bench``.
 """
 
 from __future__ import annotations
@@ -37,7 +33,11 @@ import synth
 from synth.mechanisms import get
 from synth.numerics.compiled_interval import CompiledCentred, CompiledInterval
 from synth.numerics.interval import Centred, Interval
-from synth.numerics.native import Mapped
+from synth.synthesis import certify
+from synth.synthesis.motion import ACROSS
+from synth.synthesis.search import Spec, Targets
+from synth.synthesis.search import search as search_types
+from synth.targets import MAX_TRANSMISSION
 
 from .common import report, table
 
@@ -169,126 +169,26 @@ def main(argv: list[str] | None = None) -> dict:
     )
 
 
-TOL = 1e-9  # the relative gap certified
-# the enclosures, and how many fixed angles besides the peaks' each box's bound takes
-SEARCHES = [(e, g) for g in (0, 32) for e in (("compiled", CompiledCentred), ("numpy", Centred))]
-
-
-def construction(ratio: float, stroke: float) -> tuple[ca.Function, ca.Function, float, float]:
-    """a(θ, q) (the slider's acceleration, stroke units × ``stroke``), (a, a′, a″) in θ, and
-    the q where μ_min ≥ 20° on the synthesis's branch (0 < q < cos β: ``reduced``)."""
-    beta = math.pi * (ratio - 1) / (ratio + 1)
-    s, c = math.sin(beta / 2), math.cos(beta / 2)
-    th, q = ca.SX.sym("theta"), ca.SX.sym("q")
-    p = {
-        "crank": stroke * ca.sqrt(c * c - q) / (2 * c),
-        "coupler": stroke * ca.sqrt(s * s + q) / (2 * s),
-        "offset": stroke * q / math.sin(beta),
-    }
-    acc = ca.jacobian(ca.jacobian(get("offset_slider_crank").position(p, th), th), th)
-    a1 = ca.jacobian(acc, th)
-    fn = ca.Function("acc_q", [th, q], [acc], {"cse": True})
-    rows = ca.Function("acc_q_rows", [th, q], [ca.vertcat(acc, a1, ca.jacobian(a1, th))])
-
-    def cos_mu(x: float) -> float:
-        return (x + s * math.sqrt(c * c - x)) / (c * math.sqrt(s * s + x))
-
-    star, bound = s * (math.sqrt(s * s + 4) - 3 * s) / 2, math.cos(math.radians(20))
-
-    def edge(inside: float, outside: float) -> float:  # bisection to the last float
-        while True:
-            mid = 0.5 * (inside + outside)
-            if mid in (inside, outside):
-                return inside
-            inside, outside = (mid, outside) if cos_mu(mid) <= bound else (inside, mid)
-
-    return fn, rows, edge(star, 0.0), edge(star, math.cos(beta))
-
-
-class Peaks:
-    """The peak |a| over the crank's turn at given q, in floats (the compiled function)."""
-
-    def __init__(self, rows: ca.Function) -> None:
-        self.mapped = Mapped(rows, (False, False))
-
-    def rows(self, theta: np.ndarray, q: np.ndarray) -> np.ndarray:
-        return self.mapped(theta.reshape(-1, 1), q.reshape(-1, 1))  # (3, n)
-
-    def newton(self, theta: np.ndarray, q: np.ndarray, steps: int) -> np.ndarray:
-        """Angles moved towards a′ = 0 (a step that does not stay small is not taken)."""
-        for _ in range(steps):
-            a = self.rows(theta, q)
-            step = a[1] / a[2]
-            theta = np.where(np.abs(step) < 0.1, theta - step, theta)
-        return theta
-
-    def measure(self, q: float) -> tuple[float, np.ndarray]:
-        """The peak |a| at q and its local peaks' angles (those above half of it)."""
-        grid = np.linspace(0, 2 * np.pi, 256, endpoint=False)
-        v = np.abs(self.rows(grid, np.full_like(grid, q))[0])
-        local = (v >= np.roll(v, 1)) & (v >= np.roll(v, -1)) & (v >= 0.5 * v.max())
-        theta = self.newton(grid[local], np.full(local.sum(), q), 8)
-        w = np.abs(self.rows(theta, np.full_like(theta, q))[0])
-        return float(max(w.max(), v.max())), theta
-
-
 def searched() -> list[dict]:
-    """The search with each enclosure, warm (the second of two runs: the first builds)."""
-    rows = [[search(*form, grid) for _ in range(2)][-1] for form, grid in SEARCHES]
-    cols = ("enclosure", "grid", "levels", "boxes", "angles_bounded", "gap", "peak", "q")
-    print(table(rows, (*cols, "ms", "enclosure_ms", "calls")))
-    return rows
-
-
-def search(name: str, form: type, grid: int) -> dict:
-    """The branch-and-bound to ``TOL`` (see the module's docstring), with one enclosure."""
-    fn, rows, qa, qb = construction(1.6, 300.0)
-    enclose, peaks = form(fn, wrt=[1], continuous=True), Peaks(rows)
-    t0 = time.perf_counter()
-    top, angles = peaks.measure(0.5 * (qa + qb))
-    live, least = np.array([[qa, qb]]), math.inf
-    levels = count = bounded = calls = 0
-    spent = 0.0
-    best_q = 0.5 * (qa + qb)
-    while len(live):
-        levels += 1
-        n, centres = len(live), live.mean(axis=1)
-        at = peaks.newton(np.tile(angles, n), np.repeat(centres, len(angles)), 3)
-        fixed = np.linspace(0, 2 * np.pi, grid, endpoint=False)
-        theta = np.concatenate([np.tile(fixed, (n, 1)), at.reshape(n, -1)], axis=1)
-        k = theta.shape[1]
-        t = theta.reshape(-1, 1)
-        t1 = time.perf_counter()
-        e = enclose([t, np.repeat(live[:, :1], k, 0)], [t, np.repeat(live[:, 1:], k, 0)])
-        spent += time.perf_counter() - t1
-        calls += 1
-        lows = np.fmax(np.fmax(e.lo[0][:, 0], -e.hi[0][:, 0]), 0.0)  # inf |a| (NaN: 0)
-        lower = lows.reshape(n, k).max(axis=1)
-        count, bounded = count + n, bounded + n * k
-        j = int(np.argmin(lower))
-        value, found = peaks.measure(float(centres[j]))
-        if value < top:
-            top, angles, best_q = value, found, float(centres[j])
-        keep = lower < top * (1 - TOL)
-        least = min(least, *lower[~keep]) if (~keep).any() else least
-        mids = centres[keep]
-        live = np.concatenate(
-            [np.stack([live[keep, 0], mids], 1), np.stack([mids, live[keep, 1]], 1)]
-        )
-    ms = (time.perf_counter() - t0) * 1e3
-    return {
-        "enclosure": name,
-        "grid": grid,
-        "levels": levels,
-        "boxes": count,
-        "angles_bounded": bounded,
-        "gap": (top - least) / top,
-        "peak": top,
-        "q": best_q,
-        "ms": ms,
-        "enclosure_ms": spent * 1e3,
-        "calls": calls,
-    }
+    """The product's certified search (``synth.synthesis.certify``) on the same request: the
+    least peak |s″| of the offset slider-crank at time ratio 1.6 and 20°, warm (the median of
+    five runs after one that builds)."""
+    m = get("offset_slider_crank")
+    t = Targets(1.6, 1.0, 20.0, MAX_TRANSMISSION, math.inf)
+    (v,) = search_types(m, Spec(m.type), 0, t).variants
+    targets = (1.6, min(t.cos_bound, 1 - ACROSS))
+    certify.search(m, v, "acceleration", targets, math.inf)
+    times = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        c = certify.search(m, v, "acceleration", targets, math.inf)
+        times.append((time.perf_counter() - t0) * 1e3)
+    assert c is not None
+    gap = (c.value - c.bound) / c.value
+    row = {"levels": c.levels, "boxes": c.boxes, "gap": gap, "peak": c.value}
+    row["ms"] = statistics.median(times)
+    print(table([row], tuple(row)))
+    return [row]
 
 
 if __name__ == "__main__":
