@@ -23,7 +23,16 @@ from synth.numerics.compiled_interval import CompiledCentred, CompiledInterval
 from synth.numerics.interval import REL, Centred, Interval
 
 from . import test_interval as reference
-from .test_interval import EXPRESSIONS, boxes, inexact, motion, split, two, violations
+from .test_interval import (
+    EXPRESSIONS,
+    about,
+    boxes,
+    inexact,
+    motion,
+    split,
+    two,
+    violations,
+)
 
 AGREE = 16  # REL of the enclosure's magnitude max(|lo|, |hi|) that two bounds may differ by
 EXACT = ("arithmetic", "comparisons")  # no libm function: the same bits
@@ -97,17 +106,10 @@ def test_the_motion_rows_of_two_types_are_enclosed_as_numpy_encloses_them(mtype:
         compiled, numpy = CompiledCentred(fn, continuous=True), Centred(fn, continuous=True)
     assert compiled.library is not None
     rng = np.random.default_rng(7)
-    n = 1000
-    c = np.concatenate(
-        [rng.uniform(0, 2 * np.pi, (n, 1)), p * (1 + 0.01 * rng.normal(size=(n, len(p))))], 1
-    )
-    r = np.concatenate(
-        [10 ** rng.uniform(-8, -0.5, (n, 1)), np.abs(c[:, 1:]) * 10 ** rng.uniform(-8, -2, (n, 1))],
-        1,
-    )
-    assert not violations(fn, compiled, (c - r)[:300], (c + r)[:300], rng, extra=30)
-    assert not inexact(fn, compiled, (c - r)[:6], (c + r)[:6], rng, extra=1)
-    assert not disagreements(fn, compiled, numpy, c - r, c + r, exact=False)
+    lo, hi = about(p, 1000, rng)
+    assert not violations(fn, compiled, lo[:300], hi[:300], rng, extra=30)
+    assert not inexact(fn, compiled, lo[:6], hi[:6], rng, extra=1)
+    assert not disagreements(fn, compiled, numpy, lo, hi, exact=False)
 
 
 @compiler

@@ -253,7 +253,14 @@ def test_the_motion_rows_of_two_types_are_enclosed(mtype: str, form: str) -> Non
     fn, p = motion(mtype)
     enclose = Interval(fn) if form == "naive" else Centred(fn, continuous=True)
     rng = np.random.default_rng(7)
-    n = 300
+    lo, hi = about(p, 300, rng)
+    assert not violations(fn, enclose, lo, hi, rng, extra=30)
+    assert not inexact(fn, enclose, lo[:6], hi[:6], rng, extra=1)
+
+
+def about(p: np.ndarray, n: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """n boxes of (θ, parameters) about a design ``p``: θ anywhere on the turn, within
+    1e-8 to 0.3 rad; each parameter within 1% of the design's, within 1e-8 to 1e-2 of it."""
     c = np.concatenate(
         [rng.uniform(0, 2 * np.pi, (n, 1)), p * (1 + 0.01 * rng.normal(size=(n, len(p))))], 1
     )
@@ -261,8 +268,7 @@ def test_the_motion_rows_of_two_types_are_enclosed(mtype: str, form: str) -> Non
         [10 ** rng.uniform(-8, -0.5, (n, 1)), np.abs(c[:, 1:]) * 10 ** rng.uniform(-8, -2, (n, 1))],
         1,
     )
-    assert not violations(fn, enclose, c - r, c + r, rng, extra=30)
-    assert not inexact(fn, enclose, (c - r)[:6], (c + r)[:6], rng, extra=1)
+    return c - r, c + r
 
 
 def test_known_enclosures() -> None:
