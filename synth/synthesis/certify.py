@@ -36,8 +36,8 @@ from ..mechanisms import Mechanism
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred
 from ..results import Candidate
-from ..targets import MAX_TRANSMISSION, MIN_SIZE
-from .formulation import formulate, relevant
+from ..targets import MAX_TRANSMISSION
+from .formulation import formulation, relevant
 from .measures import Acceleration, Kinematics, Speed
 from .search import Spec, Targets, Variant, build_problem
 
@@ -89,7 +89,7 @@ class Built:
 
     def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space):
         # every relevant parameter free: a request's fixed parts are the space's business
-        self.form = form = formulate(m, variant, relevant(m, variant), MIN_SIZE)
+        self.form = form = formulation(m, variant, relevant(m, variant))
         name = "_".join((m.type, *sorted(variant), "certify"))
         self.kin = Kinematics(m, variant, sp, name)
         u, k = ca.SX.sym("u", len(sp.lo)), ca.SX.sym("k", len(sp.constants))

@@ -39,6 +39,7 @@ method for the constraint over the whole turn: ``solve.multistart``).
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 from functools import cache
 from typing import Any
@@ -202,3 +203,24 @@ def formulate(
         constant_lb=lo[~keep],
         constant_ub=hi[~keep],
     )
+
+
+Key = tuple[str, frozenset[str], tuple[str, ...]]
+_local = threading.local()
+
+
+def kept_by(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Key:
+    """What a variant's free set is kept by: its formulation here, its compiled constraints in
+    ``screen``."""
+    return (m.type, variant, free)
+
+
+def formulation(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Formulation:
+    """The type's formulation for a variant and its free parameters (its constraints: the
+    searches' and the certified search's), once per thread and structure (CasADi functions
+    are never shared between threads)."""
+    cache: dict[Key, Formulation] = _local.__dict__.setdefault("formulations", {})
+    key = kept_by(m, variant, free)
+    if key not in cache:
+        cache[key] = formulate(m, variant, free, MIN_SIZE)
+    return cache[key]

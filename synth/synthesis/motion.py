@@ -32,7 +32,6 @@ independent global search by ``tests/referees/test_motion_search.py``."""
 from __future__ import annotations
 
 import math
-import threading
 import time
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
@@ -49,7 +48,7 @@ from ..targets import MAX_TRANSMISSION, MIN_SIZE
 from . import aims, certify, screen
 from .candidate import candidate
 from .diagnose import diagnose
-from .formulation import TIE, Formulation, formulate
+from .formulation import TIE, formulation, kept_by
 from .search import Searched, Spec, Targets, Variant, proposal, same, scaled, search, whole
 from .solve import starts as halton
 
@@ -85,26 +84,6 @@ SAMPLES = 256  # Halton points of the box projected onto the equalities (``scree
 ACROSS = 1e-3
 ACROSS_DEG = math.degrees(math.acos(1 - ACROSS))
 FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
-_local = threading.local()
-
-
-Key = tuple[str, frozenset[str], tuple[str, ...]]
-
-
-def kept_by(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Key:
-    """What a variant's free set is kept by: its formulation here, its compiled constraints in
-    ``screen``."""
-    return (m.type, variant, free)
-
-
-def formulation(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> Formulation:
-    """The type's formulation for a variant and its free parameters (its constraints), once
-    per thread and structure (CasADi functions are never shared between threads)."""
-    cache: dict[Key, Formulation] = _local.__dict__.setdefault("formulations", {})
-    key = kept_by(m, variant, free)
-    if key not in cache:
-        cache[key] = formulate(m, variant, free, MIN_SIZE)
-    return cache[key]
 
 
 def local_optima(

@@ -9,7 +9,7 @@ are never shared between threads):
 - IPOPT's solvers (``solve.built``): per type, variant, free set (the variant's parameters a
   request leaves free: it may fix any of the others) and objective (the two the search
   solves, the two diagnostics);
-- the motion search's formulation and its compiled constraints (``motion.formulation``,
+- the motion search's formulation and its compiled constraints (``formulation.formulation``,
   ``screen``): per type, variant and free set;
 - the certified search's enclosures (``certify``): per type with a space and variant.
 
@@ -41,8 +41,7 @@ from ..mechanisms import Mechanism, all_types, get, rod
 from ..mechanisms.fourbar.construction import construction
 from ..numerics.native import WIDTHS, cache
 from . import certify, screen
-from .formulation import DIAGNOSTICS, SOLVED, relevant
-from .motion import formulation, kept_by
+from .formulation import DIAGNOSTICS, SOLVED, formulation, kept_by, relevant
 
 OBJECTIVES = (*SOLVED, *DIAGNOSTICS)  # those a request's search and diagnosis solve by IPOPT
 # what the motion search and the sweep import on first use (~0.3 s)
