@@ -35,6 +35,7 @@ import numpy as np
 from ..mechanisms import Mechanism
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred
+from ..numerics.native import Mapped
 from ..results import Candidate
 from ..targets import MAX_TRANSMISSION
 from .formulation import formulation, relevant
@@ -85,7 +86,7 @@ def mark(c: Candidate, bound: float) -> Candidate:
 class Built:
     """What a search over one variant's space needs, built once per thread and structure: its
     kinematics (``measures.Kinematics``), the constraint rows with the free parameters
-    enclosed (``rows``) and at points (``at``), and the design's parameters at points."""
+    enclosed (``rows``) and at many points (``at``), and the design's parameters at a point."""
 
     def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space):
         # every relevant parameter free: a request's fixed parts are the space's business
@@ -101,7 +102,8 @@ class Built:
         self.inequality = form.lbg != form.ubg
         out = ca.vertcat(g[np.flatnonzero(self.inequality).tolist()], x)
         rows_fn = ca.Function(f"{name}_rows", [u, k, pv], [out], {"cse": True})
-        self.rows, self.at = CompiledCentred(rows_fn, wrt=[0]), rows_fn
+        self.rows = CompiledCentred(rows_fn, wrt=[0])
+        self.at = Mapped(rows_fn, (False, True, True))  # at many points, each a row
         self.design = ca.Function("design", [u, k], [ca.vertcat(*(p[q] for q in m.names))])
 
 
@@ -155,7 +157,7 @@ def search(
         """The best of the points whose approximate ``value`` is least, and those first in
         ``order``, measured in full: the incumbent if it is a design and the best so far."""
         nonlocal top, best
-        g = np.asarray(b.at.map(len(points))(points.T, k, pv)).T
+        g = b.at(points, k, pv).T
         ok = np.all((g >= lb) & (g <= ub), axis=1)  # designs
         picked = [*order[ok[order]][:PROBES], int(np.argmin(np.where(ok, value, math.inf)))]
         for j in dict.fromkeys(picked):
@@ -216,7 +218,7 @@ def _polish(
 
     def at(x: float) -> float:
         u = np.array([x])
-        g = np.asarray(b.at(u, k, pv)).ravel()
+        g = b.at(u[None], k, pv)[:, 0]
         if not np.all((g >= limits[0]) & (g <= limits[1])):
             return 2 * top
         return float(measure(b.kin, u[None], k)[0][0])
