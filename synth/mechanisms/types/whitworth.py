@@ -89,6 +89,14 @@ def facts(p: Params) -> dict[str, Any]:
     }
 
 
+def _ratio(p: Problem) -> float:
+    """pivot_distance/crank: a fixed pair's (checked against the target), else sin(β/2)."""
+    f = p.fixed
+    if {"crank", "pivot_distance"} <= f.keys():
+        return f["pivot_distance"] / f["crank"]
+    return math.sin(p.beta / 2)
+
+
 def reduced(p: Problem) -> Reduced:
     """The time ratio fixes pivot_distance/crank = cos(π/(1 + TR)) = sin(β/2) (the quick
     stroke's half angle), the stroke fixes the lever at half of it; the crank is a free scale
@@ -96,9 +104,7 @@ def reduced(p: Problem) -> Reduced:
     cos μ = lever/rod) or the shortest length the bound allows (min size)."""
     if p.beta <= 0:
         raise Unreachable("TIME_RATIO_UNREACHABLE", "whitworth has time ratio > 1 always")
-    f = p.fixed
-    ratio = f["pivot_distance"] / f["crank"] if {"crank", "pivot_distance"} <= f.keys() else None
-    ratio = ratio or math.sin(p.beta / 2)  # the fixed pair's (checked against the target)
+    ratio = _ratio(p)
 
     def time_ratio(crank_per_pivot: float) -> float:
         q = math.acos(min(1 / crank_per_pivot, 1.0))  # half the quick stroke
@@ -131,9 +137,7 @@ def space(p: Problem) -> Space | None:
     """As ``reduced`` states it: the crank, a free scale (the smallest allowed, or as a fixed
     crank or pivot distance sets it), the pivot distance set by it and the time ratio, the
     lever half the stroke; the rod is the free number, over its bounds (fixed: a point)."""
-    f = p.fixed
-    ratio = f["pivot_distance"] / f["crank"] if {"crank", "pivot_distance"} <= f.keys() else None
-    ratio = ratio or math.sin(p.beta / 2)
+    f, ratio = p.fixed, _ratio(p)
     crank = None if p.beta <= 0 else _scale(p, ratio)
     if crank is None:
         return None
