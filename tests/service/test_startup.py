@@ -28,7 +28,7 @@ import pytest
 import synth
 from benchmarks.startup import FIRST, FIRST_SEARCHED, SEARCHED, SLACK_MS, TYPES
 from synth.analysis import model
-from synth.synthesis import motion, screen, solve, warm
+from synth.synthesis import formulation, motion, screen, solve, warm
 
 from ..support.server import ROOT, call, serving
 
@@ -103,7 +103,7 @@ def test_after_the_warm_up_a_searched_request_with_nothing_fixed_builds_nothing(
         for module, name in [
             (model, "Mapped"),
             (screen, "Mapped"),
-            (motion, "formulate"),
+            (formulation, "formulate"),
             (solve, "formulate"),
         ]:
             watched(module, name, lambda *_, at=f"{module.__name__}.{name}": built.append(at))
