@@ -20,6 +20,7 @@ change); pins and slots are frictionless.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -43,8 +44,7 @@ def system(
     assert m.frame is not None and m.joints is not None
     fr = m.frame(variant)
     u, om = w["unit"], w["omega"]
-    pins = {k: (u * x, u * y) for k, (x, y) in m.joints(p, th).items()}
-    members = {name: (a, b) for name, a, b in m.drawing}
+    pins = _pins(m, p, th, u)
     tx, ty = fr.path(p)
 
     def d2(v: Any) -> Any:  # the second derivative in time at constant ω
@@ -93,26 +93,74 @@ def system(
 
     # what the unknowns balance: each body's inertia (Σ m a, and the moment of m a and I α
     # about the crank pivot) less its weight, the ram's, less the force on the ram
-    lam, g = w["mass_per_length"], (w["gx"], w["gy"])
-    for body in fr.bodies:
-        r = rows_of[body[0]]
-        (ax, ay), (bx, by) = (pins[q] for q in members[body[0]])
-        alpha = d2(ca.atan2(by - ay, bx - ax))
-        for member in body:
-            (ax, ay), (bx, by) = (pins[q] for q in members[member])
-            length = u * p[member]
-            mass = lam * length
-            cx, cy = (ax + bx) / 2, (ay + by) / 2
-            fx, fy = mass * (d2(cx) - g[0]), mass * (d2(cy) - g[1])
-            b[r] += fx
-            b[r + 1] += fy
-            b[r + 2] += cx * fy - cy * fx + mass * length**2 / 12 * alpha
+    g = (w["gx"], w["gy"])
+    for body, mass, (cx, cy), inertia, angle in _members(m, fr.bodies, pins, p, w):
+        r = rows_of[body]
+        fx, fy = mass * (d2(cx) - g[0]), mass * (d2(cy) - g[1])
+        b[r] += fx
+        b[r + 1] += fy
+        b[r + 2] += cx * fy - cy * fx + inertia * d2(angle)
     s = u * m.position(p, th)
     weight = (w["slider_mass"] * g[0], w["slider_mass"] * g[1])
     b[ram] += w["slider_mass"] * d2(s) - w["force"] - w["force_slope"] * s
     b[ram] -= weight[0] * tx + weight[1] * ty
     b[ram + 1] -= -weight[0] * ty + weight[1] * tx
     return a, b, layout
+
+
+def torque(
+    m: Mechanism, variant: frozenset[str], p: Params, th: ca.SX, w: dict[str, ca.SX]
+) -> ca.SX:
+    """The crank torque at θ by the balance of power, where the guide does not rub (its
+    ``friction`` is left out): the joints' forces do no work, so at constant ω
+    T = Σ m (ω² c″ − g)·c′ + I ω² φ″ φ′ over the members (c: a member's middle, φ: its body's
+    angle; ′: d/dθ) + (m_ram (ω² s″ − g·t) − force − force_slope s) s′. It is ``system``'s
+    torque from the motion alone: a far shorter expression, which an interval enclosure
+    bounds tightly (``synth.synthesis.torque``)."""
+    assert m.frame is not None and m.joints is not None
+    fr = m.frame(variant)
+    u, om = w["unit"], w["omega"]
+    tx, ty = fr.path(p)
+
+    def d(v: Any) -> Any:
+        return ca.jacobian(v, th)
+
+    g = (w["gx"], w["gy"])
+    out = ca.SX(0.0)
+    for _, mass, (cx, cy), inertia, angle in _members(m, fr.bodies, _pins(m, p, th, u), p, w):
+        out += mass * ((om**2 * d(d(cx)) - g[0]) * d(cx) + (om**2 * d(d(cy)) - g[1]) * d(cy))
+        out += inertia * om**2 * d(d(angle)) * d(angle)
+    s = u * m.position(p, th)
+    along = w["slider_mass"] * (om**2 * d(d(s)) - g[0] * tx - g[1] * ty)
+    out += (along - w["force"] - w["force_slope"] * s) * d(s)
+    return out
+
+
+def _pins(m: Mechanism, p: Params, th: ca.SX, unit: Any) -> dict[str, tuple[Any, Any]]:
+    """The type's pins at θ, in metres."""
+    assert m.joints is not None
+    return {k: (unit * x, unit * y) for k, (x, y) in m.joints(p, th).items()}
+
+
+def _members(
+    m: Mechanism,
+    bodies: tuple[tuple[str, ...], ...],
+    pins: dict[str, tuple[Any, Any]],
+    p: Params,
+    w: dict[str, ca.SX],
+) -> Iterator[tuple[str, Any, tuple[Any, Any], Any, Any]]:
+    """Each drawn member of the moving ``bodies``, a uniform slender rod: its body's name, its
+    mass, its middle, its moment of inertia about it, and its body's angle (its first
+    member's direction)."""
+    ends = {name: (a, b) for name, a, b in m.drawing}
+    for body in bodies:
+        (ax, ay), (bx, by) = (pins[q] for q in ends[body[0]])
+        angle = ca.atan2(by - ay, bx - ax)
+        for member in body:
+            (ax, ay), (bx, by) = (pins[q] for q in ends[member])
+            length = w["unit"] * p[member]
+            mass = w["mass_per_length"] * length
+            yield body[0], mass, ((ax + bx) / 2, (ay + by) / 2), mass * length**2 / 12, angle
 
 
 @dataclass(frozen=True)

@@ -103,12 +103,17 @@ class Space:
     The designs of the box that meet the other constraints (transmission, validity, the
     request's bounds) are then all the variant's feasible designs, up to a free scale and a
     mirror that leave the motion as it is: a global search over the box is one over the
-    variant (``synth.synthesis.certify``)."""
+    variant (``synth.synthesis.certify``). The loads a design carries may tell the mirror
+    image from the design, and one scale from another: ``mirror`` gives the constants of the
+    mirror image's space (None: the mirror is not free), ``scaled`` says that the crank's
+    scale is free and pinned (its weight loads a longer crank more)."""
 
     lo: tuple[float, ...]
     hi: tuple[float, ...]
     constants: tuple[float, ...]
     design: Callable[[Any, Any], dict[str, Any]]
+    mirror: tuple[float, ...] | None = None
+    scaled: bool = False
 
 
 def unreachable(what: str) -> Unreachable:

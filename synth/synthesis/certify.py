@@ -22,6 +22,7 @@ stops it (the answer then says so, uncertified).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import threading
@@ -32,6 +33,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..analysis.loads import numbers
+from ..load import Load
 from ..mechanisms import Mechanism
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred
@@ -39,12 +42,14 @@ from ..numerics.native import Mapped
 from ..results import Candidate
 from ..targets import MAX_TRANSMISSION
 from .formulation import formulation, relevant
-from .measures import Acceleration, Kinematics, Speed
+from .measures import Acceleration, Kinematics, Speed, design
 from .search import Spec, Targets, Variant, build_problem
+from .torque import Model, Torque, supports
 
 METHOD = "branch_and_bound"  # its candidates' method
 # the objectives' terms (``Objective.terms``) searched here, and their measures
 MEASURES: dict[str, Any] = {"acceleration": Acceleration, "speed": Speed}
+TORQUE = "torque"  # the peak torque's terms, measured under the request's load (``torque``)
 TOL = 1e-9  # the relative gap certified
 # the relative gap the search closes: the incumbent nears the optimum as the bound does, so a
 # tighter gap than the certificate's brings it to 1e-10 of the optimum's value (much closer,
@@ -91,12 +96,12 @@ class Built:
     def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space):
         # every relevant parameter free: a request's fixed parts are the space's business
         self.form = form = formulation(m, variant, relevant(m, variant))
-        name = "_".join((m.type, *sorted(variant), "certify"))
+        self.name = name = "_".join((m.type, *sorted(variant), "certify"))
+        self.mechanism, self.variant, self.space, self.names = m, variant, sp, m.names
         self.kin = Kinematics(m, variant, sp, name)
         u, k = ca.SX.sym("u", len(sp.lo)), ca.SX.sym("k", len(sp.constants))
         pv = ca.SX.sym("pv", form.nlp["p"].numel())
-        p = {**dict.fromkeys(variant, 0.0), **sp.design(u, k)}
-        p.update({n: x for n, x in m.defaults(p).items() if n not in p})
+        p = design(m, variant, sp, u, k)
         x = ca.vertcat(*(p[q] for q in form.free))
         g = ca.Function("g", [form.nlp["x"], form.nlp["p"]], [form.nlp["g"]])(x, pv)
         self.inequality = form.lbg != form.ubg
@@ -105,6 +110,11 @@ class Built:
         self.rows = CompiledCentred(rows_fn, wrt=[0])
         self.at = Mapped(rows_fn, (False, True, True))  # at many points, each a row
         self.design = ca.Function("design", [u, k], [ca.vertcat(*(p[q] for q in m.names))])
+
+    @functools.cached_property
+    def torque(self) -> Model:
+        """The crank torque in closed form (``torque.Model``), built on first use."""
+        return Model(self.mechanism, self.variant, self.space, self.name)
 
 
 def built(m: Mechanism, variant: frozenset[str], sp: Space) -> Built:
@@ -116,14 +126,20 @@ def built(m: Mechanism, variant: frozenset[str], sp: Space) -> Built:
 
 
 def prepared(m: Mechanism, variant: frozenset[str]) -> Built | None:
-    """What a search over the variant with nothing fixed builds (a service's warm-up; the
-    disk cache's libraries), None for a type without a space."""
+    """What a search over the variant with nothing fixed builds, the peak torque's model with
+    it where the type has a force model (a service's warm-up; the disk cache's libraries),
+    None for a type without a space."""
     if m.space is None:
         return None
     names = relevant(m, variant)
     t = Targets(1.6, 1.0, 0.0, MAX_TRANSMISSION, math.inf)
     sp = m.space(build_problem(m, variant, names, {}, Spec(m.type), t))
-    return None if sp is None else built(m, variant, sp)
+    if sp is None:
+        return None
+    b = built(m, variant, sp)
+    if m.frame is not None:  # the peak torque's too
+        b.torque.libraries()
+    return b
 
 
 def search(
@@ -132,15 +148,48 @@ def search(
     terms: str | None,
     targets: tuple[float, float],
     deadline: float,
+    load: Load | None = None,
+    metres: float = 1.0,
 ) -> Certificate | None:
     """The certified least of the ``terms``' peak over the variant ``v`` (``targets``: the
-    time ratio and cos of the transmission bound), or None where this search cannot take it
-    (another measure, or no space)."""
-    sp = m.space(v.problem) if terms in MEASURES and m.space is not None else None
+    time ratio and cos of the transmission bound; the peak torque's under ``load``, the
+    space's lengths ``metres`` each), or None where this search cannot take it (another
+    measure, no space, a load ``torque`` does not bound) or finds no design."""
+    sp = m.space(v.problem) if m.space is not None else None
     if sp is None or terms is None:
         return None
     b = built(m, v.parts, sp)
-    measure, lower_bound = MEASURES[terms].measure, MEASURES[terms].lower
+    if terms in MEASURES:
+        measure, spaces = MEASURES[terms], [sp]
+    elif terms == TORQUE and load is not None and m.frame is not None and supports(load, sp):
+        measure = Torque(b.torque, load, numbers(load, metres))
+        spaces = [sp] if sp.mirror is None else [sp, replace(sp, constants=sp.mirror)]
+    else:
+        return None
+    found = [_search(b, s, measure, v, targets, deadline) for s in spaces]
+    best = min(found, key=lambda c: c.value)
+    if not best.design:
+        return None
+    return replace(
+        best,
+        bound=min(c.bound for c in found),
+        complete=all(c.complete for c in found),
+        levels=sum(c.levels for c in found),
+        boxes=sum(c.boxes for c in found),
+    )
+
+
+def _search(
+    b: Built,
+    sp: Space,
+    meas: Any,
+    v: Variant,
+    targets: tuple[float, float],
+    deadline: float,
+) -> Certificate:
+    """The branch-and-bound over one space (the module's docstring): its best design (empty:
+    none found) and the least bound over its designs (∞: it has none)."""
+    measure, lower_bound = meas.measure, meas.lower
     k = np.array(sp.constants)
     pv = np.array(targets, dtype=float)
     # the request's bounds on its free parameters (its fixed ones are the space's own)
@@ -191,13 +240,13 @@ def search(
             near = lo[lower <= top].min(axis=0), hi[lower <= top].max(axis=0)
         lo, hi = _split(lo[keep], hi[keep], width)
     if best is None:
-        return None
+        return Certificate({}, math.inf, least, not stopped, levels, boxes)
     if len(sp.lo) == 1 and not stopped:
         top, best = _polish(b, measure, k, pv, (lb, ub), near, top, best)
     if len(lo):  # stopped with boxes alive: their bounds count
         info = measure(b.kin, 0.5 * (lo + hi), k)[1]
         least = min([least, *lower_bound(b.kin, lo, hi, info, k)])
-    design = dict(zip(m.names, np.asarray(b.design(best, k)).ravel().tolist(), strict=True))
+    design = dict(zip(b.names, np.asarray(b.design(best, k)).ravel().tolist(), strict=True))
     return Certificate(design, top, min(least, top), not stopped, levels, boxes)
 
 

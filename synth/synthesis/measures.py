@@ -58,8 +58,7 @@ class Kinematics:
     def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space, name: str) -> None:
         th = ca.SX.sym("theta")
         u, k = ca.SX.sym("u", len(sp.lo)), ca.SX.sym("k", len(sp.constants))
-        p = {**dict.fromkeys(variant, 0.0), **sp.design(u, k)}
-        p.update({n: x for n, x in m.defaults(p).items() if n not in p})
+        p = design(m, variant, sp, u, k)
         d = [m.position(p, th)]
         for _ in range(4):
             d.append(ca.jacobian(d[-1], th))
@@ -98,6 +97,14 @@ class Kinematics:
                 step = (r[row] - level) / r[row + 1]
             theta = np.where(np.abs(step) < 0.1, theta - step, theta)
         return theta
+
+
+def design(m: Mechanism, variant: frozenset[str], sp: Space, u: Any, k: Any) -> dict[str, Any]:
+    """Every parameter of the variant's design at the space's (u, k), CasADi symbols: the
+    space's, 0 for the parts the variant leaves out, the type's defaults for the rest."""
+    p = {**dict.fromkeys(variant, 0.0), **sp.design(u, k)}
+    p.update({n: x for n, x in m.defaults(p).items() if n not in p})
+    return p
 
 
 def window(m: Mechanism, p: Any, th: Any, u: Any, k: Any, name: str) -> ca.Function:
@@ -196,49 +203,20 @@ class Speed:
     @staticmethod
     def measure(kin: Kinematics, points: np.ndarray, k: np.ndarray) -> tuple[Any, Any]:
         """The measure at each point, and what its bound takes (``lower``)."""
-        n = len(points)
-        grid = np.tile(np.arange(GRID) * (TAU / GRID), (n, 1))
-        r = kin.at(grid, points, k)
-        s, v = r[0], r[1]
-        after = np.roll(v, -1, axis=1)
-        up, down = (v < 0) & (after >= 0), (v > 0) & (after <= 0)  # a least s, a greatest
-        ok = (up.sum(axis=1) == 1) & (down.sum(axis=1) == 1)
-        half = 0.5 * TAU / GRID
-        guess = np.stack([grid[0, np.argmax(up, axis=1)], grid[0, np.argmax(down, axis=1)]], 1)
-        dead = kin.newton(guess + half, points, k, 1)
-        sd = kin.at(dead, points, k)[0]
-        travel = (dead[:, 1] - dead[:, 0]) % TAU  # the crank's, while s goes up
-        slow_up = travel >= math.pi
-        start = np.where(slow_up, dead[:, 0], dead[:, 1])
-        working = np.where(slow_up, travel, TAU - travel)
-        s0, s1 = np.where(slow_up, sd[:, 0], sd[:, 1]), np.where(slow_up, sd[:, 1], sd[:, 0])
-        levels = s0[:, None] + np.array([CUT, 1 - CUT]) * (s1 - s0)[:, None]
-        offset = (grid - start[:, None]) % TAU  # each grid angle's place in the working stroke
-        inside = offset < working[:, None]
-        with np.errstate(all="ignore"):
-            run = (s - s0[:, None]) / (s1 - s0)[:, None]  # the travel run at each grid angle
-        first = [
-            np.min(np.where(inside & (run >= f), offset, np.inf), axis=1) for f in (CUT, 1 - CUT)
-        ]
-        ok &= np.isfinite(first[0]) & np.isfinite(first[1])
-        ends = kin.newton(start[:, None] + np.nan_to_num(np.stack(first, 1)), points, k, 0, levels)
-        a, b = ends[:, :1], ends[:, 1:]
-        unwrapped = start[:, None] + offset
-        window = inside & (unwrapped > a) & (unwrapped < b)
+        info = strokes(kin, points, k, (CUT, 1 - CUT))
+        v, unwrapped, window = info["rows"][1], info["unwrapped"], info["window"]
+        a, b, s0, s1 = info["ends"][:, :1], info["ends"][:, 1:], info["s0"], info["s1"]
         speed = np.abs(v)
         idx, real = local_peaks(speed, PEAKS, window)
         peaks = kin.newton(np.take_along_axis(unwrapped, idx, axis=1), points, k, 2)
         real &= (peaks > a) & (peaks < b)
         vp = np.where(real, np.abs(kin.at(peaks, points, k)[1]), 0.0)
-        ve = np.abs(kin.at(ends, points, k)[1])
+        ve = np.abs(kin.at(info["ends"], points, k)[1])
         with np.errstate(all="ignore"):
             value = np.maximum(vp.max(axis=1), ve.max(axis=1)) * (b - a)[:, 0]
-            value /= (1 - 2 * CUT) * (s1 - s0) * np.where(slow_up, 1.0, -1.0)
-        value[~(ok & np.isfinite(value))] = math.inf
-        peaks = np.where(real, peaks, np.nan)
-        info = dict(
-            dead=dead, ends=ends, peaks=peaks, slow_up=slow_up, start=start, working=working
-        )
+            value /= (1 - 2 * CUT) * np.abs(s1 - s0)
+        value[~(info["ok"] & np.isfinite(value))] = math.inf
+        info["peaks"] = np.where(real, peaks, np.nan)
         return value, info
 
     @staticmethod
@@ -286,6 +264,58 @@ class Speed:
         return np.where(proved & at_c & (core[1][:, 0] > core[0][:, 0]), np.maximum(out, 0), 0.0)
 
 
+def strokes(
+    kin: Kinematics, points: np.ndarray, k: np.ndarray, fractions: tuple[float, float]
+) -> dict[str, Any]:
+    """Each point's working stroke, on a grid of ``GRID`` angles polished by Newton: its dead
+    centres (``dead``: the least s, the greatest), where it starts and how long it lasts
+    (``start``, ``working``: crank angles), whether s grows in it (``slow_up``), s at its
+    ends (``s0``, ``s1``) and where the slider has run the ``fractions`` of its travel
+    (``ends``: unwrapped from ``start``); the grid's angles unwrapped from ``start``, the
+    rows there (``rows``), which of them lie between ``ends`` (``window``), and whether the
+    point's motion has one dead centre of each kind and both ends (``ok``)."""
+    n = len(points)
+    grid = np.tile(np.arange(GRID) * (TAU / GRID), (n, 1))
+    r = kin.at(grid, points, k)
+    s, v = r[0], r[1]
+    after = np.roll(v, -1, axis=1)
+    up, down = (v < 0) & (after >= 0), (v > 0) & (after <= 0)  # a least s, a greatest
+    ok = (up.sum(axis=1) == 1) & (down.sum(axis=1) == 1)
+    half = 0.5 * TAU / GRID
+    guess = np.stack([grid[0, np.argmax(up, axis=1)], grid[0, np.argmax(down, axis=1)]], 1)
+    dead = kin.newton(guess + half, points, k, 1)
+    sd = kin.at(dead, points, k)[0]
+    travel = (dead[:, 1] - dead[:, 0]) % TAU  # the crank's, while s goes up
+    slow_up = travel >= math.pi
+    start = np.where(slow_up, dead[:, 0], dead[:, 1])
+    working = np.where(slow_up, travel, TAU - travel)
+    s0, s1 = np.where(slow_up, sd[:, 0], sd[:, 1]), np.where(slow_up, sd[:, 1], sd[:, 0])
+    levels = s0[:, None] + np.array(fractions) * (s1 - s0)[:, None]
+    offset = (grid - start[:, None]) % TAU  # each grid angle's place in the working stroke
+    inside = offset < working[:, None]
+    with np.errstate(all="ignore"):
+        run = (s - s0[:, None]) / (s1 - s0)[:, None]  # the travel run at each grid angle
+    first = [np.min(np.where(inside & (run >= f), offset, np.inf), axis=1) for f in fractions]
+    ok &= np.isfinite(first[0]) & np.isfinite(first[1])
+    ends = kin.newton(start[:, None] + np.nan_to_num(np.stack(first, 1)), points, k, 0, levels)
+    unwrapped = start[:, None] + offset
+    window = inside & (unwrapped > ends[:, :1]) & (unwrapped < ends[:, 1:])
+    return {
+        "dead": dead,
+        "ends": ends,
+        "slow_up": slow_up,
+        "start": start,
+        "working": working,
+        "s0": s0,
+        "s1": s1,
+        "rows": r,
+        "unwrapped": unwrapped,
+        "window": window,
+        "ok": ok,
+        "fractions": fractions,
+    }
+
+
 def prove(kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> tuple[Any, Any, Any, Any]:
     """Intervals about the centre's dead centres and window ends (``info``) that hold each
     box's own for every u in it, and whether each box's are proved: the dead centres' where
@@ -316,15 +346,16 @@ def prove(kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> tuple[
     pick = np.where(slow_up[:, None], [[0, 1]], [[1, 0]])  # the stroke's start, end
     s0 = np.take_along_axis(s_lo, pick, 1)[:, 0], np.take_along_axis(s_hi, pick, 1)[:, 0]
     s1 = np.take_along_axis(s_lo, pick, 1)[:, 1], np.take_along_axis(s_hi, pick, 1)[:, 1]
-    low = [(1 - f) * s0[0] + f * s1[0] for f in (CUT, 1 - CUT)]
-    high = [(1 - f) * s0[1] + f * s1[1] for f in (CUT, 1 - CUT)]
+    fractions = info["fractions"]
+    low = [(1 - f) * s0[0] + f * s1[0] for f in fractions]
+    high = [(1 - f) * s0[1] + f * s1[1] for f in fractions]
     level = np.nextafter(np.stack(low, 1), -np.inf), np.nextafter(np.stack(high, 1), np.inf)
     # the window's ends: dθ/du = −(∂s/∂u − ∂level/∂u)/s′ (∂s0/∂u: ∂s/∂u at its dead centre),
     # and the levels' own width
     ae = kin.at(ends, c, k)
     de = kin.du(ends.reshape(-1, 1), np.repeat(c, 2, axis=0), k).reshape(2 * d, n, 2)[:d]
     d0 = np.take_along_axis(ds, pick[None].repeat(d, 0), 2)
-    dlevel = np.stack([(1 - f) * d0[:, :, 0] + f * d0[:, :, 1] for f in (CUT, 1 - CUT)], 2)
+    dlevel = np.stack([(1 - f) * d0[:, :, 0] + f * d0[:, :, 1] for f in fractions], 2)
     with np.errstate(all="ignore"):
         slope = np.abs(ae[1])
         move = np.sum(np.abs(de - dlevel) * half.T[:, :, None], axis=0) / slope

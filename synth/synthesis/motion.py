@@ -331,7 +331,9 @@ def motion(
                 bounds = bounds if v.exact and not starts else None
                 continue
             targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
-            cert = certify.search(m, v, o.terms, targets, t.deadline)
+            load = extras.get("load")
+            metres = 1.0 if load is None else load.metres * t.stroke  # the space's in strokes
+            cert = certify.search(m, v, o.terms, targets, t.deadline, load, metres)
             if cert is None or not cert.complete:
                 bounds = None
             elif bounds is not None:

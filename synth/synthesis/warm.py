@@ -11,7 +11,8 @@ are never shared between threads):
   solves, the two diagnostics);
 - the motion search's formulation and its compiled constraints (``formulation.formulation``,
   ``screen``): per type, variant and free set;
-- the certified search's enclosures (``certify``): per type with a space and variant.
+- the certified search's enclosures (``certify``): per type with a space and variant, the
+  peak torque's with them.
 
 ``compile_all`` puts every native library in the disk cache (an image's build step, ``make``'s
 install step; ``python -m synth.synthesis.warm``). ``warm`` builds in the calling thread the
@@ -152,7 +153,8 @@ def compile_all(part: int = 0, parts: int = 1) -> int:
         for m in map(get, all_types()):
             for v in variants(m):
                 b = certify.prepared(m, v)
-                if b is not None and None in (*b.kin.libraries(), b.rows.library):
+                torque = b.torque.libraries() if b is not None and m.frame is not None else []
+                if b is not None and None in (*b.kin.libraries(), b.rows.library, *torque):
                     raise RuntimeError(f"{m.type}: the certified search's enclosures not built")
     return n
 

@@ -58,7 +58,7 @@ REQUESTS = [
         "min_transmission_angle_deg": 20.0,
         "objective": "min_peak_torque",
         "load": LOAD,
-        "mechanisms": [{"type": "whitworth", "fixed": {"pivot_distance": 100.0}}],
+        "mechanisms": [{"type": "crank_shaper", "fixed": {"pivot_distance": 100.0}}],
     },
 ]
 

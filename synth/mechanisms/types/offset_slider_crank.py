@@ -134,7 +134,8 @@ def space(p: Problem) -> Space | None:
     """The dead-centre construction as ``reduced`` states it: every design is one q in
     (0, cos β) = (0, c² − s²), up to the offset's sign (a mirror: the same motion), β the
     constant; a fixed part sets q (the box a point), and the offset's sign is the fixed
-    offset's, else the one its bounds allow."""
+    offset's, else the one its bounds allow (the other the mirror's, where they
+    allow both)."""
     if p.beta <= math.pi / 2 * TOL:
         return None
     s, c = p.half
@@ -148,7 +149,9 @@ def space(p: Problem) -> Space | None:
         crank, coupler = ca.sqrt(c * c - q) / (2 * c), ca.sqrt(s * s + q) / (2 * s)
         return {"crank": crank, "coupler": coupler, "offset": k[1] * q / ca.sin(beta)}
 
-    return Space((lo,), (hi,), (p.beta, sign), design)
+    e = p.box("offset")
+    mirror = (p.beta, -sign) if "offset" not in p.fixed and e[0] < 0 < e[1] else None
+    return Space((lo,), (hi,), (p.beta, sign), design, mirror)
 
 
 def _design(p: Problem, q: float, sign: int, s: float, c: float) -> dict[str, float]:

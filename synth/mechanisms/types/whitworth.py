@@ -146,7 +146,7 @@ def space(p: Problem) -> Space | None:
         return {"crank": k[0], "pivot_distance": k[1], "lever": k[2], "connecting_rod": u[0]}
 
     lo, hi = (f["connecting_rod"],) * 2 if "connecting_rod" in f else p.box("connecting_rod")
-    return Space((lo,), (hi,), (crank, crank * ratio, f.get("lever", 0.5)), design)
+    return Space((lo,), (hi,), (crank, crank * ratio, f.get("lever", 0.5)), design, scaled=True)
 
 
 # the crank pin's block slides in the lever's slot, on the line from O4 through B; the lever's
