@@ -5,7 +5,7 @@ order in which an objective ranks the exact solvers' proposals."""
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
 
@@ -13,14 +13,25 @@ from .. import objectives
 from ..analysis.verify import verify, verify_many
 from ..mechanisms import Mechanism
 from ..results import Analysis, Candidate, Family
-from .search import Proposal, Searched, Targets, Variant
+from .search import Proposal, Searched, Targets, Variant, same
+
+ONE = 1e-12  # two designs this close (stroke units, each parameter) are one
 
 
 def candidate(
-    m: Mechanism, p: Proposal, t: Targets, variants: list[Variant], extras: dict[str, Any]
+    m: Mechanism,
+    p: Proposal,
+    t: Targets,
+    variants: list[Variant],
+    extras: dict[str, Any],
+    known: Sequence[Candidate] = (),
 ) -> Candidate | None:
     """The proposal as a candidate if the forward analysis finds that it meets the targets;
-    ``extras`` (include, tolerance) are added to its analysis."""
+    ``extras`` (include, tolerance) are added to its analysis. A candidate of ``known`` that
+    is its design (within ``ONE`` × stroke) stands for it, not verified again."""
+    for c in known:
+        if same(p.params, c.params, t.stroke, ONE):
+            return c
     checked = verify(m.type, p.params, t.time_ratio, t.stroke, t.bound_deg, **extras)
     return None if checked is None else made(m, p, checked, t, variants)
 

@@ -7,17 +7,17 @@ terms). At each level, over the boxes alive:
   forms' domain) and the request's box on each parameter, enclosed over each box
   (``numerics.interval``'s centred form, compiled): a box that surely breaks one goes;
 - **bound**: the measure's lower bound over each box, from its centre's measurement;
-- **incumbent**: the measure in full at the centres of the ``PROBES`` boxes of least bound
-  and of the least measured, where they meet every constraint (and first at the box's
-  corners: an optimum at a bound); the least so far;
+- **incumbent**: the least measured centre that meets every constraint (and first the
+  least corner of the box: an optimum at a bound), if it is the least so far;
 - a box whose bound is within ``CLOSE`` of the incumbent goes (its bound kept); the others
   are cut into ``SPLIT`` parts across their widest side.
 
 The search is done when no box is left: then every design of the variant measures at least
 the least bound kept, and a bounded Brent search over where a better one may lie polishes the
-incumbent (one free number). After ``LEVELS`` levels, or with more than ``LIVE`` boxes alive,
-it stops with the bound it reached. Its work is the same on any machine: the deadline only
-stops it (the answer then says so, uncertified).
+incumbent (one free number) unless it is within ``POLISHED`` of that bound already. After
+``LEVELS`` levels, or with more than ``LIVE`` boxes alive, it stops with the bound it reached.
+Its work is the same on any machine: the deadline only stops it (the answer then says so,
+uncertified).
 """
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ TOL = 1e-9  # the relative gap certified
 # and the enclosures' rounding, ~1e-11 of the value, keeps ever more boxes about it alive)
 CLOSE = 1e-10
 EPS = float(np.finfo(float).eps)
-PROBES = 2  # the least-bound boxes whose centres are measured in full at each level
+POLISHED = 1e-12  # relative: an incumbent this close to the bound is not polished
 SPLIT = 8  # the parts a box is cut into (fewer levels: each costs a few calls)
 LEVELS = 30  # levels at most (1-D: 8^-30 of the box)
 LIVE = 4096  # boxes alive at most
@@ -202,21 +202,18 @@ def _search(
     least, levels, boxes, stopped = math.inf, 0, 0, False
     near = lo[0], hi[0]
 
-    def probe(points: np.ndarray, value: np.ndarray, order: np.ndarray) -> None:
-        """The best of the points whose approximate ``value`` is least, and those first in
-        ``order``, measured in full: the incumbent if it is a design and the best so far."""
+    def probe(points: np.ndarray, value: np.ndarray) -> None:
+        """The incumbent: the point of least measured ``value`` that is a design, if it is the
+        best so far."""
         nonlocal top, best
         g = b.at(points, k, pv).T
-        ok = np.all((g >= lb) & (g <= ub), axis=1)  # designs
-        picked = [*order[ok[order]][:PROBES], int(np.argmin(np.where(ok, value, math.inf)))]
-        for j in dict.fromkeys(picked):
-            if ok[j] and value[j] < top:
-                full = measure(b.kin, points[j : j + 1], k)[0][0]
-                if full < top:
-                    top, best = full, points[j]
+        value = np.where(np.all((g >= lb) & (g <= ub), axis=1), value, math.inf)  # designs
+        j = int(np.argmin(value))
+        if value[j] < top:
+            top, best = value[j], points[j]
 
     corners = np.array(list(itertools.product(*zip(sp.lo, sp.hi, strict=True))))
-    probe(corners, measure(b.kin, corners, k)[0], np.arange(len(corners)))  # one at a bound
+    probe(corners, measure(b.kin, corners, k)[0])  # an optimum at a bound
     while len(lo) and levels < LEVELS and len(lo) <= LIVE:
         if time.monotonic() >= deadline:
             stopped = True
@@ -230,7 +227,7 @@ def _search(
         centres = 0.5 * (lo + hi)
         value, info = measure(b.kin, centres, k)
         lower = lower_bound(b.kin, lo, hi, info, k)
-        probe(centres, value, np.argsort(lower, kind="stable"))
+        probe(centres, value)
         keep = lower < top * (1 - CLOSE)
         least = min([least, *lower[~keep]])
         point = np.all(lo == hi, axis=1)  # a box that is a point: its bound is all there is
@@ -241,7 +238,7 @@ def _search(
         lo, hi = _split(lo[keep], hi[keep], width)
     if best is None:
         return Certificate({}, math.inf, least, not stopped, levels, boxes)
-    if len(sp.lo) == 1 and not stopped:
+    if len(sp.lo) == 1 and not stopped and top - least > POLISHED * top:
         top, best = _polish(b, measure, k, pv, (lb, ub), near, top, best)
     if len(lo):  # stopped with boxes alive: their bounds count
         info = measure(b.kin, 0.5 * (lo + hi), k)[1]

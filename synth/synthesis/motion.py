@@ -1,10 +1,7 @@
-"""How the slider moves, as an objective or a limit: ``uniform_cutting_speed`` (the least speed
-fluctuation over the middle 80% of the working stroke, where a tool cuts),
-``min_peak_acceleration`` (the least peak |acceleration| over both strokes, in ω²·stroke) and
-``max_working_speed_fluctuation`` (a limit on that fluctuation, with those objectives); and
-what it asks of the drive: ``min_peak_torque`` (the least peak crank torque under the
-request's load) and ``max_peak_torque`` (a limit on it). What each search bounds is its
-``aims.Aim``.
+"""The searched objectives (``synth.objectives``): how the slider moves
+(``uniform_cutting_speed``, ``min_peak_acceleration``, with a limit on the fluctuation) and
+what it asks of the drive (``min_peak_torque``, with a limit on it under the request's load).
+What each search bounds is its ``aims.Aim``.
 
 No closed form gives these measures: they are extremes over the crank's turn, found by root
 finding (``synth.analysis.quality``, ``synth.analysis.loads``). Where a variant's designs are
@@ -49,7 +46,17 @@ from . import aims, certify, screen
 from .candidate import candidate
 from .diagnose import diagnose
 from .formulation import TIE, formulation, kept_by
-from .search import Searched, Spec, Targets, Variant, proposal, same, scaled, search, whole
+from .search import (
+    Searched,
+    Spec,
+    Targets,
+    Variant,
+    proposal,
+    same,
+    scaled,
+    search,
+    whole,
+)
 from .solve import starts as halton
 
 
@@ -342,8 +349,8 @@ def motion(
                 q = proposal(
                     m, i, whole(spec, scaled(cert.design, t.stroke), v.parts), certify.METHOD, t
                 )
-                c = None if q is None else candidate(m, q, t, s.variants, extras)
-                mine += [c] if c is not None else []
+                c = None if q is None else candidate(m, q, t, s.variants, extras, mine)
+                mine += [c] if c is not None and c not in mine else []
                 if c is not None and o.allows(c, limit):
                     continue
             aim, capped = aims.aim(m, v.parts, o, t, extras, limit, mine)

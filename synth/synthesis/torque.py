@@ -94,17 +94,18 @@ class Model:
         k: np.ndarray,
         w: np.ndarray,
         f: np.ndarray,
-    ) -> np.ndarray:
+    ) -> tuple[np.ndarray, np.ndarray]:
         """inf T over each box [lo, hi] (rows) at its angle ``theta`` with its force ``f``
         (one each), −∞ where unbounded: where T is proved monotonic in a free number over the
-        box, over the face where it is least (exactly: T's change there costs nothing)."""
+        box, over the face where it is least (exactly: T's change there costs nothing); and
+        that face's point where T is monotonic in every one (NaN elsewhere)."""
         at = theta[:, None], f[:, None]
         d = self.slope([at[0], lo, k, w, at[1]], [at[0], hi, k, w, at[1]])
         rising, falling = d.lo[0] >= 0, d.hi[0] <= 0
         lo, hi = np.where(falling, hi, lo), np.where(rising, lo, hi)
         e = self.enclosure([at[0], lo, k, w, at[1]], [at[0], hi, k, w, at[1]])
-        out: np.ndarray = np.nan_to_num(e.lo[0][:, 0], nan=-math.inf)
-        return out
+        face = np.where(np.all(rising | falling, axis=1)[:, None], lo, math.nan)
+        return np.nan_to_num(e.lo[0][:, 0], nan=-math.inf), face
 
     def at(
         self,
@@ -164,10 +165,24 @@ class Torque:
         return value, info
 
     def lower(self, kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> np.ndarray:
-        """maxⱼ inf_U T(θⱼ, ·) of each box, at the ``BOUNDED`` of its centre's peaks and cut's
-        ends where the centre's torque is largest, an end's angle moved to the side of its
-        proved interval that it stands for (the module's docstring); −∞ where nothing is
-        bounded."""
+        """maxⱼ inf_U T(θⱼ, ·) of each box (``bound``); where T at the first angle is monotonic
+        in every free number, again at the angles of the point where it is least (measured
+        there: as tight as the box's best corner)."""
+        out, face = self.bound(kin, lo, hi, info, k)
+        at = np.flatnonzero(np.isfinite(face[:, 0]))
+        if at.size:
+            _, near = self.measure(kin, face[at], k)
+            out[at] = np.maximum(out[at], self.bound(kin, lo[at], hi[at], near, k)[0])
+        return out
+
+    def bound(
+        self, kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """maxⱼ inf_U T(θⱼ, ·) of each box, at the ``BOUNDED`` of the peaks and cut's ends of
+        the point ``info`` measured where its torque is largest, an end's angle moved to the
+        side of its proved interval that it stands for (the module's docstring), −∞ where
+        nothing is bounded; and the point where T at the first angle is least, where it is
+        proved monotonic in every free number (``Model.least``; NaN elsewhere)."""
         proved, _, (ends_lo, ends_hi), _ = prove(kin, lo, hi, info, k)
         (a_lo, b_lo), (a_hi, b_hi) = ends_lo.T[:, :, None], ends_hi.T[:, :, None]
         sides = [np.nextafter(a_lo, -math.inf), a_hi, b_lo, np.nextafter(b_hi, math.inf)]
@@ -180,8 +195,12 @@ class Torque:
             clear = proved[:, None] & ((angles - a_lo) % TAU > b_hi - a_lo)
         force = self._cut(info)[:, None] * np.ones_like(angles)
         bound = np.full((n, per), math.inf)
+        face = np.full(lo.shape, math.nan)
         for rows, f in ((~clear, force), (~cut, 0 * force)):  # T with the cut's force, without
             box, j = np.nonzero(rows)
-            least = self.model.least(angles[box, j], lo[box], hi[box], k, self.w, f[box, j])
+            least, point = self.model.least(angles[box, j], lo[box], hi[box], k, self.w, f[box, j])
             bound[box, j] = np.minimum(bound[box, j], least)
-        return bound.max(axis=1)  # type: ignore[no-any-return]
+            first = j == 0
+            face[box[first]] = point[first]
+        face[~(cut[:, 0] | clear[:, 0])] = math.nan  # both forces: two faces
+        return bound.max(axis=1), face
