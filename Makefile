@@ -62,13 +62,13 @@ test: $(VENV)/.dev $(VENV)/.compiled
 # the numerical-stability suite at full length (≥ 10 000 hypothesis cases per type and property)
 # and the full global-search cross-check of the synthesis optima (≥ 20 targets per type), and
 # the envelope against dense pin paths on more designs, the motion objectives' referee for the
-# crank-rocker, the certified motion optima against brute-force draws (20 targets per type and
-# objective), and 5 000 loaded analyses and 500 loaded syntheses at the limits, and 1 000
+# crank-rocker, the certified motion optima and least peak torques against brute-force draws
+# (20 targets per type and objective, each load), and 5 000 loaded analyses and 500 loaded syntheses at the limits, and 1 000
 # budgeted syntheses on the server, each within its budget (200 in `make test`)
 stress: $(VENV)/.dev $(VENV)/.compiled
 	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q tests/referees/test_stress.py tests/referees/test_global_search.py \
 		tests/referees/test_quality.py tests/referees/test_motion_search.py tests/referees/test_loaded_limits.py \
-		tests/referees/test_certified.py
+		tests/referees/test_certified.py tests/referees/test_certified_torque.py
 	SYNTH_BUDGET_REQUESTS=1000 $(BIN)/python -m pytest -q tests/service/test_budgets.py
 
 # the design atlas the service ships (GET /v1/atlas) and the README's charts: docs/atlas/,
