@@ -28,7 +28,7 @@ import pytest
 import synth
 from benchmarks.startup import FIRST, FIRST_SEARCHED, SEARCHED, SLACK_MS, TYPES
 from synth.analysis import model
-from synth.synthesis import formulation, motion, screen, solve, warm
+from synth.synthesis import certify, formulation, measures, motion, screen, solve, torque, warm
 
 from ..support.server import ROOT, call, serving
 
@@ -84,8 +84,8 @@ def test_a_fresh_servers_first_searched_request_answers_within_its_budget(object
 def test_after_the_warm_up_a_searched_request_with_nothing_fixed_builds_nothing(monkeypatch):
     """In a thread of its own (its structures its own), after ``warm.warm``: a request of each
     type and searched objective, nothing fixed, builds no compiled function (the analysis's,
-    the motion search's constraints), no formulation and no solver; each type reaches the
-    motion search."""
+    the motion search's constraints, the certified search's), no formulation and no solver;
+    each type reaches the motion search (the certified one, or the NLP)."""
     built: list[str] = []
     searched: set[str] = set()
 
@@ -103,11 +103,14 @@ def test_after_the_warm_up_a_searched_request_with_nothing_fixed_builds_nothing(
         for module, name in [
             (model, "Mapped"),
             (screen, "Mapped"),
+            (measures, "Mapped"),
+            (torque, "Mapped"),
             (formulation, "formulate"),
             (solve, "formulate"),
         ]:
             watched(module, name, lambda *_, at=f"{module.__name__}.{name}": built.append(at))
         watched(motion, "formulation", lambda m, *_: searched.add(m.type))
+        watched(certify, "search", lambda m, *_: searched.add(m.type))
         for objective, targets in SEARCHED.items():
             load = targets.get("load")
             for mtype in TYPES:
