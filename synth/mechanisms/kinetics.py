@@ -16,6 +16,9 @@ Gravity (``gx``, ``gy``) pulls each member at its middle and the ram. Only the r
 rubs: its friction, −μ |N| sign(v) along the path, is ``friction`` × N where the signs of N
 and v hold (``friction`` = −μ sign(v) sign(N): the caller splits the turn where they
 change); pins and slots are frictionless.
+
+Where the guide does not rub, the crank's torque alone follows from the motion by the balance
+of power (``torque``), with the same mass model (``_members``).
 """
 
 from __future__ import annotations

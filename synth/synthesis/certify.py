@@ -91,7 +91,9 @@ def mark(c: Candidate, bound: float) -> Candidate:
 class Built:
     """What a search over one variant's space needs, built once per thread and structure: its
     kinematics (``measures.Kinematics``), the constraint rows with the free parameters
-    enclosed (``rows``) and at many points (``at``), and the design's parameters at a point."""
+    enclosed (``rows``) and at many points (``at``), the design's parameters at a point, and
+    its crank torque (``torque``, built on first use; any space of the structure: the
+    constants are inputs)."""
 
     def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space):
         # every relevant parameter free: a request's fixed parts are the space's business

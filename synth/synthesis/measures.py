@@ -317,12 +317,13 @@ def strokes(
 
 
 def prove(kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> tuple[Any, Any, Any, Any]:
-    """Intervals about the centre's dead centres and window ends (``info``) that hold each
+    """Intervals about the centre's dead centres and window ends (``info``, from ``strokes``:
+    the window's ends where the working stroke has run its ``fractions``) that hold each
     box's own for every u in it, and whether each box's are proved: the dead centres' where
     s′ has opposite signs at their ends (its half-width ``SLACK`` times the first-order
     estimate |dθ/du|·half-width, plus ``DEAD`` and the box's half-widths), the window ends'
-    where s − level does,
-    the levels enclosed from s over the dead centres' intervals (at least ``CROSSING``).
+    where s − level does, the levels enclosed from s over the dead centres' intervals (at
+    least ``CROSSING``).
     Returns (proved, (dead lower, dead upper), (ends lower, ends upper)), (n, 2) each, and
     the stroke's greatest (n)."""
     n, d = lo.shape
