@@ -295,9 +295,14 @@ def strokes(
     inside = offset < working[:, None]
     with np.errstate(all="ignore"):
         run = (s - s0[:, None]) / (s1 - s0)[:, None]  # the travel run at each grid angle
-    first = [np.min(np.where(inside & (run >= f), offset, np.inf), axis=1) for f in fractions]
+    first = [
+        f * working if f in (0.0, 1.0) else np.min(np.where(inside & (run >= f), offset, np.inf), 1)
+        for f in fractions
+    ]  # a fraction 0 or 1: the dead centre
     ok &= np.isfinite(first[0]) & np.isfinite(first[1])
     ends = kin.newton(start[:, None] + np.nan_to_num(np.stack(first, 1)), points, k, 0, levels)
+    edge = np.array([f in (0.0, 1.0) for f in fractions])
+    ends = np.where(edge, start[:, None] + np.stack(first, 1), ends)
     unwrapped = start[:, None] + offset
     window = inside & (unwrapped > ends[:, :1]) & (unwrapped < ends[:, 1:])
     return {
@@ -348,8 +353,9 @@ def prove(kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> tuple[
     s0 = np.take_along_axis(s_lo, pick, 1)[:, 0], np.take_along_axis(s_hi, pick, 1)[:, 0]
     s1 = np.take_along_axis(s_lo, pick, 1)[:, 1], np.take_along_axis(s_hi, pick, 1)[:, 1]
     fractions = info["fractions"]
-    low = [(1 - f) * s0[0] + f * s1[0] for f in fractions]
-    high = [(1 - f) * s0[1] + f * s1[1] for f in fractions]
+    with np.errstate(invalid="ignore"):  # 0 × an unbounded end's ∞, at a fraction 0 or 1
+        low = [(1 - f) * s0[0] + f * s1[0] for f in fractions]
+        high = [(1 - f) * s0[1] + f * s1[1] for f in fractions]
     level = np.nextafter(np.stack(low, 1), -np.inf), np.nextafter(np.stack(high, 1), np.inf)
     # the window's ends: dθ/du = −(∂s/∂u − ∂level/∂u)/s′ (∂s0/∂u: ∂s/∂u at its dead centre),
     # and the levels' own width
@@ -361,16 +367,19 @@ def prove(kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> tuple[
         slope = np.abs(ae[1])
         move = np.sum(np.abs(de - dlevel) * half.T[:, :, None], axis=0) / slope
         reach = SLACK * (move + (level[1] - level[0]) / slope) + CROSSING
+    # an end at a fraction 0 or 1 is that dead centre: its interval is the dead centre's
+    edge = np.array([f in (0.0, 1.0) for f in fractions])
+    start_wide = np.where(slow_up, wide[:, 0], wide[:, 1])
+    end_wide = np.where(slow_up, wide[:, 1], wide[:, 0])
+    reach = np.where(edge, np.stack([end_wide if f else start_wide for f in fractions], 1), reach)
     p_before = enclose(kin.position, (ends - reach,) * 2, lo, hi, k)
     p_after = enclose(kin.position, (ends + reach,) * 2, lo, hi, k)
     below = np.where(sign > 0, p_before[1] < level[0], p_before[0] > level[1])
     above = np.where(sign > 0, p_after[0] > level[1], p_after[1] < level[0])
-    proved &= np.all(below & above, axis=1)
-    # both inside the working stroke, clear of its dead centres' intervals
-    start_wide = np.where(slow_up, wide[:, 0], wide[:, 1])
-    end_wide = np.where(slow_up, wide[:, 1], wide[:, 0])
+    proved &= np.all(below & above | edge, axis=1)
+    # both inside the working stroke, clear of its dead centres' intervals (but an edge's own)
     first, last = ends[:, 0] - reach[:, 0], ends[:, 1] + reach[:, 1]
-    proved &= (info["start"] + start_wide < first) & (first < last)
-    proved &= last < info["start"] + info["working"] - end_wide
+    proved &= edge[0] | (info["start"] + start_wide < first)
+    proved &= (first < last) & (edge[1] | (last < info["start"] + info["working"] - end_wide))
     stroke = np.nextafter(s_hi[:, 1] - s_lo[:, 0], np.inf)
     return proved, (dead - wide, dead + wide), (ends - reach, ends + reach), stroke

@@ -21,9 +21,10 @@ on the face where it is least, else by the centred form over the box. The space'
 all meet the time ratio, so the working stroke runs the same way for all of them, and so
 does the cut's force.
 
-This holds where the force is the whole of the load's step: a cutting force over a zone
-inside the working stroke (0 < start, end < 1), no force profile, and no guide friction
-(whose work needs the guide's force, ``supports``).
+A zone that starts or ends at a dead centre (a fraction 0 or 1) ends there: its interval is
+the dead centre's, and T does not step there (s′ = 0). This holds where the force is the
+whole of the load's step: a cutting force over its zone, no force profile, and no guide
+friction (whose work needs the guide's force, ``supports``).
 """
 
 from __future__ import annotations
@@ -49,14 +50,8 @@ def supports(load: Load, sp: Space) -> bool:
     """Whether the bound holds for this load on this space (the module's docstring): on a
     space whose crank's scale is pinned (``Space.scaled``), unless the crank's weight
     counts (a crank turning evenly about its pivot takes no torque but its weight's)."""
-    a, b = load.cutting_zone
     weighs = load.link_mass_per_length > 0 and load.gravity_deg is not None
-    return (
-        load.force_profile is None
-        and load.guide_friction == 0
-        and 0 < a < b < 1
-        and not (sp.scaled and weighs)
-    )
+    return load.force_profile is None and load.guide_friction == 0 and not (sp.scaled and weighs)
 
 
 class Model:
