@@ -44,6 +44,15 @@ class MinMax(Mapping[str, E]):
 
 
 @dataclass(frozen=True)
+class DeadCentres(MinMax[Extreme]):
+    """The slider's least and greatest positions, each with its crank angle (its fields typed
+    for a schema: a generic's are not)."""
+
+    min: Extreme
+    max: Extreme
+
+
+@dataclass(frozen=True)
 class Stroke:
     crank_angle_deg: float  # crank travel during the stroke
     direction: int  # sign of the slider's travel along its path
@@ -248,7 +257,7 @@ class Analysis:
     params: dict[str, float]
     time_ratio: float
     stroke: float
-    extremes: MinMax[Extreme]  # the dead centres
+    extremes: DeadCentres
     working_stroke: Stroke
     return_stroke: Stroke
     transmission: Transmission
@@ -379,6 +388,15 @@ class Extremum:
 
 
 @dataclass(frozen=True)
+class TimeRatioRange(MinMax[Extremum]):
+    """A sweep's least and greatest time ratio over its valid part, each with the varied
+    parameter's value there (its fields typed for a schema: a generic's are not)."""
+
+    min: Extremum
+    max: Extremum
+
+
+@dataclass(frozen=True)
 class SweepResult:
     """One parameter varied, the rest held (POST /v1/sweep). None where the design is invalid."""
 
@@ -390,7 +408,7 @@ class SweepResult:
     min_transmission_angle_deg: list[float | None]
     valid: list[bool]
     valid_interval: list[tuple[float, float]]  # exact, within [start, stop]
-    time_ratio_range: MinMax[Extremum] | None  # over the valid part
+    time_ratio_range: TimeRatioRange | None  # over the valid part
     # False: the budget ended the sweep before stop (values, and all above, end where it did)
     complete: bool = True
 

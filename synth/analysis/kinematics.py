@@ -25,9 +25,9 @@ from ..results import (
     Analysis,
     Conditioning,
     Curves,
+    DeadCentres,
     Extreme,
     Joint,
-    MinMax,
     PinPath,
     Stroke,
     Tolerance,
@@ -330,7 +330,7 @@ def _summary(
         "params": p,
         "time_ratio": max(up, down) / min(up, down),
         "stroke": s_max - s_min,
-        "extremes": MinMax(
+        "extremes": DeadCentres(
             Extreme(s_min, math.degrees(t_min)),
             Extreme(s_max, math.degrees(t_max)),
         ),

@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import InvalidParameters, SynthError
 from ..mechanisms import get
 from ..numerics.dense import bisect
-from ..results import Analysis, Extremum, MinMax, SweepResult
+from ..results import Analysis, Extremum, SweepResult, TimeRatioRange
 from .kinematics import analyze, analyze_many
 
 
@@ -145,7 +145,7 @@ def _tr_range(
     values: np.ndarray,
     runs: Sequence[Analysis | None],
     intervals: list[tuple[float, float]],
-) -> MinMax[Extremum] | None:
+) -> TimeRatioRange | None:
     if not intervals:
         return None
     found: list[tuple[float, float]] = []
@@ -171,4 +171,4 @@ def _tr_range(
                 )
                 if math.isfinite(r.fun):
                     found.append((sign * float(r.fun), float(r.x)))
-    return MinMax(Extremum(*min(found)), Extremum(*max(found)))
+    return TimeRatioRange(Extremum(*min(found)), Extremum(*max(found)))

@@ -183,6 +183,30 @@ def test_analyze_has_no_pins_unless_asked(client):
     assert list(asked.json()["curves"]["pins"]) == ["O2", "B", "yoke"]  # the same, asked
 
 
+TYPED = ("type", "$ref", "anyOf", "allOf", "oneOf", "items", "const", "enum")
+
+
+def test_every_field_a_client_reads_is_typed_in_the_openapi(client):
+    """A client generated from /openapi.json types each field by its schema: none is left
+    untyped (a generic's fields were, and a generator dropped the sweep's reply for it), but
+    a refusal's echo of the input, which is any JSON."""
+    schemas = client.get("/openapi.json").json()["components"]["schemas"]
+    untyped = [
+        (name, field)
+        for name, schema in schemas.items()
+        for field, prop in schema.get("properties", {}).items()
+        if not any(k in prop for k in TYPED)
+    ]
+    assert untyped == [("ValidationError", "input")]
+    sweep = schemas["SweepResult"]["properties"]["time_ratio_range"]["anyOf"]
+    assert {"$ref": "#/components/schemas/TimeRatioRange"} in sweep
+    assert schemas["TimeRatioRange"]["properties"]["min"] == {
+        "$ref": "#/components/schemas/Extremum"
+    }
+    extremes = schemas["AnalyzeResponse"]["properties"]["extremes"]
+    assert extremes == {"$ref": "#/components/schemas/DeadCentres"}
+
+
 def test_the_openapi_shows_the_pins_and_forces_for_an_analysis_only(client):
     schemas = client.get("/openapi.json").json()["components"]["schemas"]
     include = schemas["AnalyzeRequest"]["properties"]["include"]
