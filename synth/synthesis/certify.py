@@ -15,9 +15,10 @@ terms). At each level, over the boxes alive:
 The search is done when no box is left: then every design of the variant measures at least
 the least bound kept, and a bounded Brent search over where a better one may lie polishes the
 incumbent (one free number) unless it is within ``POLISHED`` of that bound already. After
-``LEVELS`` levels, or with more than ``LIVE`` boxes alive, it stops with the bound it reached.
-Its work is the same on any machine: the deadline only stops it (the answer then says so,
-uncertified).
+``LEVELS`` levels, or with more than ``LIVE`` boxes alive, it stops with the bound it reached
+(a box not bounded yet: its parent's). Its work is the same on any machine: the deadline only
+stops it, looked at before each ``CHUNK`` of boxes is measured and bounded (the answer then
+says so, uncertified).
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ POLISHED = 1e-12  # relative: an incumbent this close to the bound is not polish
 SPLIT = 8  # the parts a box is cut into (fewer levels: each costs a few calls)
 LEVELS = 30  # levels at most (1-D: 8^-30 of the box)
 LIVE = 4096  # boxes alive at most
+CHUNK = 256  # the boxes measured and bounded between two looks at the deadline
 _local = threading.local()
 
 
@@ -216,6 +218,7 @@ def _search(
 
     corners = np.array(list(itertools.product(*zip(sp.lo, sp.hi, strict=True))))
     probe(corners, measure(b.kin, corners, k)[0])  # an optimum at a bound
+    parent = np.array([-math.inf])  # each box's parent's bound, which holds for it too
     while len(lo) and levels < LEVELS and len(lo) <= LIVE:
         if time.monotonic() >= deadline:
             stopped = True
@@ -223,13 +226,23 @@ def _search(
         levels, boxes = levels + 1, boxes + len(lo)
         e = b.rows([lo, k, pv], [hi, k, pv])
         possible = ~np.any((e.hi[0] < lb) | (e.lo[0] > ub), axis=1)
-        lo, hi = lo[possible], hi[possible]
+        lo, hi, parent = lo[possible], hi[possible], parent[possible]
         if not len(lo):
             break
         centres = 0.5 * (lo + hi)
-        value, info = measure(b.kin, centres, k)
-        lower = lower_bound(b.kin, lo, hi, info, k)
+        value, lower = np.full(len(lo), math.inf), parent.copy()
+        for c in range(0, len(lo), CHUNK):  # the deadline looked at between chunks
+            if c and time.monotonic() >= deadline:
+                stopped = True
+                break
+            at = slice(c, c + CHUNK)
+            value[at], info = measure(b.kin, centres[at], k)
+            lower[at] = lower_bound(b.kin, lo[at], hi[at], info, k)
         probe(centres, value)
+        if stopped:  # mid-level: each box's bound so far counts
+            least = min([least, *lower])
+            lo = lo[:0]
+            break
         keep = lower < top * (1 - CLOSE)
         least = min([least, *lower[~keep]])
         point = np.all(lo == hi, axis=1)  # a box that is a point: its bound is all there is
@@ -238,13 +251,13 @@ def _search(
         if (lower <= top).any():  # where a design as good as the incumbent may be
             near = lo[lower <= top].min(axis=0), hi[lower <= top].max(axis=0)
         lo, hi = _split(lo[keep], hi[keep], width)
+        parent = np.tile(lower[keep], SPLIT)  # part j of box i: row j n + i (``_split``)
     if best is None:
         return Certificate({}, math.inf, least, not stopped, levels, boxes)
     if len(sp.lo) == 1 and not stopped and top - least > POLISHED * top:
         top, best = _polish(b, measure, k, pv, (lb, ub), near, top, best)
-    if len(lo):  # stopped with boxes alive: their bounds count
-        info = measure(b.kin, 0.5 * (lo + hi), k)[1]
-        least = min([least, *lower_bound(b.kin, lo, hi, info, k)])
+    if len(lo):  # stopped with boxes alive: their parents' bounds count (no work past it)
+        least = min([least, *parent])
     design = dict(zip(b.names, np.asarray(b.design(best, k)).ravel().tolist(), strict=True))
     return Certificate(design, top, min(least, top), not stopped, levels, boxes)
 

@@ -14,6 +14,7 @@ judge). The certified design itself is measured by brute force too.
 from __future__ import annotations
 
 import os
+import time
 
 import pytest
 
@@ -90,6 +91,48 @@ def test_a_search_stopped_short_is_not_certified(monkeypatch):
     assert best.candidates[0].certified
     # the short search's bound holds still
     assert best.candidates[0].objective_value >= c.objective_value * (1 - c.gap) * (1 - 1e-12)
+
+
+def test_a_deadline_inside_a_level_stops_the_search_there(monkeypatch):
+    """The clock passes the deadline after the certified search's fifth look, one box a
+    chunk: the search stops inside its second level, measures nothing more, and says so (the
+    answer is not certified); the bound it gives (the boxes bounded so far, the others their
+    parents') holds."""
+    looks, real = [], time.monotonic
+
+    class Clock:
+        @staticmethod
+        def monotonic():
+            looks.append(1)
+            return real() + (1e9 if len(looks) > 5 else 0.0)
+
+    measured = []
+    acceleration = certify.MEASURES["acceleration"]
+
+    class Counted(acceleration):
+        @staticmethod
+        def measure(kin, points, k):
+            measured.append(len(looks))
+            return acceleration.measure(kin, points, k)
+
+    found, search = [], certify.search
+
+    def recorded(*args, **kwargs):
+        found.append(search(*args, **kwargs))
+        return found[-1]
+
+    monkeypatch.setattr(certify, "time", Clock)
+    monkeypatch.setattr(certify, "CHUNK", 1)
+    monkeypatch.setattr(certify, "MEASURES", {**certify.MEASURES, "acceleration": Counted})
+    monkeypatch.setattr(certify, "search", recorded)
+    r = synth.synthesize(1.6, 300.0, 20.0, [{"type": "offset_slider_crank"}], objective=PEAK)
+    (cert,) = found
+    assert not cert.complete and cert.levels == 2 and not r.candidates[0].certified
+    assert max(measured) <= 5  # nothing measured after the clock passed the deadline
+    monkeypatch.undo()
+    best = synth.synthesize(1.6, 300.0, 20.0, [{"type": "offset_slider_crank"}], objective=PEAK)
+    assert best.candidates[0].certified
+    assert best.candidates[0].objective_value >= cert.bound * (1 - 1e-12)
 
 
 @pytest.mark.parametrize(
