@@ -55,9 +55,10 @@ def supports(load: Load, sp: Space) -> bool:
 
 
 class Model:
-    """A variant's space with its crank torque in closed form: T, T′ and T″ at many (angle,
-    point, force) triples (``rows``), and T enclosed over boxes of (θ, u) (``enclosure``),
-    for the load's numbers (``kinetics.LOAD``) and a force on the ram (N, along s)."""
+    """A variant's space with its crank torque in closed form: T, and T, T′ and T″, at many
+    (angle, point, force) triples (``value``, ``rows``), and T enclosed over boxes of (θ, u)
+    (``enclosure``) with its u-derivatives (``slope``), for the load's numbers
+    (``kinetics.LOAD``) and a force on the ram (N, along s)."""
 
     def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space, name: str) -> None:
         th, force = ca.SX.sym("theta"), ca.SX.sym("force")
