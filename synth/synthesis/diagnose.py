@@ -234,3 +234,16 @@ def _with(spec: Spec) -> str:
     if not spec.fixed:
         return ""
     return " with " + ", ".join(f"{k} {v:g}" for k, v in spec.fixed.items()) + " fixed"
+
+
+def unloaded(mtype: str, refusal: str | None) -> Infeasible:
+    """Why a type's designs came back without their loads: the load's refusal of the first
+    design analysed (each one was refused), else the budget."""
+    if refusal is not None:
+        why = f"no {mtype} design found carries this load: the first is refused ({refusal})"
+        return Infeasible(mtype, "LOAD_NOT_CARRIED", why)
+    why = (
+        f"the time budget ran out before the loads of the {mtype} designs found were "
+        "analysed; ask again with a larger time_budget_ms"
+    )
+    return Infeasible(mtype, "BUDGET_EXHAUSTED", why)

@@ -25,7 +25,7 @@ from ..objectives import FLUCTUATION, REGISTRY, TORQUE
 from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
 from ..targets import PARETO
 from .candidate import candidate, predicted_rank
-from .diagnose import diagnose
+from .diagnose import diagnose, unloaded
 from .front import pareto
 from .motion import motion
 from .search import DEFAULT, Searched, Solver, Spec, Targets, search
@@ -187,20 +187,7 @@ def _loaded(
                 continue
         out.append(c)
     lost = dict.fromkeys(c.type for c in cands if not any(o.type == c.type for o in out))
-    return out, infeasible + [_unloaded(t, refused.get(t)) for t in lost]
-
-
-def _unloaded(mtype: str, refusal: str | None) -> Infeasible:
-    """Why a type's designs came back without their loads: the load's refusal of the first
-    design analysed (each one was refused), else the budget."""
-    if refusal is not None:
-        why = f"no {mtype} design found carries this load: the first is refused ({refusal})"
-        return Infeasible(mtype, "LOAD_NOT_CARRIED", why)
-    why = (
-        f"the time budget ran out before the loads of the {mtype} designs found were "
-        "analysed; ask again with a larger time_budget_ms"
-    )
-    return Infeasible(mtype, "BUDGET_EXHAUSTED", why)
+    return out, infeasible + [unloaded(t, refused.get(t)) for t in lost]
 
 
 def _catalogue() -> str:

@@ -38,13 +38,14 @@ from typing import Any
 import numpy as np
 
 from .. import objectives
-from ..errors import SynthError
+from ..analysis.kinematics import analyze
+from ..errors import InvalidDesign, SynthError
 from ..mechanisms import Mechanism, get
 from ..results import Candidate, Infeasible
 from ..targets import MAX_TRANSMISSION, MIN_SIZE
 from . import aims, certify, screen
 from .candidate import candidate
-from .diagnose import diagnose
+from .diagnose import diagnose, unloaded
 from .formulation import TIE, formulation, kept_by
 from .search import (
     Searched,
@@ -367,12 +368,24 @@ def motion(
             mine = [certify.mark(c, min(bounds)) for c in mine]
         kept = [c for c in mine if o.allows(c, limit)]
         if not kept and not mine:
-            infeasible.append(diagnose(m, spec, best_t, s))
+            best = pool[0].params if pool else None
+            infeasible.append(_locked(m, best, extras.get("load")) or diagnose(m, spec, best_t, s))
         elif not kept:  # the limit left none
             assert o.limit is not None and limit is not None
             infeasible.append(_unreachable(m, spec, t, extras, o.limit, limit, mine))
         found += _distinct(kept, t.stroke, o.tie)
     return o.rank(found)[:max_candidates], infeasible
+
+
+def _locked(m: Mechanism, best: dict[str, float] | None, load: Any) -> Infeasible | None:
+    """Why the ``load`` cannot be carried by the best-transmitting design the solvers found
+    (``best``: friction locks its ram, or a dead point meets the load), or None."""
+    try:
+        if best is not None and load is not None:
+            analyze(m.type, best, load=load)
+    except InvalidDesign as e:
+        return unloaded(m.type, e.msg) if e.condition in ("friction", "dead_point") else None
+    return None
 
 
 def _unreachable(

@@ -140,3 +140,19 @@ def test_a_load_the_bound_does_not_take_is_answered_uncertified(mtype, change):
     assert r.complete and r.candidates
     assert not any(c.certified for c in r.candidates)
     assert all(c.method != certify.METHOD for c in r.candidates)
+
+
+def test_a_friction_that_locks_every_design_is_the_reason_given():
+    """At time ratio 2.5 a guide's friction of 0.2 locks the ram of every slider-crank the
+    textbook's construction draws (checked here); the least peak torque's refusal says so,
+    with the friction's numbers, not that no design met the targets."""
+    load = Load("m", 40.0, cutting_force=2000.0, slider_mass=20.0, guide_friction=0.2)
+    drawn = slider_crank_designs(2.5, np.linspace(0.0, 2 * math.pi, 200))
+    assert drawn
+    for p in drawn:
+        with pytest.raises(SynthError, match="friction 0.2 locks the ram"):
+            synth.analyze("offset_slider_crank", p, load=load)
+    r = synth.synthesize(2.5, 1.0, 0.0, ["offset_slider_crank"], objective=OBJECTIVE, load=load)
+    (why,) = r.infeasible
+    assert not r.candidates and why.code == "LOAD_NOT_CARRIED"
+    assert "the guide's friction 0.2 locks the ram" in why.reason
