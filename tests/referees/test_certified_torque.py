@@ -150,7 +150,7 @@ def test_a_friction_that_locks_every_design_is_the_reason_given():
     drawn = slider_crank_designs(2.5, np.linspace(0.0, 2 * math.pi, 200))
     assert drawn
     for p in drawn:
-        with pytest.raises(SynthError, match="friction 0.2 locks the ram"):
+        with pytest.raises(SynthError, match=r"friction 0\.2 locks the ram"):
             synth.analyze("offset_slider_crank", p, load=load)
     r = synth.synthesize(2.5, 1.0, 0.0, ["offset_slider_crank"], objective=OBJECTIVE, load=load)
     (why,) = r.infeasible
