@@ -131,11 +131,13 @@ def torque(
     g = (w["gx"], w["gy"])
     out = ca.SX(0.0)
     for _, mass, (cx, cy), inertia, angle in _members(m, fr.bodies, _pins(m, p, th, u), p, w):
-        out += mass * ((om**2 * d(d(cx)) - g[0]) * d(cx) + (om**2 * d(d(cy)) - g[1]) * d(cy))
-        out += inertia * om**2 * d(d(angle)) * d(angle)
+        (vx, vy), spin = (d(cx), d(cy)), d(angle)
+        out += mass * ((om**2 * d(vx) - g[0]) * vx + (om**2 * d(vy) - g[1]) * vy)
+        out += inertia * om**2 * d(spin) * spin
     s = u * m.position(p, th)
-    along = w["slider_mass"] * (om**2 * d(d(s)) - g[0] * tx - g[1] * ty)
-    out += (along - w["force"] - w["force_slope"] * s) * d(s)
+    v = d(s)
+    along = w["slider_mass"] * (om**2 * d(v) - g[0] * tx - g[1] * ty)
+    out += (along - w["force"] - w["force_slope"] * s) * v
     return out
 
 

@@ -36,6 +36,15 @@ def check(
         )
 
 
+def ratio(p: Problem, over: str, under: str) -> float:
+    """``over``/``under`` of crank and pivot_distance: the fixed pair's (``check`` holds it to
+    the target), else what the time ratio sets, sin(β/2)."""
+    f = p.fixed
+    if {"crank", "pivot_distance"} <= f.keys():
+        return f[over] / f[under]
+    return math.sin(p.beta / 2)
+
+
 def scale(p: Problem, pivot_per_crank: float, reach: float = math.inf) -> float | None:
     """The crank of the smallest design with pivot_distance = ``pivot_per_crank`` × crank and
     crank ≤ ``reach``; a fixed crank or pivot_distance sets it (both fixed: the crank, the pair

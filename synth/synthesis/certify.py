@@ -101,7 +101,7 @@ class Built:
         # every relevant parameter free: a request's fixed parts are the space's business
         self.form = form = formulation(m, variant, relevant(m, variant))
         self.name = name = "_".join((m.type, *sorted(variant), "certify"))
-        self.mechanism, self.variant, self.space, self.names = m, variant, sp, m.names
+        self.mechanism, self.variant, self.space = m, variant, sp
         self.kin = Kinematics(m, variant, sp, name)
         u, k = ca.SX.sym("u", len(sp.lo)), ca.SX.sym("k", len(sp.constants))
         pv = ca.SX.sym("pv", form.nlp["p"].numel())
@@ -258,7 +258,9 @@ def _search(
         top, best = _polish(b, measure, k, pv, (lb, ub), near, top, best)
     if len(lo):  # stopped with boxes alive: their parents' bounds count (no work past it)
         least = min([least, *parent])
-    design = dict(zip(b.names, np.asarray(b.design(best, k)).ravel().tolist(), strict=True))
+    design = dict(
+        zip(b.mechanism.names, np.asarray(b.design(best, k)).ravel().tolist(), strict=True)
+    )
     return Certificate(design, top, min(least, top), not stopped, levels, boxes)
 
 

@@ -27,6 +27,7 @@ A design that is not one (no two dead centres on the grid) measures ∞.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 import casadi as ca
@@ -89,14 +90,21 @@ class Kinematics:
     def newton(
         self, theta: np.ndarray, points: np.ndarray, k: np.ndarray, row: int, level: Any = 0.0
     ) -> np.ndarray:
-        """Angles (n, m) moved towards rows[row] = level (each point's), ``NEWTON`` steps (a
-        step that does not stay small is not taken)."""
-        for _ in range(NEWTON):
-            r = self.at(theta, points, k)
-            with np.errstate(all="ignore"):
-                step = (r[row] - level) / r[row + 1]
-            theta = np.where(np.abs(step) < 0.1, theta - step, theta)
-        return theta
+        """Angles (n, m) moved towards rows[row] = level (each point's): ``newton``."""
+        return newton(lambda t: self.at(t, points, k), theta, row, level)
+
+
+def newton(
+    rows: Callable[[np.ndarray], np.ndarray], theta: np.ndarray, row: int, level: Any = 0.0
+) -> np.ndarray:
+    """Angles moved towards ``rows(θ)[row]`` = level by ``NEWTON`` steps on that row and the
+    next (its derivative in θ); a step that does not stay small is not taken."""
+    for _ in range(NEWTON):
+        r = rows(theta)
+        with np.errstate(all="ignore"):
+            step = (r[row] - level) / r[row + 1]
+        theta = np.where(np.abs(step) < 0.1, theta - step, theta)
+    return theta
 
 
 def design(m: Mechanism, variant: frozenset[str], sp: Space, u: Any, k: Any) -> dict[str, Any]:

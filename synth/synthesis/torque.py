@@ -40,9 +40,8 @@ from ..mechanisms import Mechanism, kinetics
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred, CompiledInterval
 from ..numerics.native import WIDEST, Mapped
-from .measures import PEAKS, TAU, Kinematics, design, local_peaks, prove, strokes
+from .measures import PEAKS, TAU, Kinematics, design, local_peaks, newton, prove, strokes
 
-NEWTON = 6  # Newton steps that polish a peak's angle
 BOUNDED = 2  # the angles a box's bound is taken at
 
 
@@ -144,11 +143,7 @@ class Torque:
         theta = np.take_along_axis(grid, idx, axis=1)
         inside = np.take_along_axis(window, idx, axis=1)
         f = np.where(inside, cut, 0.0)
-        for _ in range(NEWTON):
-            r = self.model.at(theta, points, k, self.w, f, rows=True)
-            with np.errstate(all="ignore"):
-                step = r[1] / r[2]
-            theta = np.where(np.abs(step) < 0.1, theta - step, theta)
+        theta = newton(lambda t: self.model.at(t, points, k, self.w, f, rows=True), theta, 1)
         a, b = info["ends"][:, :1], info["ends"][:, 1:]
         real &= inside == ((theta > a) & (theta < b))  # still on its side of the cut's ends
         # the peaks, and each end of the cut from either side (off, on; on, off)

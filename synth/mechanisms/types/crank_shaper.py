@@ -54,7 +54,7 @@ from ..registry import (
     register,
 )
 from ..rod import rod
-from ..slotted import check
+from ..slotted import check, ratio
 from ..slotted import scale as _scale
 
 
@@ -122,8 +122,7 @@ def reduced(p: Problem) -> Reduced:
     if p.beta <= 0:
         raise Unreachable("TIME_RATIO_UNREACHABLE", "crank_shaper has time ratio > 1 always")
     f = p.fixed
-    k = f["crank"] / f["pivot_distance"] if {"crank", "pivot_distance"} <= f.keys() else None
-    k = k or math.sin(p.beta / 2)  # sin ψmax: the fixed pair's (checked against the target)
+    k = ratio(p, "crank", "pivot_distance")  # sin ψmax
 
     def ratio_of(sin_half: float) -> float:  # the time ratio of crank/pivot_distance
         return targets.time_ratio(2 * math.asin(sin_half))

@@ -44,7 +44,7 @@ from ..registry import (
     Scale,
     register,
 )
-from ..slotted import check
+from ..slotted import check, ratio
 from ..slotted import scale as _scale
 
 
@@ -89,14 +89,6 @@ def facts(p: Params) -> dict[str, Any]:
     }
 
 
-def _ratio(p: Problem) -> float:
-    """pivot_distance/crank: a fixed pair's (checked against the target), else sin(β/2)."""
-    f = p.fixed
-    if {"crank", "pivot_distance"} <= f.keys():
-        return f["pivot_distance"] / f["crank"]
-    return math.sin(p.beta / 2)
-
-
 def reduced(p: Problem) -> Reduced:
     """The time ratio fixes pivot_distance/crank = cos(π/(1 + TR)) = sin(β/2) (the quick
     stroke's half angle), the stroke fixes the lever at half of it; the crank is a free scale
@@ -104,14 +96,14 @@ def reduced(p: Problem) -> Reduced:
     cos μ = lever/rod) or the shortest length the bound allows (min size)."""
     if p.beta <= 0:
         raise Unreachable("TIME_RATIO_UNREACHABLE", "whitworth has time ratio > 1 always")
-    ratio = _ratio(p)
+    per_crank = ratio(p, "pivot_distance", "crank")
 
     def time_ratio(crank_per_pivot: float) -> float:
         q = math.acos(min(1 / crank_per_pivot, 1.0))  # half the quick stroke
         return (math.pi - q) / q
 
     check(p, time_ratio, lambda lever: 2 * lever)
-    crank = _scale(p, ratio)
+    crank = _scale(p, per_crank)
     if crank is None:
         return Reduced([])
     lever = p.fixed.get("lever", 0.5)
@@ -126,7 +118,7 @@ def reduced(p: Problem) -> Reduced:
         return Reduced([])
     design = {
         "crank": crank,
-        "pivot_distance": crank * ratio,
+        "pivot_distance": crank * per_crank,
         "lever": lever,
         "connecting_rod": rod,
     }
@@ -137,8 +129,8 @@ def space(p: Problem) -> Space | None:
     """As ``reduced`` states it: the crank, a free scale (the smallest allowed, or as a fixed
     crank or pivot distance sets it), the pivot distance set by it and the time ratio, the
     lever half the stroke; the rod is the free number, over its bounds (fixed: a point)."""
-    f, ratio = p.fixed, _ratio(p)
-    crank = None if p.beta <= 0 else _scale(p, ratio)
+    f, per_crank = p.fixed, ratio(p, "pivot_distance", "crank")
+    crank = None if p.beta <= 0 else _scale(p, per_crank)
     if crank is None:
         return None
 
@@ -146,7 +138,7 @@ def space(p: Problem) -> Space | None:
         return {"crank": k[0], "pivot_distance": k[1], "lever": k[2], "connecting_rod": u[0]}
 
     lo, hi = (f["connecting_rod"],) * 2 if "connecting_rod" in f else p.box("connecting_rod")
-    return Space((lo,), (hi,), (crank, crank * ratio, f.get("lever", 0.5)), design, scaled=True)
+    return Space((lo,), (hi,), (crank, crank * per_crank, f.get("lever", 0.5)), design, scaled=True)
 
 
 # the crank pin's block slides in the lever's slot, on the line from O4 through B; the lever's
