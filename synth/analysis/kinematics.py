@@ -78,7 +78,7 @@ def analyze(
     """
     load = Load.of(load)  # a Load, or the API's load object
     deg = _asked(mechanism, include, crank_angles_deg, samples, load is not None)
-    m, p, variant, f, pv, found = _prepared(mechanism, params)  # checked there
+    m, p, variant, f, pv, found = prepared(mechanism, params)  # checked there
     crank_speed = loads.speed(m, load, crank_speed, crank_acceleration)
     return _analysis(m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include,
                      tolerance, load)  # fmt: skip
@@ -138,7 +138,7 @@ def _analysis(
     summary = _summary(m, p, f, rows, theta, values)
     loaded = None
     if load is not None:
-        st = quality.Strokes(*_ends(rows, theta, values))
+        st = quality.Strokes(*slider_extremes(rows, theta, values))
         summary["loads"], loaded = loads.loads(m, variant, f, pv, st, load)
     if deg is not None:
         curves = _curves(f, pv, crank_speed, crank_acceleration, deg)
@@ -153,7 +153,7 @@ def _analysis(
     if "envelope" in include:
         summary["envelope"] = quality.envelope(m, variant, p, pv)
     if {"motion", "sensitivities"} & set(include) or tolerance is not None:
-        st = quality.Strokes(*_ends(rows, theta, values))
+        st = quality.Strokes(*slider_extremes(rows, theta, values))
         if "motion" in include:
             summary["motion"] = quality.motion(m, variant, f, pv, st)
         if "sensitivities" in include or tolerance is not None:
@@ -164,7 +164,7 @@ def _analysis(
     return Analysis(**summary)
 
 
-def _prepared(
+def prepared(
     mechanism: str, params: Mapping[str, float]
 ) -> tuple[Mechanism, dict[str, float], frozenset[str], Model, np.ndarray, Points]:
     """The completed design, its variant's compiled model, its parameter vector, and the
@@ -241,7 +241,7 @@ def check_drawn(mechanism: str, include: Collection[str]) -> None:
         )
 
 
-def _ends(
+def slider_extremes(
     rows: np.ndarray, theta: np.ndarray, values: np.ndarray
 ) -> tuple[float, float, float, float]:
     """The slider's extremes: crank angles (radians) and positions (t_min, t_max, s_min, s_max)."""
@@ -305,7 +305,7 @@ def _summary(
     reversals = int(np.count_nonzero(rows == 0))
     if reversals < 2:
         raise InvalidDesign("the slider does not move: no dead centres found", (), "stroke")
-    t_min, t_max, s_min, s_max = _ends(rows, theta, values)
+    t_min, t_max, s_min, s_max = slider_extremes(rows, theta, values)
     up = (t_max - t_min) % TWO_PI  # crank travel while the slider goes min -> max (+ direction)
     down = TWO_PI - up
     if min(up, down) < 1e-12:

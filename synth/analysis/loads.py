@@ -3,7 +3,7 @@ flywheel that evens it out, and the forces at the joints and the ram's guide.
 
 The forces at a crank angle solve the design's Newton–Euler equations A z = b
 (``synth.mechanisms.kinetics``); their derivatives in the crank angle solve the same system
-differentiated (``model.Forces``). The resisting force is linear in the ram's position between
+differentiated (``forces.Forces``). The resisting force is linear in the ram's position between
 the points of the load's profile (a cutting force over its zone: two points), and steps where
 the working stroke passes them (``quality.reached``): the turn is a piece between each two and
 a piece for the rest; with the guide's friction, split further where the ram turns and where
@@ -38,9 +38,10 @@ from ..errors import InvalidParameters
 from ..load import Load
 from ..mechanisms import Mechanism, kinetics
 from ..results import Flywheel, Force, Loads, Power, Torque
-from .model import GRID, Forces, Model, forces
+from .forces import Forces, Torques, forces, torques
+from .model import GRID, Model
 from .quality import Strokes, reached
-from .roots import TWO_PI, _rtsafe, stationary_points
+from .roots import TWO_PI, rtsafe, stationary_points
 
 PANEL = math.pi / 64  # the widest panel of the quadrature (π/32: a sharp drag-link mean 5e-8 off)
 NODES, WEIGHTS = np.polynomial.legendre.leggauss(16)  # per panel
@@ -48,7 +49,7 @@ NODES, WEIGHTS = np.polynomial.legendre.leggauss(16)  # per panel
 
 # a quantity of z, z′, z″ (rows: angles): its value and first two derivatives at each angle
 Quantity = Callable[[np.ndarray], np.ndarray]
-Found = tuple[np.ndarray, np.ndarray]  # roots (radians) and the piece each is in
+Found = tuple[np.ndarray, np.ndarray]  # angles (radians) and the piece or value at each
 
 
 def _torque(z: np.ndarray) -> np.ndarray:
@@ -85,7 +86,7 @@ class Pieces:
     """Pieces evaluated together, each angle with its piece's numbers: their quantities on a
     grid (``GRID`` cells a turn, at least 8 a piece), their roots, their integrals."""
 
-    def __init__(self, sys: Forces, pieces: list[Piece]) -> None:
+    def __init__(self, sys: Forces | Torques, pieces: list[Piece]) -> None:
         self.sys, self.pieces = sys, pieces
         self.lo = np.array([p.lo for p in pieces])
         self.hi = np.array([p.hi for p in pieces])
@@ -110,7 +111,7 @@ class Pieces:
 
     def roots(self, fs: list[Quantity], k: int, falling: int = 0) -> list[Found]:
         """Each quantity's roots of its row k (0: value, 1: derivative) in the pieces, and the
-        piece of each: sign changes on the grid, polished together (``roots._rtsafe`` on rows
+        piece of each: sign changes on the grid, polished together (``roots.rtsafe`` on rows
         k and k + 1); only the falling ones for the first ``falling`` quantities (their
         derivative's: maxima)."""
         c = self.cells
@@ -137,7 +138,7 @@ class Pieces:
             return out
 
         ends = (self.grid[cc], self.grid[cc + 1], *map(np.concatenate, (f_lo, f_hi, scale)))
-        x = _rtsafe(fd, *ends)
+        x = rtsafe(fd, *ends)
         return [(x[w == i], owner[w == i]) for i in range(len(fs))]
 
     def integrals(self) -> tuple[list[np.ndarray], np.ndarray]:
@@ -162,17 +163,17 @@ class Pieces:
         return np.array([(t**k @ WEIGHTS) * half for k in range(1, powers + 1)])
 
 
-def _extremes(pieces: Pieces, fs: list[Quantity], largest: int) -> list[tuple[np.ndarray, ...]]:
+def _extremes(sys: Forces, pieces: Pieces, fs: list[Quantity], k: int) -> list[Found]:
     """Where each quantity may be extreme (radians) and its values there: its stationary
-    points on each piece (only its maxima for the first ``largest``) and the pieces' ends
-    (the value from each side); in one evaluation."""
+    points on each piece (only its maxima for the first ``k``) and the pieces' ends (the
+    value from each side); in one evaluation, where ``sys``'s forces are bounded."""
     n = len(pieces.pieces)
     ends = np.concatenate([pieces.lo, pieces.hi]), np.tile(np.arange(n), 2)
     found = [(np.concatenate([x, ends[0]]), np.concatenate([o, ends[1]]))
-             for x, o in pieces.roots(fs, 1, largest)]  # fmt: skip
+             for x, o in pieces.roots(fs, 1, k)]  # fmt: skip
     x, owner = (np.concatenate(c) for c in zip(*found, strict=True))
     z = pieces(x, owner)
-    pieces.sys.bounded(x, pieces.pv[owner], z[0])
+    sys.bounded(x, pieces.pv[owner], z[0])
     cut = np.cumsum([f[0].size for f in found])[:-1]
     return [(xs, f(zs)[0]) for (xs, _), zs, f
             in zip(found, np.split(z, cut, axis=1), fs, strict=True)]  # fmt: skip
@@ -231,7 +232,7 @@ def loads(
     pushes = [_magnitude([lay.pin(j), lay.pin(j) + 1]) for j in range(len(lay.pins))]
     pushes += [_magnitude([lay.slot(j)]) for j in range(len(lay.slots))]
     pushes.append(_magnitude([lay.size - 1]))
-    *found_all, (x, v) = _extremes(pieces, [*pushes, _torque], len(pushes))  # forces: maxima
+    *found_all, (x, v) = _extremes(sys, pieces, [*pushes, _torque], len(pushes))  # maxima
     total, squares = pieces.integrals()[1].sum(axis=1)
     mean = float(total / TWO_PI)
     k_hi, k_lo = int(np.argmax(v)), int(np.argmin(v))
@@ -321,7 +322,7 @@ def peak_terms(
     change with its angle too (the implicit function theorem on s − level at a profile's
     point, on s′ at a dead centre, on the guide's force N where friction's sign changes);
     a segment's force depends on the stroke's dead centres' positions."""
-    sys = forces(m, variant)
+    sys: Forces | Torques = forces(m, variant) if load.guide_friction else torques(m, variant)
     k, guide = len(m.parameters), sys.n - 1
     dead = np.array([st.start, st.start + st.working])
     kd = f.dp(dead, pv)  # (angle, [rows; θ-derivatives], parameter)
@@ -373,24 +374,24 @@ def peak_terms(
 
 
 def _end_fractions(span: _Span, load: Load) -> tuple[float, float]:
-    """The fractions of the working stroke at a span's ends: its segment's, or for the rest of
-    the turn the profile's last and first."""
+    """The fractions of the working stroke at a span's ends: its segment's, or the profile's."""
     if span.segment is not None:
         return span.segment[0], span.segment[2]
     profile = load.profile
     return profile[-1][0], profile[0][0]
 
 
-def _pieces(sys: Forces, spans: list[_Span], st: Strokes, mu: float) -> Pieces:
+def _pieces(sys: Forces | Torques, spans: list[_Span], st: Strokes, mu: float) -> Pieces:
     """The spans as pieces on which everything is smooth: themselves, without the guide's
-    friction (``mu`` 0); with it, their parts on which the friction, −μ |N| sign(v), is one
-    multiple of N (``kinetics``): split at the dead centres, where the ram turns, and where
-    N changes sign (there N = 0 whichever sign is assumed, so the roots of N with one
-    assumed sign are the changes), each part taking the sign of N that its middle is
-    consistent with."""
+    friction (``mu`` 0; ``sys`` may be ``Torques``); with it (``Forces``), their parts on
+    which the friction, −μ |N| sign(v), is one multiple of N (``kinetics``): split at the dead
+    centres, where the ram turns, and where N changes sign (there N = 0 whichever sign is
+    assumed, so the roots of N with one sign assumed are the changes), each part taking the
+    sign of N that its middle is consistent with."""
+    whole = [Piece(s.lo, s.hi, np.append(s.pv, 0.0), i) for i, s in enumerate(spans)]
     if mu == 0:
-        whole = [Piece(s.lo, s.hi, np.append(s.pv, 0.0), i) for i, s in enumerate(spans)]
         return Pieces(sys, whole)
+    assert isinstance(sys, Forces)
     sys.lock(np.append(spans[-1].pv, 0.0), mu)  # the design's ram leans past atan μ: refused
     turns = TWO_PI * np.arange(-1, 3)
     dead = np.concatenate([st.start + turns, st.start + st.working + turns])

@@ -35,7 +35,7 @@ from ..results import (
     Tolerance,
 )
 from .model import Model, model
-from .roots import TWO_PI, _rtsafe, stationary_points
+from .roots import TWO_PI, rtsafe, stationary_points
 
 CUT = 0.1  # a tool cuts over the middle 80% of the working stroke: 10% run-in, 10% run-out
 
@@ -65,7 +65,7 @@ def reached(f: Model, pv: np.ndarray, st: Strokes, fractions: np.ndarray) -> np.
     levels = st.s0 + fractions * (st.s1 - st.s0)
     k = fractions.size
     lo, hi = np.full(k, st.start), np.full(k, st.start + st.working)
-    return _rtsafe(fd, lo, hi, st.s0 - levels, st.s1 - levels, np.full(k, abs(st.stroke)))
+    return rtsafe(fd, lo, hi, st.s0 - levels, st.s1 - levels, np.full(k, abs(st.stroke)))
 
 
 def _inside(x: np.ndarray, start: float, length: float) -> np.ndarray:

@@ -152,14 +152,14 @@ def _polish(
 ) -> np.ndarray:
     """The roots of each one's row of fd (x, rows -> (value, derivative), vectorised) in the
     brackets [lo, hi], where it changes sign from f_lo to f_hi, to machine precision: the
-    compiled Newton steps (``model.Polisher``) from the secant point, and ``_rtsafe`` for
+    compiled Newton steps (``model.Polisher``) from the secant point, and ``rtsafe`` for
     any they leave unfinished (a kink, a slow start)."""
     if rows.size == 0:
         return np.empty(0)
     x, done = _compiled(polisher, rows, lo, hi, f_lo, f_hi, scale, pv)
     if not done.all():
         left = np.nonzero(~done)[0]
-        x[left] = _rtsafe(lambda y: fd(y, left), lo[left], hi[left], f_lo[left], f_hi[left],
+        x[left] = rtsafe(lambda y: fd(y, left), lo[left], hi[left], f_lo[left], f_hi[left],
                           scale[left])  # fmt: skip
     return x
 
@@ -181,13 +181,13 @@ def _compiled(
     x0 = np.where(np.isfinite(x0), x0, 0.5 * (lo + hi))
     x, step, fx, width = polisher(x0, lo, hi, np.where(f_lo < 0, 1.0, -1.0), rows, pv)
     tol = EPS4 * np.maximum(1.0, np.abs(x))
-    # finished like ``_rtsafe``: on a root, a closed bracket, or a Newton step down to
+    # finished like ``rtsafe``: on a root, a closed bracket, or a Newton step down to
     # rounding where the function is ~0 too (at a kink it jumps across 0)
     done = (fx == 0) | (width <= tol) | ((np.abs(step) <= tol) & (np.abs(fx) <= 1e-12 * scale))
     return x, done
 
 
-def _rtsafe(
+def rtsafe(
     fd: Callable[[np.ndarray], np.ndarray],
     lo: np.ndarray,
     hi: np.ndarray,

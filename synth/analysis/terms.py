@@ -1,6 +1,6 @@
 """What the synthesis's searches bound, for one design: the terms whose largest is a motion
 measure or the peak crank torque, with their derivatives in the parameters, and where each
-transmission joint is worst. Each from the design's analysis (``kinematics._prepared``)."""
+transmission joint is worst. Each from the design's analysis (``kinematics.prepared``)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from ..errors import InvalidDesign
 from ..load import Load
 from ..mechanisms import Mechanism
 from . import loads, quality
-from .kinematics import _ends, _prepared
+from .kinematics import prepared, slider_extremes
 from .model import Model
 
 
@@ -41,11 +41,11 @@ def _running(
 ) -> tuple[Mechanism, frozenset[str], Model, np.ndarray, quality.Strokes]:
     """A design's type, variant, model, parameters and strokes; raises InvalidDesign where its
     slider does not run one working and one return stroke."""
-    m, _, variant, f, pv, (rows, theta, values) = _prepared(mechanism, params)
+    m, _, variant, f, pv, (rows, theta, values) = prepared(mechanism, params)
     if np.count_nonzero(rows == 0) != 2:
         msg = "the slider does not run one working and one return stroke"
         raise InvalidDesign(msg, (), "stroke")
-    st = quality.Strokes(*_ends(rows, theta, values))
+    st = quality.Strokes(*slider_extremes(rows, theta, values))
     if st.stroke == 0:  # a design at the edge of running: its extremes coincide
         raise InvalidDesign("the slider does not move: its stroke is 0", (), "stroke")
     return m, variant, f, pv, st
@@ -54,7 +54,7 @@ def _running(
 def worst_transmission(mechanism: str, params: Mapping[str, float]) -> tuple[float, ...]:
     """Each transmission joint's crank angle (radians) where its |cos μ| is largest, in the
     type's order; raises SynthError for a design that does not run."""
-    _, _, _, f, _, (rows, theta, values) = _prepared(mechanism, params)
+    _, _, _, f, _, (rows, theta, values) = prepared(mechanism, params)
     out = []
     for j in range(1, len(f.names) + 1):
         k = np.nonzero(rows == j)[0]

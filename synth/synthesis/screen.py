@@ -19,8 +19,9 @@ from typing import cast
 import casadi as ca
 import numpy as np
 
+from ..analysis.forces import forces
 from ..analysis.loads import numbers
-from ..analysis.model import forces, model
+from ..analysis.model import model
 from ..analysis.quality import CUT
 from ..load import Load
 from ..mechanisms import Mechanism, kinetics

@@ -4,8 +4,9 @@ A structure is what a request's work builds once and then keeps (per thread: Cas
 are never shared between threads):
 
 - the compiled analysis (``analysis.model.compiled``): per type, structural variant and kind,
-  with its sensitivities and root polish, and the loads' equations where the type has a
-  frame; native libraries in the disk cache (``numerics.native``), loaded per thread;
+  with its sensitivities and root polish, and the loads' equations and torque where the type
+  has a frame (``analysis.forces.compiled``); native libraries in the disk cache
+  (``numerics.native``), loaded per thread;
 - IPOPT's solvers (``solve.built``): per type, variant, free set (the variant's parameters a
   request leaves free: it may fix any of the others) and objective (the two the search
   solves, the two diagnostics);
@@ -37,7 +38,7 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from multiprocessing import get_context
 
-from ..analysis import model
+from ..analysis import forces, model
 from ..mechanisms import Mechanism, all_types, get, rod
 from ..mechanisms.fourbar.construction import construction
 from ..numerics.native import WIDTHS, cache
@@ -91,6 +92,7 @@ def warm(kinds: Collection[str] = model.KINDS, searches: bool = True) -> None:
         for variant in variants(m):
             if set(model.KINDS) <= set(kinds):
                 model.compiled(m, variant)
+                forces.compiled(m, variant)
             else:
                 for kind in kinds:
                     model.model(m, variant, kind)
@@ -135,7 +137,10 @@ def compile_all(part: int = 0, parts: int = 1) -> int:
     fns = []
     if part == 0:
         fns += [
-            fn for m in map(get, all_types()) for v in variants(m) for fn in model.compiled(m, v)
+            fn
+            for m in map(get, all_types())
+            for v in variants(m)
+            for fn in (*model.compiled(m, v), *forces.compiled(m, v))
         ]
         c = construction()  # its points, its chunks' loop and its local model
         fns += [*c.points.mapped.compiled(), c.local.fn, rod.compiled().fn]

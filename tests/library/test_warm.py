@@ -10,7 +10,7 @@ import threading
 import pytest
 
 import synth
-from synth.analysis import model
+from synth.analysis import forces, model
 from synth.mechanisms import all_types, get
 from synth.synthesis import motion, search, warm
 
@@ -98,7 +98,7 @@ def test_warm_builds_a_threads_analysis_compiled():
             fn.class_name()
             for t in all_types()
             for v in warm.variants(get(t))
-            for fn in model.compiled(get(t), v)
+            for fn in (*model.compiled(get(t), v), *forces.compiled(get(t), v))
         }
 
     out: list[set[str]] = []

@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 
 import synth
 from api.main import app
-from synth.analysis.model import forces
+from synth.analysis.forces import forces
 from synth.errors import InvalidDesign, InvalidParameters
 from synth.load import RANGES, Load
 from synth.mechanisms import all_types, get, kinetics
