@@ -113,8 +113,8 @@ def local_optima(
     (time ratio, cos of the transmission bound). The measure, a maximum of terms, is minimised
     in epigraph form: t ≥ each of the ``TERMS`` largest terms (a peak moving along the turn is
     one constraint handing over to another, not a kink); a ``limit`` (terms, cap) bounds its
-    terms alike. A default bound (not in ``explicit``) gives way to a start beyond it.
-    ``fixed_parts``: more starts drawn, and about the starts where the box has few. The
+    terms alike. A default bound (not in ``explicit``) gives way to a start beyond it. Points
+    about the starts are drawn where the box's hold too few designs (``fixed_parts``: more). The
     deadline is looked at before each evaluation of the measure at a new design (a few ms,
     ~15 with a load): a run it cuts short ends at its last iterate."""
     if time.monotonic() >= deadline:  # nothing built for a search that cannot run
@@ -215,9 +215,9 @@ def local_optima(
     drawn_starts = aim.drawn[bool(fixed_parts)]
     drawn = screen.project(form, key, halton(lo, hi, lo > 0, SAMPLES), pv, lo, hi)
     near = drawn[:0]
-    if fixed_parts and len(drawn) < drawn_starts and len(own):
-        # fixed parts can leave the box's points no design (a four-bar's other links drawn
-        # up to 5 × stroke beside a short fixed coupler): points about the starts besides
+    if len(drawn) < drawn_starts and len(own):
+        # the box's points may hold few designs (a drag-link's ground is its shortest link; a
+        # short fixed coupler leaves a four-bar's other links few): points about the starts too
         near_lo = np.maximum(lo, np.where(lo > 0, own.min(axis=0) / AROUND, lo))
         near_hi = np.minimum(hi, np.where(lo > 0, own.max(axis=0) * AROUND, hi))
         near = screen.project(form, key, halton(near_lo, near_hi, lo > 0, SAMPLES), pv, lo, hi)
