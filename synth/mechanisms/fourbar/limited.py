@@ -22,7 +22,8 @@ each is then solved with F exact.
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
@@ -30,19 +31,19 @@ from ...numerics.ops import NUMPY
 from .. import rod
 from ..reduced import Reduced
 from .levels import levels, swings
-from .search import GRID, U_HI, U_LO, Design
+from .search import GRID, U_HI, U_LO, Design, Search
 from .strata import Strata, minima
 
-if TYPE_CHECKING:
-    from .solver import FourBar
+# a solver's least f or size over every stratum (``FourBar.stratified``)
+Stratified = Callable[..., tuple[list[Design], bool]]
 
 ROOT_STEPS = 30  # Illinois steps on F − R
 GOLDEN = 60  # golden-section steps on R
 
 
-def limited(fb: FourBar, coupler: Design, exact: bool) -> Reduced:
-    """The best design where the rod decides (``coupler``: the best coupler's, ``exact``
-    whether it is certified), and whether it is exact."""
+def limited(fb: Search, stratified: Stratified, coupler: Design, exact: bool) -> Reduced:
+    """The best design of the solver ``fb`` where the rod decides (``coupler``: the best
+    coupler's, ``exact`` whether it is certified), and whether it is exact."""
     q = dict(zip(rod.PARAMS, rod.params(fb.p, fb.r.rod, fb.r.height), strict=True))
     lo, hi = fb.psi
 
@@ -53,10 +54,10 @@ def limited(fb: FourBar, coupler: Design, exact: bool) -> Reduced:
         return np.where(np.isfinite(cos), cos, np.inf)
 
     def line(psi: float) -> tuple[float, Design | None, bool]:
-        found, ok = fb.stratified("f", psi=psi)
+        found, ok = stratified("f", psi=psi)
         return (found[0][1]["f"], found[0], ok) if found else (math.inf, None, ok)
 
-    found, sure = fb.stratified("f")
+    found, sure = stratified("f")
     sure = sure and exact
     options: list[tuple[float, float, Design | None]] = []  # (T, ψ, design or None: R's)
     for d, e in found:  # the coupler's optima where the rod keeps up
@@ -96,14 +97,14 @@ def limited(fb: FourBar, coupler: Design, exact: bool) -> Reduced:
         return Reduced([coupler[0]], exact=False)
     t, psi, best = min(options, key=lambda o: (o[0], o[2] is not None))
     if best is None:  # R decides and every coupler with f ≤ R ties: the smallest
-        got, ok = fb.stratified("size", cos_bound=t, psi=psi)
+        got, ok = stratified("size", cos_bound=t, psi=psi)
         if not got:
             return Reduced([coupler[0]], exact=False)
         best, sure = got[0], sure and ok
     return Reduced([best[0]], exact=sure)
 
 
-def _coupler_rows(fb: FourBar, rows: np.ndarray) -> np.ndarray:
+def _coupler_rows(fb: Search, rows: np.ndarray) -> np.ndarray:
     """F on the grid's rows: each row's least f over its feasible points, both sheets."""
     bounds = levels(fb, "f", 1.0)
     u = np.linspace(U_LO, U_HI, GRID)[None, :]

@@ -80,7 +80,7 @@ class FourBar(Search):
         d, e = found
         if e["rod_cos"] > e["f"] * (1 + ROUNDING):
             if self.r.swings:  # the rod's angle depends on the swing
-                return limited(self, found, exact)
+                return limited(self, self.stratified, found, exact)
             return self.smallest(e["rod_cos"], d)
         return Reduced([d], exact=exact)
 
