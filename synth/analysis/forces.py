@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import functools
 import threading
-from typing import Any, cast
+from typing import Any, TypeVar, cast
 
 import casadi as ca
 import numpy as np
@@ -17,6 +17,7 @@ from ..mechanisms import Mechanism, kinetics
 from .model import GRID, Batched
 
 _local = threading.local()
+S = TypeVar("S", "Forces", "Torques")  # a compiled system, cached per thread and variant
 
 
 class Forces:
@@ -278,16 +279,16 @@ def _system(rows: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
 
 def forces(m: Mechanism, variant: frozenset[str]) -> Forces:
     """The variant's ``Forces``, once per thread (CasADi functions are not shared)."""
-    return cast(Forces, _cached(Forces, m, variant))
+    return _cached(Forces, m, variant)
 
 
 def torques(m: Mechanism, variant: frozenset[str]) -> Torques:
     """The variant's ``Torques``, once per thread."""
-    return cast(Torques, _cached(Torques, m, variant))
+    return _cached(Torques, m, variant)
 
 
-def _cached(build: Any, m: Mechanism, variant: frozenset[str]) -> Any:
-    cache = _local.__dict__.setdefault(build.__name__, {})
+def _cached(build: type[S], m: Mechanism, variant: frozenset[str]) -> S:
+    cache: dict[tuple[str, frozenset[str]], S] = _local.__dict__.setdefault(build.__name__, {})
     if (m.type, variant) not in cache:
         cache[m.type, variant] = build(m, variant)
     return cache[m.type, variant]
