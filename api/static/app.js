@@ -174,7 +174,7 @@ async function synthesize(choose = 0) {
   $("synth-status").textContent = "Synthesising…";
   const r = await busy(form, () => api("v1/synthesize", body));
   $("synth-status").textContent = r.ok && !r.data.complete
-    ? "The time budget ran out: these are the designs found by then." : "";
+    ? "The time budget ran out: the notes below say what it left undone." : "";
   const tbody = $("candidates").querySelector("tbody");
   tbody.replaceChildren();
   $("refusals").replaceChildren();

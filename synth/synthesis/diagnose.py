@@ -238,12 +238,23 @@ def _with(spec: Spec) -> str:
 
 def unloaded(mtype: str, refusal: str | None) -> Infeasible:
     """Why a type's designs came back without their loads: the load's refusal of the first
-    design analysed (each one was refused), else the budget."""
+    design analysed (each one was refused, none is returned), else the budget (they are
+    returned without)."""
     if refusal is not None:
         why = f"no {mtype} design found carries this load: the first is refused ({refusal})"
         return Infeasible(mtype, "LOAD_NOT_CARRIED", why)
     why = (
         f"the time budget ran out before the loads of the {mtype} designs found were "
-        "analysed; ask again with a larger time_budget_ms"
+        "analysed: they come without them; ask again with a larger time_budget_ms"
+    )
+    return Infeasible(mtype, "BUDGET_EXHAUSTED", why)
+
+
+def cut_short(mtype: str, objective: str) -> Infeasible:
+    """Why a type's candidates are its exact solvers' designs alone: the budget ran out within
+    its search (what that had found depends on when; the designs before it do not)."""
+    why = (
+        f"the time budget ran out during the {mtype} search for {objective}: its candidates "
+        "are the exact solvers' designs, not searched; ask again with a larger time_budget_ms"
     )
     return Infeasible(mtype, "BUDGET_EXHAUSTED", why)

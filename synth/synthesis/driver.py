@@ -170,16 +170,17 @@ def _loaded(
     cands: list[Candidate], infeasible: list[Infeasible], load: Load, deadline: float
 ) -> tuple[list[Candidate], list[Infeasible]]:
     """The candidates with their loads (an analysis each where the search gave them none,
-    ~15 ms), best first until the deadline: the rest are left out, and a type left with none
-    says that the budget ran out. A design the load cannot be carried by (friction locks its
-    ram, or a dead point meets a load) is left out too; a type left with none says why."""
+    ~15 ms). A design the load cannot be carried by (friction locks its ram, or a dead point
+    meets a load) is left out; a type left with none says why. Where the deadline passes
+    first, none is analysed here (how many were is the clock's): the candidates come as they
+    are, and each type that lacks its loads says the budget ran out."""
     out: list[Candidate] = []
-    refused: dict[str, str | None] = {}  # a type's first refusal; None: the budget ran out
+    refused: dict[str, str] = {}  # a type's first refusal
     for c in cands:
         if not c.loads:
             if time.monotonic() >= deadline:
-                refused[c.type] = None
-                continue
+                bare = dict.fromkeys(c.type for c in cands if not c.loads)
+                return cands, infeasible + [unloaded(t, None) for t in bare]
             try:
                 c = replace(c, loads=analyze(c.type, c.params, load=load).loads)
             except InvalidDesign as e:
@@ -187,7 +188,7 @@ def _loaded(
                 continue
         out.append(c)
     lost = dict.fromkeys(c.type for c in cands if not any(o.type == c.type for o in out))
-    return out, infeasible + [unloaded(t, refused.get(t)) for t in lost]
+    return out, infeasible + [unloaded(t, refused[t]) for t in lost]
 
 
 def _catalogue() -> str:

@@ -20,8 +20,8 @@ variant's free parameters (stroke units), solved by SLSQP:
   equalities (with fixed parts and few such points, ``SAMPLES`` more within ``AROUND`` of
   the starts), ranked by their measure on a grid of crank angles (``screen``); it runs from
   the ``STARTS`` best of the former and as many of the latter as ``Aim.drawn`` says, at most
-  ``MAX_ITER`` iterations each. No clock but the request's deadline decides anything (and a
-  reply it cuts short says so).
+  ``MAX_ITER`` iterations each. No clock but the request's deadline decides anything: a
+  type's search it cuts short answers the exact solvers' designs alone, and says so.
 
 Its answer, a local optimum, is verified like every candidate, and checked against an
 independent global search by ``tests/referees/test_motion_search.py``."""
@@ -45,7 +45,7 @@ from ..results import Candidate, Infeasible
 from ..targets import MAX_TRANSMISSION, MIN_SIZE
 from . import aims, certify, screen
 from .candidate import candidate
-from .diagnose import diagnose, unloaded
+from .diagnose import cut_short, diagnose, unloaded
 from .formulation import TIE, formulation, kept_by
 from .search import (
     Searched,
@@ -59,22 +59,6 @@ from .search import (
     whole,
 )
 from .solve import starts as halton
-
-
-def qr(*args: Any, **kwargs: Any) -> Any:
-    """scipy's, imported on first use (scipy.linalg and scipy.optimize: ~0.4 s of an import
-    of synth, as ``minimize``'s)."""
-    from scipy.linalg import qr
-
-    return qr(*args, **kwargs)
-
-
-def minimize(*args: Any, **kwargs: Any) -> Any:
-    """scipy's, imported on first use."""
-    from scipy.optimize import minimize
-
-    return minimize(*args, **kwargs)
-
 
 # SLSQP runs per variant from the best ranked exact solvers' designs (STARTS) and projected
 # points of the box, where the four-bars' other basins lie (``Aim.drawn``)
@@ -119,6 +103,9 @@ def local_optima(
     ~15 with a load): a run it cuts short ends at its last iterate."""
     if time.monotonic() >= deadline:  # nothing built for a search that cannot run
         return
+    from scipy.linalg import qr  # on first use: ~0.4 s of an import of synth
+    from scipy.optimize import minimize
+
     form = formulation(m, variant, free)
     key = kept_by(m, variant, free)
     pv = np.concatenate([[fixed[k] for k in form.fixed], targets])
@@ -328,6 +315,10 @@ def motion(
             c = candidate(m, p, t, s.variants, extras)
             if c is not None:
                 mine.append(c)
+        if time.monotonic() >= t.deadline:  # how many were measured is the clock's: none kept
+            infeasible.append(diagnose(m, spec, best_t, Searched()))
+            continue
+        exact = list(mine)  # the exact solvers' designs, measured: the answer if cut short
         bounds: list[float] | None = []  # each variant's certified least; None: one has none
         for v in s.variants:
             starts = [
@@ -364,6 +355,9 @@ def motion(
                 if c is not None:  # its family's smallest member, and it where that differs
                     smallest = _smallest_member(m, i, c, t, s.variants, extras)
                     mine += [smallest] if aim.scale_free else [c, smallest]
+        if time.monotonic() >= t.deadline:  # where the search stopped is the clock's: not kept
+            mine, bounds = exact, None
+            infeasible.append(cut_short(m.type, o.name))
         if bounds:  # every variant's least certified (a limit only raises the optimum)
             mine = [certify.mark(c, min(bounds)) for c in mine]
         kept = [c for c in mine if o.allows(c, limit)]

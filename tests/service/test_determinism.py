@@ -18,8 +18,6 @@ import time
 import urllib.error
 import urllib.request
 
-import pytest
-
 from benchmarks.common import spinning
 
 from ..support.server import serving
@@ -109,9 +107,8 @@ SEARCHED = [  # (type or types, objective, time ratio, stroke, bound°, more arg
     ("crank_shaper", TORQUE, 1.4, 300.0, 10.0, {"load": HEAVY}),
     ("drag_link_slider", TORQUE, 1.6, 300.0, 20.0, {"load": LOAD}),
 ]
-# a request that needs far more than the default budget (15–18 s alone with enough, warm, on
-# a quiet two-core machine): cut short at 2 s where the clock says, its reply depends on the
-# machine's load (issue 39; its drag-link case, 1.4 s to 4 s alone, is cut short only loaded)
+# a request that needs far more than the default budget (14–18 s alone with enough, warm, on
+# a quiet two-core machine): cut short at 2 s, quiet or loaded
 CUT_SHORT = ("crank_rocker_slider", TORQUE, 1.6, 300.0, 20.0, {"load": HEAVY})
 # a fresh interpreter: the request (JSON) in, its reply out (JSON, keys sorted, no time)
 FRESH = """
@@ -190,13 +187,13 @@ def test_20_searched_requests_give_the_same_reply_in_fresh_processes_quiet_and_l
         assert q == ld, f"{label(kw)}: the reply under load differs"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="issue 39: under the default 2 s budget a request that needs more is cut short "
-    "where the clock says, so its reply depends on the machine's load",
-)
 def test_a_searched_request_cut_short_by_the_default_budget_gives_the_same_reply():
+    """Cut short, the search's answer is its exact solvers' designs, whatever the load: the
+    budget decides only that the answer is not complete."""
     kw = arguments(CUT_SHORT, 2000.0)
     quiet, loaded = quiet_and_loaded([kw, kw])
-    assert all(r["complete"] for r in quiet + loaded), label(kw)
+    assert not any(r["complete"] for r in quiet + loaded), label(kw)
     assert quiet[0] == quiet[1] == loaded[0] == loaded[1], label(kw)
+    assert quiet[0]["candidates"] and [i["code"] for i in quiet[0]["infeasible"]] == [
+        "BUDGET_EXHAUSTED"
+    ]
