@@ -270,6 +270,24 @@ class LoadSpec(Strict):
     guide_friction: float = Field(
         0.0, ge=0.0, le=2.0, description="Coulomb coefficient at the ram's guide (0: none)"
     )
+    flywheel_rpm: float | None = Field(
+        None,
+        ge=RANGES["flywheel_rpm"][0],
+        le=RANGES["flywheel_rpm"][1],
+        description="the speed of the shaft that carries the flywheel (omitted: the crank's)",
+    )
+    flywheel_width: float | None = Field(
+        None,
+        ge=RANGES["flywheel_width"][0],
+        le=RANGES["flywheel_width"][1],
+        description="in length_unit: adds the diameter of a solid steel disc flywheel this wide",
+    )
+    motor_rpm: float | None = Field(
+        None,
+        ge=RANGES["motor_rpm"][0],
+        le=RANGES["motor_rpm"][1],
+        description="the motor's speed: adds its rated torque there",
+    )
     gravity_deg: float | None = Field(
         None, ge=-360.0, le=360.0,
         description="the direction gravity pulls in, in the drawing's frame (degrees from +x, "

@@ -205,7 +205,7 @@ def main() -> None:
               show_default=True, help="what the candidates are best at")  # fmt: skip
 @click.option("--max-candidates", type=int, help="at most this many in all")
 @click.option("--time-budget-ms", type=float, default=2000.0, show_default=True,
-              help="the search's time; past it, the best found (reported incomplete)")  # fmt: skip
+              help="the search's time; past it, what was done (reported incomplete)")  # fmt: skip
 @click.option(
     "--include",
     multiple=True,
@@ -298,12 +298,13 @@ def analyze(mechanism: str, params: tuple[str, ...], samples: int | None,
             angles: tuple[float, ...], include: tuple[str, ...], crank_speed: float | None,
             load_json: str | None, fmt: str) -> None:  # fmt: skip
     try:
+        load = _load(load_json)
         a = _analyze(mechanism, _numbers(params, "--param"), crank_speed=crank_speed,
                      crank_angles_deg=list(angles) or None, samples=samples, include=include,
-                     load=_load(load_json))  # fmt: skip
+                     load=load)  # fmt: skip
     except SynthError as e:
         _fail(e)
-    _emit(fmt, a.to_dict(), _analysis_rows(a), _analysis_text(a))
+    _emit(fmt, a.to_dict(), _analysis_rows(a), _analysis_text(a, load))
 
 
 def _analysis_rows(a: Analysis) -> list[dict[str, Any]]:
@@ -320,7 +321,7 @@ def _analysis_rows(a: Analysis) -> list[dict[str, Any]]:
     return [{k: float(v[i]) for k, v in cols.items()} for i in range(n)]
 
 
-def _analysis_text(a: Analysis) -> str:
+def _analysis_text(a: Analysis, load: Load | None) -> str:
     t = a.transmission
     lines = [
         f"{a.type}: " + ", ".join(f"{k} {v:.6g}" for k, v in a.params.items()),
@@ -344,11 +345,17 @@ def _analysis_text(a: Analysis) -> str:
         lines.append(f"envelope {box} ({size}), link lengths {e.link_length_sum:.6g}")
     if a.sensitivities is not None:
         lines += _sensitivities(a.sensitivities)
-    if a.loads is not None:
-        q = a.loads
-        lines.append(f"crank torque {q.torque.min:.6g} to {q.torque.max:.6g} N·m (mean "
-                     f"{q.torque.mean:.6g}), motor {q.power.rated:.6g} W, flywheel "
-                     f"{q.flywheel.inertia:.6g} kg·m²")  # fmt: skip
+    if a.loads is not None and load is not None:
+        q, fly = a.loads, a.loads.flywheel
+        tq = q.torque
+        lines.append(f"crank torque {tq.min:.6g} to {tq.max:.6g} N·m (mean {tq.mean:.6g})")
+        lines[-1] += f", motor {q.power.rated:.6g} W"
+        if q.power.motor_torque is not None:
+            lines[-1] += f", {q.power.motor_torque:.6g} N·m at {load.motor_rpm:.6g} rpm"
+        lines.append(f"flywheel {fly.inertia:.6g} kg·m² on a shaft at {fly.rpm:.6g} rpm")
+        if fly.disc_diameter is not None:
+            disc = f"{fly.disc_diameter:.6g} {load.length_unit} across"
+            lines[-1] += f": a steel disc {disc}, {load.flywheel_width:.6g} wide"
         forces = [f"{k} {f.max:.6g} N at {f.at_deg:.6g}°" for k, f in q.joints.items()]
         lines.append(f"largest forces: {', '.join(forces)}; guide {q.guide.max:.6g} N")
     if a.curves is not None:

@@ -17,9 +17,19 @@ LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "in": 0.0254}  # metres per length unit
 GRAVITY = 9.80665  # m/s², standard
 # the ranges of the numbers the flywheel and the motor's power divide by, wider than any machine
 # needs: a crank that turns once in 1.9 years to one at 1e6 rpm, a flywheel that holds the speed
-# to a millionth or to ±50 %, a drive that wastes all but a millionth. So Cs ω² ≥ 1.1e-20 and
-# mean·ω/η stay finite numbers
-RANGES = {"crank_rpm": (1e-6, 1e6), "speed_fluctuation": (1e-6, 1.0), "efficiency": (1e-6, 1.0)}
+# to a millionth or to ±50 %, a drive that wastes all but a millionth; a flywheel's shaft and a
+# motor as slow or fast as a crank, a disc a nanometre to a billion length units wide. So Cs ω²
+# ≥ 1.1e-20, mean·ω/η and a disc's diameter stay finite numbers
+RANGES = {
+    "crank_rpm": (1e-6, 1e6),
+    "speed_fluctuation": (1e-6, 1.0),
+    "efficiency": (1e-6, 1.0),
+    "flywheel_rpm": (1e-6, 1e6),
+    "motor_rpm": (1e-6, 1e6),
+    "flywheel_width": (1e-9, 1e9),
+}
+OPTIONAL = ("flywheel_rpm", "motor_rpm", "flywheel_width")  # None: not asked for
+STEEL = 7850.0  # kg/m³: the solid disc a flywheel's diameter is given for
 # the least step between two fractions of the working stroke (a cut's zone, a profile's points):
 # a nanometre of a metre's stroke. The force's slope between them, ΔF / (Δu · stroke), is finite
 GAP = 1e-9
@@ -39,8 +49,11 @@ class Load:
     is the direction gravity pulls in, in the drawing's frame (degrees from +x, counter-
     clockwise; −90: down the drawing's y axis); None: no weight (the plane is horizontal).
     ``speed_fluctuation`` is the coefficient Cs = (ω_max − ω_min)/ω a flywheel must hold the
-    crank within, ``efficiency`` the drive's from motor to crank; these two and ``crank_rpm``
-    within ``RANGES``."""
+    crank within, ``efficiency`` the drive's from motor to crank; ``flywheel_rpm`` the speed
+    of the shaft that carries the flywheel (None: the crank's), ``flywheel_width`` the width
+    of a solid steel disc flywheel (in ``length_unit``) whose diameter the loads give,
+    ``motor_rpm`` the motor's speed, at which they give its rated torque; each number within
+    ``RANGES``."""
 
     length_unit: str
     crank_rpm: float
@@ -53,6 +66,9 @@ class Load:
     force_profile: tuple[tuple[float, float], ...] | None = None
     guide_friction: float = 0.0
     gravity_deg: float | None = None
+    flywheel_rpm: float | None = None
+    flywheel_width: float | None = None
+    motor_rpm: float | None = None
 
     @classmethod
     def of(cls, load: Load | Mapping[str, Any] | None) -> Load | None:
@@ -81,8 +97,10 @@ class Load:
                 ("load", "length_unit"),
             )
         for name in ("crank_rpm", "cutting_force", "slider_mass", "link_mass_per_length",
-                     "guide_friction", "speed_fluctuation"):  # fmt: skip
+                     "guide_friction", "speed_fluctuation", *OPTIONAL):  # fmt: skip
             v, (lo, hi) = getattr(self, name), RANGES.get(name, (0.0, math.inf))
+            if v is None and name in OPTIONAL:
+                continue
             if not (_number(v) and lo <= v <= hi):
                 rule = f"> 0, at least {lo:g} and at most {hi:g}" if name in RANGES else "≥ 0"
                 msg = f"load.{name} must be a finite number {rule}, got {v!r}"
@@ -144,6 +162,30 @@ class Load:
     def omega(self) -> float:
         """The crank speed, rad/s."""
         return 2 * math.pi * self.crank_rpm / 60
+
+    @property
+    def flywheel_speed(self) -> float:
+        """The speed of the shaft that carries the flywheel, rpm."""
+        return float(self.flywheel_rpm or self.crank_rpm)
+
+    def inertia(self, energy: float) -> float:
+        """The flywheel inertia (kg·m²) that holds its shaft's speed within
+        ``speed_fluctuation`` against an energy swing ``energy`` (J): ΔE / (Cs ω²)."""
+        return energy / self.speed_fluctuation / (2 * math.pi * self.flywheel_speed / 60) ** 2
+
+    def motor_torque(self, rated: float) -> float | None:
+        """The motor's torque (N·m) at ``motor_rpm`` for its rated power ``rated`` (W); None
+        without a motor speed."""
+        return None if self.motor_rpm is None else rated / (2 * math.pi * self.motor_rpm / 60)
+
+    def disc(self, inertia: float) -> float | None:
+        """The diameter (``length_unit``) of a solid steel disc ``flywheel_width`` wide whose
+        inertia about its axis is ``inertia`` (kg·m²): I = π ρ w D⁴ / 32; None without a
+        width."""
+        if self.flywheel_width is None:
+            return None
+        width = self.flywheel_width * self.metres
+        return math.sqrt(math.sqrt(32 * inertia / (math.pi * STEEL * width))) / self.metres
 
     @property
     def gravity(self) -> tuple[float, float]:

@@ -193,22 +193,29 @@ class Torque:
 @dataclass(frozen=True)
 class Power:
     """The crank's mean and peak power (W), and the motor's rated power: the mean over the
-    drive's efficiency (a flywheel takes the peaks)."""
+    drive's efficiency (a flywheel takes the peaks); with the load's ``motor_rpm``, the
+    motor's rated torque there (N·m)."""
 
     mean: float
     peak: float
     rated: float
+    motor_torque: float | None = None
 
 
 @dataclass(frozen=True)
 class Flywheel:
     """The largest swing of the crank's energy over a turn, ΔE = max E − min E with E(θ) =
     ∫ (T − T_mean) dθ (J: the turning-moment diagram's areas between its highest and lowest
-    points), and the flywheel inertia (kg·m²) on the crank shaft that holds its speed within
-    the load's ``speed_fluctuation``."""
+    points), and the flywheel inertia (kg·m²) that holds the speed within the load's
+    ``speed_fluctuation`` Cs, I = ΔE / (Cs ω²), on the shaft that carries it, turning at
+    ``rpm`` (the load's ``flywheel_rpm``, else the crank's); with the load's
+    ``flywheel_width``, the diameter of a solid steel disc of that inertia (``disc_diameter``,
+    in the load's length unit)."""
 
     energy: float
     inertia: float
+    rpm: float
+    disc_diameter: float | None = None
 
 
 @dataclass(frozen=True)

@@ -309,7 +309,11 @@ function designFieldId(prefix) {
 // a load's fields: [name, label, default]; the cutting zone's two ends and the unit aside
 const LOAD_FIELDS = [["crank_rpm", "Crank speed (rpm)", 40], ["cutting_force", "Cutting force (N)", 2000],
   ["slider_mass", "Ram and tool (kg)", 60], ["link_mass_per_length", "Links (kg/m)", 0],
-  ["guide_friction", "Guide friction (μ)", 0]];
+  ["guide_friction", "Guide friction (μ)", 0], ["efficiency", "Drive efficiency, motor to crank", 1],
+  ["speed_fluctuation", "Speed fluctuation the flywheel allows (Cs)", 0.05],
+  ["flywheel_rpm", "Flywheel's shaft (rpm; blank: the crank's)", ""],
+  ["flywheel_width", "Flywheel disc's width (blank: no disc)", ""],
+  ["motor_rpm", "Motor speed (rpm; blank: power only)", ""]];
 
 function loadBox(prefix) {
   // the load form of a view (ids `${prefix}-load-...`), closed: no load until opened
@@ -613,9 +617,12 @@ function loadsView() {
   const top = Object.entries(l.joints).reduce((a, b) => (b[1].max > a[1].max ? b : a));
   $("loads-summary").textContent = `torque ${fmt(l.torque.min, 4)} … ${fmt(l.torque.max, 4)} N·m ` +
     `(mean ${fmt(l.torque.mean, 4)}, rms ${fmt(l.torque.rms, 4)}); power mean ${fmt(l.power.mean, 4)} W, ` +
-    `peak ${fmt(l.power.peak, 4)} W, motor ${fmt(l.power.rated, 4)} W; flywheel: energy swing ` +
-    `${fmt(l.flywheel.energy, 4)} J, inertia ${fmt(l.flywheel.inertia, 4)} kg·m² on the crank shaft; ` +
-    `largest joint force ${fmt(top[1].max, 4)} N at ${top[0]}, guide ${fmt(l.guide.max, 4)} N.`;
+    `peak ${fmt(l.power.peak, 4)} W, motor ${fmt(l.power.rated, 4)} W` +
+    (l.power.motor_torque == null ? "" : ` (${fmt(l.power.motor_torque, 4)} N·m at its speed)`) +
+    `; flywheel: energy swing ${fmt(l.flywheel.energy, 4)} J, inertia ${fmt(l.flywheel.inertia, 4)} kg·m² ` +
+    `on a shaft at ${Number(l.flywheel.rpm.toPrecision(6))} rpm` +
+    (l.flywheel.disc_diameter == null ? "" : `, a steel disc ${fmt(l.flywheel.disc_diameter, 4)} across`) +
+    `; largest joint force ${fmt(top[1].max, 4)} N at ${top[0]}, guide ${fmt(l.guide.max, 4)} N.`;
   const c = sortedCurves();
   const dead = [current.analysis.extremes.min.crank_angle_deg, current.analysis.extremes.max.crank_angle_deg];
   plot($("plot-torque"), c.th, [{ ys: c.torque, color: COLORS[0], label: "crank torque (N·m)" }],

@@ -14,14 +14,13 @@ the guide's force changes sign (``_pieces``). On each piece everything is smooth
   the pieces' ends;
 - the mean and the root mean square: Gauss–Legendre quadrature on each piece;
 - the flywheel: the crank's energy E(θ) = ∫ (T − T_mean) dθ is extreme where T crosses its
-  mean (roots, polished alike) or jumps across it at a piece's end; its largest swing ΔE
-  over a turn gives the inertia I = ΔE / (Cs ω²).
+  mean (roots, polished alike) or jumps across it at a piece's end: its largest swing ΔE.
 
 Where no finite forces move the design, it is refused with the crank angle named: a loaded
 dead point (``Forces.dead``), a ram the guide's friction locks (``Forces.lock``), A singular
 to rounding where the extremes land (``Forces.bounded``). ``peak_terms`` gives the least peak
 torque's search the torque's maxima and the pieces' ends with their derivatives in the
-lengths (A ∂z/∂p = ∂b/∂p − ∂A/∂p z, and each end's angle moving with the design).
+lengths, each end's angle moving with the design.
 """
 
 from __future__ import annotations
@@ -239,9 +238,10 @@ def loads(
     t = Torque(float(v[k_hi]), _deg(x[k_hi]), float(v[k_lo]), _deg(x[k_lo]), mean,
                math.sqrt(squares / TWO_PI))  # fmt: skip
     energy = _energy(pieces, mean)
-    om = load.omega  # ≥ 1e-7 rad/s, Cs ≥ 1e-6 and η ≥ 1e-6 (``Load``): no division by 0
-    power = Power(mean * om, t.max * om, mean * om / load.efficiency)
-    flywheel = Flywheel(energy, energy / load.speed_fluctuation / om / om)
+    om, rated = load.omega, mean * load.omega / load.efficiency  # ω, Cs, η > 0 (``Load``)
+    power = Power(mean * om, t.max * om, rated, load.motor_torque(rated))
+    inertia = load.inertia(energy)
+    flywheel = Flywheel(energy, inertia, load.flywheel_speed, load.disc(inertia))
     largest = [Force(float(v.max()), _deg(x[int(np.argmax(v))])) for x, v in found_all]
     joints = dict(zip((*lay.pins, *lay.slots), largest[:-1], strict=True))
     quantities = [_torque, *pushes]

@@ -5,6 +5,7 @@ exit status (0 an answer, 1 every type refuses, 2 bad input) and its messages.""
 import csv
 import io
 import json
+import math
 import shutil
 import socket
 import subprocess
@@ -174,6 +175,26 @@ def test_a_loaded_synthesis_prints_what_the_drive_needs():
     assert float(row["peak_torque_Nm"]) == pytest.approx(q.torque.max, rel=1e-9)
     assert float(row["flywheel_kgm2"]) == pytest.approx(q.flywheel.inertia, rel=1e-9)
     assert f"{q.torque.max:.6g}" in text[1] and f"{q.flywheel.inertia:.6g}" in text[1]
+
+
+def test_analyze_prints_the_flywheel_and_the_motor_on_their_shafts():
+    """The flywheel at 1 450 rpm: the crank shaft's inertia × (40 / 1 450)², as the library
+    gives it on the crank shaft; the steel disc of that inertia 80 mm wide (I = ρ π d⁴ w / 32,
+    solved for d here); the motor's torque at 960 rpm, its rated power over its speed."""
+    load = {"length_unit": "mm", "crank_rpm": 40, "cutting_force": 2000, "slider_mass": 60}
+    shafts = {"flywheel_rpm": 1450, "flywheel_width": 80, "motor_rpm": 960, "efficiency": 0.8}
+    text = run("analyze", "whitworth", *WHITWORTH, "--load", json.dumps({**load, **shafts}))
+    p = {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0}
+    q = synth.analyze("whitworth", p, load=load).loads
+    inertia = q.flywheel.inertia * (40 / 1450) ** 2
+    disc = (32 * inertia / (7850 * math.pi * 0.080)) ** 0.25 * 1000
+    motor = q.power.mean / 0.8 / (960 * math.pi / 30)
+    (fly,) = [line for line in text.stdout.splitlines() if line.startswith("flywheel ")]
+    assert (
+        fly == f"flywheel {inertia:.6g} kg·m² on a shaft at 1450 rpm: a steel disc "
+        f"{disc:.6g} mm across, 80 wide"
+    )
+    assert f"motor {q.power.mean / 0.8:.6g} W, {motor:.6g} N·m at 960 rpm" in text.stdout
 
 
 def test_analyze_prints_what_include_asks_for():

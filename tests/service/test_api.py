@@ -327,6 +327,23 @@ def test_an_analysis_takes_a_force_profile(client):
     assert r.json()["loads"]["torque"]["mean"] == pytest.approx(work / (2 * math.pi), rel=1e-9)
 
 
+def test_an_analysis_sizes_the_flywheel_and_the_motor_on_their_shafts(client):
+    """The flywheel on a shaft at 1 450 rpm: (crank rpm / 1 450)² of the crank shaft's inertia,
+    and the diameter of a 60 mm steel disc with it; the motor's torque at 960 rpm."""
+    crank = client.post("/v1/analyze", json={**ANALYZE, "load": LOAD}).json()["loads"]
+    shafts = {"flywheel_rpm": 1450.0, "flywheel_width": 60.0, "motor_rpm": 960.0}
+    r = client.post("/v1/analyze", json={**ANALYZE, "load": {**LOAD, **shafts}})
+    assert r.status_code == 200, r.text
+    fly, power = r.json()["loads"]["flywheel"], r.json()["loads"]["power"]
+    rpm = LOAD["crank_rpm"]
+    assert fly["rpm"] == 1450.0 and crank["flywheel"]["rpm"] == rpm
+    assert fly["inertia"] == pytest.approx(crank["flywheel"]["inertia"] * (rpm / 1450) ** 2)
+    d = fly["disc_diameter"] / 1000  # m: a solid disc's I = ρ π d⁴ w / 32
+    assert 7850 * math.pi * d**4 * 0.060 / 32 == pytest.approx(fly["inertia"])
+    assert power["motor_torque"] == pytest.approx(power["rated"] / (960 * math.pi / 30))
+    assert crank["flywheel"]["disc_diameter"] is None and crank["power"]["motor_torque"] is None
+
+
 def test_the_least_peak_torque_answers_with_each_candidates_loads(client):
     body = {
         "time_ratio": 1.6,
@@ -423,6 +440,9 @@ BAD = [
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "cutting_zone": [0.1, 1.5]}),
      "cutting_zone"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "efficiency": 0.0}), "efficiency"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "flywheel_rpm": 0.0}), "flywheel_rpm"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "motor_rpm": -960.0}), "motor_rpm"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "flywheel_width": "inf"}), "flywheel_width"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "colour": 1}), "colour"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, 5.0], [1.2, 6.0]]}),
      "force_profile"),

@@ -263,8 +263,13 @@ def test_the_analysis_takes_a_load(page):
     for area in ("gives", "takes"):  # the flywheel's
         assert pg.locator(f"#plot-torque rect.{area}").count()
     summary = pg.inner_text("#loads-summary")
-    assert "N·m" in summary and "kg·m²" in summary
+    assert "N·m" in summary and "kg·m²" in summary and "on a shaft at 40 rpm" in summary
     assert "at 40 rpm" in pg.inner_html("#plot-velocity")
+    pg.fill("#a-load-flywheel_rpm", "1450")  # the flywheel on the motor's shaft, a disc
+    pg.fill("#a-load-flywheel_width", "0.1")
+    pg.click("#a-run")
+    pg.wait_for_function("document.querySelector('#loads-summary').textContent"
+                         ".includes('on a shaft at 1450 rpm, a steel disc')")  # fmt: skip
     pg.click("#a-load summary")  # closed: no load
     pg.click("#a-run")
     pg.wait_for_selector("#loads", state="hidden")
