@@ -9,6 +9,7 @@ IPOPT's local optima of the diagnostic objectives (formulation.DIAGNOSTICS).
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Hashable, Iterator
 from dataclasses import dataclass, field, replace
@@ -16,13 +17,14 @@ from dataclasses import dataclass, field, replace
 from ..analysis.kinematics import analyze
 from ..errors import SynthError, Unreachable
 from ..mechanisms import Mechanism
-from ..mechanisms.reduced import differ
+from ..mechanisms.reduced import Problem, differ
 from ..results import TOL, Infeasible
 from ..targets import MAX_TRANSMISSION, time_ratio
 from . import scans
 from .search import Searched, Spec, Targets, Variant, bounds, ipopt, predict, scaled, whole
 
 SCAN_TOL = 1e-6  # relative: a design at the scan's time ratio
+LIFT = 10.0  # a default bound lifted this many times wider, to say what lifting it reaches
 # β of the range's ends: the one the target lies beyond tighter than the verification (it tells
 # how far to move), the other to the six digits a message prints
 NEAR_END, FAR_END = 1e-10, 1e-6
@@ -44,7 +46,7 @@ def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
             "TRANSMISSION_UNREACHABLE",
             f"{m.type} reaches at most a minimum transmission angle of {best:.4f}° at time "
             f"ratio {t.time_ratio:g} and stroke {t.stroke:g}{_with(spec)}, below the bound "
-            f"{t.bound_deg:g}°{_defaults(m, spec, t.stroke)}",
+            f"{t.bound_deg:g}°{_lifted(m, spec, t, searchable, best) or _defaults(m, spec, t)}",
             best_transmission_angle_deg=best,
         )
     if time.monotonic() >= t.deadline:  # then what follows would end so: not begun
@@ -89,16 +91,16 @@ def _angles(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
     it may be (a bound no rod can meet leaves no start on its grid)."""
     found = _reduced(m, v, t, v.problem.beta)
     if found is not None:
-        return list(found)
+        return [mu for mu, _ in found]
     return [mu for _, mu in _optima(m, v, spec, t, MAX_TRANSMISSION, 1.0)]
 
 
 def _reduced(
     m: Mechanism, v: Variant, t: Targets, beta: float, tol: float = TOL
-) -> Iterator[float] | None:
+) -> Iterator[tuple[float, dict[str, float]]] | None:
     """The predicted angles of the exact reduced optima at β (max transmission, no bound)
-    that meet the time ratio and stroke to ``tol``, one by one (each costs a prediction), or
-    None where the reduced solver is not exact there."""
+    that meet the time ratio and stroke to ``tol``, each with its design (stroke units), one
+    by one (each costs a prediction), or None where the reduced solver is not exact there."""
     problem = replace(
         v.problem, beta=beta, cos_bound=1.0, objective=MAX_TRANSMISSION, hints=(), near=()
     )
@@ -112,11 +114,11 @@ def _reduced(
         return None
     tr = time_ratio(beta)
 
-    def angles() -> Iterator[float]:
+    def angles() -> Iterator[tuple[float, dict[str, float]]]:
         for d in answer.designs:
             got = predict(m, {**scaled(d, t.stroke), **dict.fromkeys(v.parts, 0.0)})
             if got and abs(got[0] - tr) <= tol * tr and abs(got[1] - t.stroke) <= tol * t.stroke:
-                yield got[2]
+                yield got[2], d
 
     return angles()
 
@@ -171,7 +173,7 @@ class _Scan:
         slotted levers): SCAN_TOL tells the ends."""
         bound = self.t.bound_deg - TOL * max(self.t.bound_deg, 1.0)
         angles = _reduced(self.m, self.v, self.t, beta, SCAN_TOL)
-        return angles is not None and any(a >= bound for a in angles)
+        return angles is not None and any(a >= bound for a, _ in angles)
 
 
 def forget_ranges() -> None:
@@ -218,16 +220,73 @@ def _fixed_design(m: Mechanism, spec: Spec, t: Targets) -> str:
     )
 
 
-def _defaults(m: Mechanism, spec: Spec, stroke: float) -> str:
+def _defaulted(m: Mechanism, spec: Spec) -> list[str]:
+    """The free parameters the request leaves to their default bounds."""
+    return [q.name for q in m.parameters if q.name not in spec.fixed and q.name not in spec.bounds]
+
+
+def _defaults(m: Mechanism, spec: Spec, t: Targets) -> str:
     """Where the search kept free lengths within their default bounds: those bounds, which a
     request's ``bounds`` widen."""
-    free = [q.name for q in m.parameters if q.name not in spec.fixed and q.name not in spec.bounds]
+    free = _defaulted(m, spec)
     if not free:
         return ""
     ranges = ", ".join(
-        f"{k} {lo:g} to {hi:g}" for k in free for lo, hi in [bounds(m, k, spec, stroke)]
+        f"{k} {lo:g} to {hi:g}" for k in free for lo, hi in [bounds(m, k, spec, t.stroke)]
     )
     return f", with its free lengths within their default bounds ({ranges}; bounds widen them)"
+
+
+def _lifted(m: Mechanism, spec: Spec, t: Targets, variants: list[Variant], best: float) -> str:
+    """Where the best design (the reduced solvers' exact optimum) rests on a default bound:
+    that bound, and what lifting it reaches: the least limit that meets the request's bound
+    (bisected), else the angle with it ``LIFT`` times wider; '' elsewhere."""
+
+    def optima(v: Variant, problem: Problem) -> list[tuple[float, dict[str, float]]] | None:
+        found = _reduced(m, replace(v, problem=problem), t, v.problem.beta)
+        return None if found is None else list(found)
+
+    def reach(k: str, end: int, limit: float) -> float:  # the best angle with k's end there
+        found = [-math.inf]
+        for v in variants:
+            if k in v.problem.bounds:
+                box = list(v.problem.bounds[k])
+                box[end] = limit / t.stroke
+                wider = {**v.problem.bounds, k: (box[0], box[1])}
+                lifted = replace(v.problem, bounds=wider, explicit=v.problem.explicit | {k})
+                found += [mu for mu, _ in optima(v, lifted) or ()]
+        return max(found)
+
+    each = [(v, optima(v, v.problem)) for v in variants]
+    if any(found is None for _, found in each):
+        return ""
+    tops = [(mu, v, d) for v, found in each for mu, d in found or ()]
+    if not tops:
+        return ""
+    _, v, d = max(tops, key=lambda o: o[0])
+    near_end = [(k, end) for k in _defaulted(m, spec) if k in v.problem.bounds for end in (0, 1)]
+    resting = [
+        (k, end)
+        for k, end in near_end
+        if abs(d[k] - v.problem.bounds[k][end]) <= 1e-9 * max(abs(d[k]), 1.0)
+    ]
+    lifts = []
+    for k, end in resting:
+        limit = bounds(m, k, spec, t.stroke)[end]
+        wider = limit * LIFT if end else limit / LIFT
+        lifts.append((reach(k, end, wider), k, end, limit, wider))
+    top, k, end, limit, wider = max(lifts, default=(best, "", 0, 0.0, 0.0))
+    if top <= best + 1e-9:
+        return ""
+    word = "≤" if end else "≥"
+    said = f"; its best design rests on the default bound {k} {word} {limit:g}: with {k} {word}"
+    if top < t.bound_deg:
+        return f"{said} {wider:g} it reaches {top:.4f}° (a request's bounds lift it)"
+    near, far = limit, wider  # the least limit that meets the bound lies between
+    while abs(far - near) > 1e-6 * abs(far):
+        mid = (near + far) / 2
+        near, far = (near, mid) if reach(k, end, mid) >= t.bound_deg else (mid, far)
+    return f"{said} {far:.6g} it meets {t.bound_deg:g}° (a request's bounds lift it)"
 
 
 def _with(spec: Spec) -> str:

@@ -6,6 +6,7 @@ which shares no code with synth.
 """
 
 import math
+import re
 
 import pytest
 
@@ -186,16 +187,31 @@ def test_transmission_bound_above_any_design():
     assert "27.008" in why.reason and "below the bound 50°" in why.reason
 
 
-def test_a_refusal_a_default_bound_set_says_so_and_bounds_widen_it():
-    """The best angle within the default bounds is not the type's best: the reason names
-    those bounds, and a wider one finds the designs (a longer rod)."""
+def test_a_refusal_a_default_bound_set_says_so_and_what_lifting_it_reaches():
+    """The best angle within the default bounds is not the type's best: the reason names the
+    default bound its best design rests on, and the least limit that meets the bound. Bounded
+    just above that limit, the designs come (the brute force checks them); just below, the
+    refusal stays."""
     (why,) = synth.synthesize(1.6, 300.0, 80.0, mechanisms=["whitworth"]).infeasible
     assert why.code == "TRANSMISSION_UNREACHABLE" and "75.5225°" in why.reason
-    assert "default bounds" in why.reason and "connecting_rod 30 to 600" in why.reason
-    spec = {"type": "whitworth", "bounds": {"connecting_rod": [30.0, 2000.0]}}
-    c = synth.synthesize(1.6, 300.0, 80.0, mechanisms=[spec]).candidates[0]
+    rests = "default bound connecting_rod ≤ 600: with connecting_rod ≤ "
+    said = re.search(rests + r"(\S+) it meets 80°", why.reason)
+    assert said, why.reason
+    least = float(said[1])
+    above = {"type": "whitworth", "bounds": {"connecting_rod": [30.0, least * (1 + 1e-5)]}}
+    c = synth.synthesize(1.6, 300.0, 80.0, mechanisms=[above]).candidates[0]
     assert_meets(c, 1.6, 300.0, 80.0)
     assert c.params["connecting_rod"] > 600.0
+    below = {"type": "whitworth", "bounds": {"connecting_rod": [30.0, least * (1 - 1e-4)]}}
+    (short,) = synth.synthesize(1.6, 300.0, 80.0, mechanisms=[below]).infeasible
+    assert short.code == "TRANSMISSION_UNREACHABLE" and short.best_transmission_angle_deg < 80.0
+    # past what lifting reaches (ten times the default), the reach itself
+    (far,) = synth.synthesize(1.6, 300.0, 89.5, mechanisms=["whitworth"]).infeasible
+    said = re.search(r"with connecting_rod ≤ 6000 it reaches (\S+)° ", far.reason)
+    assert said, far.reason
+    lifted = {"type": "whitworth", "bounds": {"connecting_rod": [30.0, 6000.0]}}
+    (top,) = synth.synthesize(1.6, 300.0, 89.5, mechanisms=[lifted]).infeasible
+    assert f"{top.best_transmission_angle_deg:.4f}" == said[1]
 
 
 def test_the_best_angle_in_a_refusal_is_over_every_variant():
