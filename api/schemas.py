@@ -291,8 +291,18 @@ class LoadSpec(Strict):
     gravity_deg: float | None = Field(
         None, ge=-360.0, le=360.0,
         description="the direction gravity pulls in, in the drawing's frame (degrees from +x, "
-        "counter-clockwise: -90 is down the drawing's y axis); omitted: no weight",
+        "counter-clockwise: -90 is down the drawing's y axis); omitted, and no "
+        "ram_incline_deg: no weight",
     )  # fmt: skip
+    ram_incline_deg: float | None = Field(
+        None,
+        ge=-90.0,
+        le=90.0,
+        description="instead of gravity_deg, gravity in the machine's frame, the same for "
+        "every type: the mechanism in a vertical plane, its drive below the ram's path, the "
+        "working stroke this many degrees above the horizontal (0: a shaper, -90: a slotter "
+        "cutting downwards)",
+    )
     force_profile: (
         Annotated[
             list[Annotated[list[Annotated[float, Field(ge=0.0, le=1e12)]],

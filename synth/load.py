@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import MISSING, dataclass, fields
+from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any
 
 from .errors import InvalidParameters
@@ -47,7 +47,10 @@ class Load:
     and its tool, ``link_mass_per_length`` (kg/m) the links' (uniform slender rods; 0:
     massless), ``guide_friction`` the Coulomb coefficient at the ram's guide. ``gravity_deg``
     is the direction gravity pulls in, in the drawing's frame (degrees from +x, counter-
-    clockwise; −90: down the drawing's y axis); None: no weight (the plane is horizontal).
+    clockwise; −90: down the drawing's y axis); or ``ram_incline_deg`` says it in the
+    machine's, the same for every type: the mechanism in a vertical plane, its drive below
+    the ram's path, the working stroke this many degrees above the horizontal (0: a shaper,
+    −90: a slotter cutting downwards); neither: no weight (the plane is horizontal).
     ``speed_fluctuation`` is the coefficient Cs = (ω_max − ω_min)/ω a flywheel must hold the
     crank within, ``efficiency`` the drive's from motor to crank; ``flywheel_rpm`` the speed
     of the shaft that carries the flywheel (None: the crank's), ``flywheel_width`` the width
@@ -66,6 +69,7 @@ class Load:
     force_profile: tuple[tuple[float, float], ...] | None = None
     guide_friction: float = 0.0
     gravity_deg: float | None = None
+    ram_incline_deg: float | None = None
     flywheel_rpm: float | None = None
     flywheel_width: float | None = None
     motor_rpm: float | None = None
@@ -108,6 +112,13 @@ class Load:
         if self.gravity_deg is not None and not _number(self.gravity_deg):
             msg = f"load.gravity_deg must be a finite angle, got {self.gravity_deg!r}"
             raise InvalidParameters(msg, ("load", "gravity_deg"))
+        incline = self.ram_incline_deg
+        if incline is not None and not (_number(incline) and -90 <= incline <= 90):
+            msg = f"load.ram_incline_deg must be an angle from -90 to 90, got {incline!r}"
+            raise InvalidParameters(msg, ("load", "ram_incline_deg"))
+        if incline is not None and self.gravity_deg is not None:
+            msg = "load: give gravity_deg (the drawing's frame) or ram_incline_deg, not both"
+            raise InvalidParameters(msg, ("load", "ram_incline_deg"))
         e, (lo, hi) = self.efficiency, RANGES["efficiency"]
         if not (_number(e) and lo <= e <= hi):
             msg = f"load.efficiency must be in (0, 1], at least {lo:g}, got {e!r}"
@@ -187,9 +198,22 @@ class Load:
         width = self.flywheel_width * self.metres
         return math.sqrt(math.sqrt(32 * inertia / (math.pi * STEEL * width))) / self.metres
 
+    def drawn(self, working: tuple[float, float], up: tuple[float, float]) -> Load:
+        """This load with its gravity in a design's drawing frame: ``working``, the unit
+        vector of the ram's working stroke there, and ``up``, the unit normal of its path
+        pointing away from the crank's side (``ram_incline_deg`` α: gravity is
+        −g (sin α working + cos α up))."""
+        if self.ram_incline_deg is None:
+            return self
+        a = math.radians(self.ram_incline_deg)
+        gx = -(math.sin(a) * working[0] + math.cos(a) * up[0])
+        gy = -(math.sin(a) * working[1] + math.cos(a) * up[1])
+        return replace(self, gravity_deg=math.degrees(math.atan2(gy, gx)), ram_incline_deg=None)
+
     @property
     def gravity(self) -> tuple[float, float]:
         """Gravity's acceleration in the drawing's frame, m/s² (0 without ``gravity_deg``)."""
+        assert self.ram_incline_deg is None  # in the machine's frame: ``drawn`` first
         if self.gravity_deg is None:
             return 0.0, 0.0
         a = math.radians(self.gravity_deg)

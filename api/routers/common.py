@@ -97,5 +97,9 @@ def tolerance(body: Extras) -> Tolerance | None:
 
 
 def load(spec: LoadSpec | None) -> Load | None:
-    """A request's load as synth takes it."""
-    return Load(**spec.model_dump(exclude_unset=True)) if spec else None
+    """A request's load as synth takes it; a rule the schema leaves to ``Load`` (two fields
+    that exclude each other): a 422 at its field."""
+    try:
+        return Load(**spec.model_dump(exclude_unset=True)) if spec else None
+    except InvalidParameters as e:
+        raise Located(e, [e.loc]) from None

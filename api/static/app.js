@@ -313,7 +313,8 @@ const LOAD_FIELDS = [["crank_rpm", "Crank speed (rpm)", 40], ["cutting_force", "
   ["speed_fluctuation", "Speed fluctuation the flywheel allows (Cs)", 0.05],
   ["flywheel_rpm", "Flywheel's shaft (rpm; blank: the crank's)", ""],
   ["flywheel_width", "Flywheel disc's width (blank: no disc)", ""],
-  ["motor_rpm", "Motor speed (rpm; blank: power only)", ""]];
+  ["motor_rpm", "Motor speed (rpm; blank: power only)", ""],
+  ["ram_incline_deg", "Working stroke above horizontal (°; 0 shaper, −90 slotter; blank: no weight)", ""]];
 
 function loadBox(prefix) {
   // the load form of a view (ids `${prefix}-load-...`), closed: no load until opened

@@ -19,6 +19,7 @@ from ..errors import InvalidDesign, InvalidParameters, SynthError
 from ..load import Load
 from ..mechanisms import Mechanism, get
 from ..mechanisms.fourbar.geometry import grashof_class
+from ..mechanisms.registry import GROUND, RAM
 from ..results import (
     NEAR_DEAD_POINT_DEG,
     NEAR_LIMIT,
@@ -139,7 +140,7 @@ def _analysis(
     loaded = None
     if load is not None:
         st = quality.Strokes(*slider_extremes(rows, theta, values))
-        summary["loads"], loaded = loads.loads(m, variant, f, pv, st, load)
+        summary["loads"], loaded = loads.loads(m, variant, f, pv, st, upright(m, pv, st, load))
     if deg is not None:
         curves = _curves(f, pv, crank_speed, crank_acceleration, deg)
         if "pins" in include:
@@ -283,6 +284,27 @@ def joints(
     pv = np.array([p[n] for n in m.names], dtype=float)
     xy = _pins(model(m, m.variant(p), "pins"), pv, deg)
     return {k: np.column_stack(v) for k, v in xy.items()}
+
+
+def upright(m: Mechanism, pv: np.ndarray, st: quality.Strokes, load: Load) -> Load:
+    """``load`` with its gravity in the design's drawing frame (``Load.drawn``): its working
+    stroke along the type's path, the way the slider goes from ``st.s0`` to ``st.s1``; up,
+    the path's normal pointing from the crank's pivot to the ram's pin."""
+    if load.ram_incline_deg is None:
+        return load
+    p = dict(zip(m.names, pv.tolist(), strict=True))
+    variant = m.variant(p)
+    assert m.frame is not None  # a type that carries loads
+    frame = m.frame(variant)
+    ux, uy = (float(c) for c in frame.path(p))
+    way = math.copysign(1.0, st.s1 - st.s0)
+    crank = next(a for a, b, c in frame.pins if (b, c) == (frame.bodies[0][0], GROUND))
+    ram = [a for a, *joined in frame.pins if RAM in joined] + [
+        a for a, _, slotted, _ in frame.slots if slotted == RAM
+    ]
+    xy = _pins(model(m, variant, "pins"), pv, np.degrees([st.start]))
+    side = ux * (xy[ram[0]][1][0] - xy[crank][1][0]) - uy * (xy[ram[0]][0][0] - xy[crank][0][0])
+    return load.drawn((way * ux, way * uy), (-uy, ux) if side >= 0 else (uy, -ux))
 
 
 def _pins(f: Model, pv: np.ndarray, deg: np.ndarray) -> dict[str, tuple[np.ndarray, np.ndarray]]:

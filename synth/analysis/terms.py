@@ -12,7 +12,7 @@ from ..errors import InvalidDesign
 from ..load import Load
 from ..mechanisms import Mechanism
 from . import loads, quality
-from .kinematics import prepared, slider_extremes
+from .kinematics import prepared, slider_extremes, upright
 from .model import Model
 
 
@@ -33,7 +33,7 @@ def peak_torque_terms(
     ``metres`` each), and their derivatives in the parameters (``loads.peak_terms``), for an
     optimiser that bounds each; raises SynthError for a design that does not run."""
     m, variant, f, pv, st = _running(mechanism, params)
-    return loads.peak_terms(m, variant, f, pv, st, load, metres)
+    return loads.peak_terms(m, variant, f, pv, st, upright(m, pv, st, load), metres)
 
 
 def _running(

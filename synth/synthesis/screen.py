@@ -13,7 +13,7 @@ ranked in a few batched calls.
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import cast
 
 import casadi as ca
@@ -144,8 +144,10 @@ def rank_torque(
 ) -> np.ndarray:
     """Each design's peak crank torque under ``load`` (its lengths ``metres`` each),
     approximately: the Newton–Euler equations solved at a grid of crank angles, the load's
-    force from its profile at the ram's place on the grid; inf where the slider does not run
-    one stroke each way on it."""
+    force from its profile at the ram's place on the grid, without the weights where gravity
+    is given in the machine's frame; inf where the slider does not run one stroke each way on
+    it."""
+    load = replace(load, ram_incline_deg=None)
     g = _sampled(m, variant, pvs)
     profile = np.array(load.profile)
     with np.errstate(all="ignore"):

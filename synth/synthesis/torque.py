@@ -48,9 +48,12 @@ BOUNDED = 2  # the angles a box's bound is taken at
 def supports(load: Load, sp: Space) -> bool:
     """Whether the bound holds for this load on this space (the module's docstring): on a
     space whose crank's scale is pinned (``Space.scaled``), unless the crank's weight
-    counts (a crank turning evenly about its pivot takes no torque but its weight's)."""
+    counts (a crank turning evenly about its pivot takes no torque but its weight's); not
+    with gravity in the machine's frame, whose direction in the drawing's varies by design."""
     weighs = load.link_mass_per_length > 0 and load.gravity_deg is not None
-    return load.force_profile is None and load.guide_friction == 0 and not (sp.scaled and weighs)
+    machine = load.ram_incline_deg is not None  # its drawing frame's gravity varies by design
+    plain = load.force_profile is None and load.guide_friction == 0 and not machine
+    return plain and not (sp.scaled and weighs)
 
 
 class Model:

@@ -19,6 +19,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import asdict
 
 import numpy as np
 import pytest
@@ -275,6 +276,47 @@ def test_the_flywheel_and_the_motor_where_a_designer_puts_them(mtype):
         motor = mean * (RPM * math.pi / 30) / 0.85 / (960 * math.pi / 30)
         assert got.power.motor_torque == pytest.approx(motor, rel=1e-7)
         assert crank.flywheel.disc_diameter is None and crank.power.motor_torque is None
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+def test_gravity_in_the_machines_frame_means_the_same_for_every_type(mtype):
+    """The ram's weight alone (massless links, a crank at a millionth of a rpm: no inertia),
+    its working stroke α above the horizontal: the crank's torque is m g sin α ds_w/dθ, s_w
+    the ram's travel along its working stroke (the brute force's, differentiated by complex
+    step), whichever way the type draws its path; across the path the guide takes it."""
+    theta = np.linspace(0.0, 2 * math.pi, 20_001)
+    for p in random_designs(mtype, 3, seed=27):
+        way = bruteforce.simulate(mtype, p, n=4000)["working_direction"]
+        ds = way * bruteforce.d_dtheta(lambda t, p=p: bruteforce.position(mtype, p, t), theta)
+        weight = 50.0 * 9.80665 * 1e-3 * ds  # N·m per unit of sin α: the lengths in mm
+        for alpha in (-90.0, 0.0, 30.0):
+            load = Load("mm", 1e-6, slider_mass=50.0, ram_incline_deg=alpha)
+            got = synth.analyze(mtype, p, load=load).loads.torque
+            want = math.sin(math.radians(alpha)) * weight
+            tol = 1e-6 * np.abs(weight).max()
+            assert got.max == pytest.approx(want.max(), abs=tol), (p, alpha)
+            assert got.min == pytest.approx(want.min(), abs=tol), (p, alpha)
+
+
+@pytest.mark.parametrize(
+    ("mtype", "params", "down_deg"),
+    [  # the path above the crank's pivot (y = offset > 0): down is −y; below it: +y
+        ("offset_slider_crank", {"crank": 100.0, "coupler": 300.0, "offset": 60.0}, -90.0),
+        ("offset_slider_crank", {"crank": 100.0, "coupler": 300.0, "offset": -60.0}, 90.0),
+        # the ram's path x = h − d to the right of the crank's pivot (h = 390 > d = 240)
+        ("crank_shaper", {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0}, 180.0),
+    ],
+)
+def test_a_horizontal_ram_hangs_its_drive_below(mtype, params, down_deg):
+    """A shaper (ram_incline_deg 0): gravity across the ram's path, from it towards the
+    crank's pivot; with the links' weights, the same loads as that direction in the
+    drawing's frame, worked out here by hand from the type's geometry."""
+    base = {"slider_mass": 40.0, "link_mass_per_length": 12.0, "cutting_force": 500.0}
+    machine = synth.analyze(mtype, params, load=Load("mm", RPM, **base, ram_incline_deg=0.0))
+    drawn = synth.analyze(mtype, params, load=Load("mm", RPM, **base, gravity_deg=down_deg))
+    for part in ("torque", "guide"):
+        got, want = (asdict(getattr(a.loads, part)) for a in (machine, drawn))
+        assert got == pytest.approx(want, rel=1e-12, abs=1e-9), part
 
 
 PROFILE = ((0.0, 500.0), (0.1, 3000.0), (0.6, 2000.0), (0.95, 2000.0))

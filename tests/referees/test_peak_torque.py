@@ -74,10 +74,15 @@ def against_the_referee(mtype, tr, bound, load=LOAD):
 
 # and the slider-crank with the guide's friction
 RUBBING = Load("m", 40.0, cutting_force=2.0, slider_mass=0.05, guide_friction=0.2)
+# a slotter: the ram cutting downwards, gravity in the machine's frame (the searched path)
+SLOTTER = Load(
+    "m", 40.0, cutting_force=2.0, slider_mass=0.05, link_mass_per_length=0.01, ram_incline_deg=-90.0
+)
 
 
 @pytest.mark.parametrize(("mtype", "tr", "bound", "load"), [(*q, LOAD) for q in QUICK]
-                         + [("offset_slider_crank", 1.6, 20.0, RUBBING)])  # fmt: skip
+                         + [("offset_slider_crank", 1.6, 20.0, RUBBING),
+                            ("offset_slider_crank", 1.6, 20.0, SLOTTER)])  # fmt: skip
 def test_the_least_peak_torque_is_not_beaten_by_a_global_search(mtype, tr, bound, load):
     against_the_referee(mtype, tr, bound, load)
 
