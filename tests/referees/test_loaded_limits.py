@@ -267,7 +267,7 @@ def load_spec(draw, lock: float | None):
         "length_unit": draw(st.sampled_from(["m", "mm", "in"])),
         "crank_rpm": draw(in_range("crank_rpm")),
     }
-    for name in ("speed_fluctuation", "efficiency"):
+    for name in ("speed_fluctuation", "efficiency", "flywheel_rpm", "flywheel_width", "motor_rpm"):
         if draw(st.booleans()):
             out[name] = draw(in_range(name))
     for name in ("slider_mass", "link_mass_per_length"):
@@ -280,6 +280,8 @@ def load_spec(draw, lock: float | None):
         out["force_profile"] = [[u, draw(log_uniform(1e-3, 1e6))] for u in fractions]
     if draw(st.booleans()):
         out["gravity_deg"] = draw(st.sampled_from([-90.0, 0.0, 90.0, 180.0, 37.5]))
+    elif draw(st.booleans()):  # the machine's frame: a shaper, a slotter, a slope
+        out["ram_incline_deg"] = draw(st.sampled_from([-90.0, 0.0, 37.5, 90.0]))
     if lock is not None and lock <= 2 and draw(st.integers(0, 3)) > 0:
         nudge = draw(st.sampled_from([0.0, 0.0, 1e-15, -1e-15, 1e-9, -1e-9, 1e-3, -1e-3]))
         out["guide_friction"] = lock * (1 + nudge)
@@ -364,7 +366,10 @@ def test_loaded_syntheses_at_the_limits_never_fail(client, tally, data):
 
 
 def _numbers(loads):
-    """Every number of a ``Loads`` (or its JSON), for a finiteness check."""
+    """Every number of a ``Loads`` (or its JSON), for a finiteness check (a figure not asked
+    for, None, is none)."""
+    if loads is None:
+        return []
     if isinstance(loads, dict):
         return [x for v in loads.values() for x in _numbers(v)] if loads else []
     if isinstance(loads, list | tuple):
