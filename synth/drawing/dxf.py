@@ -1,21 +1,29 @@
 """A drawing as DXF, for CAD (ezdxf): each link a centre line on its own layer (named as the
 link, as long as the design says), the pins as circles, the fixed pivots, the ram's guide and
-block, the stroke as a dimension, the pins' paths when asked; the drawing's unit set."""
+block, the stroke and each link as a dimension, the pins' paths when asked, and a title block
+(the type, what the design achieves, its lengths, the unit and scale, the date, the project
+and its version) below the drawing; the drawing's unit set."""
 
 from __future__ import annotations
 
+import datetime
 import io
 
 from ezdxf import units
 from ezdxf.document import Drawing as Document
 from ezdxf.filemanagement import new
+from ezdxf.layouts.layout import Modelspace
 
-from . import Drawing, sketch, slot, unit_mm
+from ..analysis.kinematics import analyze
+from ..mechanisms import get
+from ..version import __version__
+from . import Drawing, Sketch, sketch, slot, unit_mm
 
 UNITS = {"mm": units.MM, "m": units.M, "in": units.IN}
 # the symbols' layers (none a parameter's name: layer names ignore case) and their colours
 # (AutoCAD's colour index); the links' take 1, 2, 3, …
 LAYERS = {"PINS": 7, "PIVOTS": 8, "SLOTS": 8, "GUIDE": 8, "RAM": 8, "STROKE": 7, "PATHS": 9}
+LAYERS |= {"DIMENSIONS": 7, "TITLE": 7}
 
 
 def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
@@ -59,8 +67,37 @@ def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
     dim = msp.add_aligned_dim(p1=d.stroke[0], p2=d.stroke[1], distance=offset,
                               dxfattribs={"layer": "STROKE"}, override=size)  # fmt: skip
     dim.render()
+    on = {"layer": "DIMENSIONS"}
+    for link in d.links:  # beside each link, its length
+        a, b, away = d.pins[link.a], d.pins[link.b], 2 * sk.text_height
+        msp.add_aligned_dim(p1=a, p2=b, distance=away, dxfattribs=on, override=size).render()
+    _title(msp, d, sk, length_unit)
     for xy in (d.paths or {}).values():
         msp.add_lwpolyline([tuple(p) for p in xy], dxfattribs={"layer": "PATHS"})
     out = io.StringIO()
     doc.write(out)
     return out.getvalue().encode()
+
+
+def _title(msp: Modelspace, d: Drawing, sk: Sketch, length_unit: str) -> None:
+    """The title block, below the drawing: a framed column of lines."""
+    a = analyze(d.type, d.params)
+    lines = [
+        f"{get(d.type).title} ({d.type})",
+        f"time ratio {a.time_ratio:.9g}, stroke {a.stroke:.9g} {length_unit}, minimum "
+        f"transmission angle {a.transmission.min_deg:.4f} deg",
+        ", ".join(f"{k} {v:.9g}" for k, v in d.params.items()),
+        f"lengths in {length_unit}, scale 1:1, crank at {d.crank_angle_deg:g} deg, "
+        f"{datetime.datetime.now(datetime.UTC).date().isoformat()}",
+        f"quickreturn-synth {__version__}",
+    ]
+    x0, y0, _, _ = d.bounds()
+    h, gap = sk.text_height, 1.6 * sk.text_height
+    top = y0 - 4 * h
+    for i, text in enumerate(lines):
+        label = msp.add_text(text, height=h, dxfattribs={"layer": "TITLE"})
+        label.set_placement((x0 + h, top - (i + 1) * gap))
+    width = max(len(t) for t in lines) * 0.62 * h + 2 * h  # ~0.55 h a character
+    bottom = top - (len(lines) + 0.8) * gap
+    corners = [(x0, top), (x0 + width, top), (x0 + width, bottom), (x0, bottom)]
+    msp.add_lwpolyline(corners, close=True, dxfattribs={"layer": "TITLE"})

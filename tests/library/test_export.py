@@ -5,6 +5,7 @@ refused naming the field."""
 
 import io
 import math
+import re
 import xml.etree.ElementTree as ET
 
 import ezdxf
@@ -53,7 +54,7 @@ def test_a_dxf_reads_back_with_the_designs_lengths_and_stroke(mtype):
             assert min(math.dist(c, xy[0]) for xy in pins.values()) < near
         labels = {e.dxf.text for e in msp.query('TEXT[layer=="PINS"]')}
         assert labels == set(pins)
-        (dim,) = msp.query("DIMENSION")
+        (dim,) = msp.query('DIMENSION[layer=="STROKE"]')
         stroke = bruteforce.simulate(mtype, p)["stroke"]
         assert dim.get_measurement() == pytest.approx(stroke, rel=1e-9)
         # what a CAD program shows: the dimension block's text, the stroke to 6 decimals
@@ -64,6 +65,33 @@ def test_a_dxf_reads_back_with_the_designs_lengths_and_stroke(mtype):
                  if np.ptp(xy, axis=0).max() == 0]  # fmt: skip
         paths = msp.query('LWPOLYLINE[layer=="PATHS"]')
         assert len(paths) == (len(pins) - len(fixed) if i == 0 else 0)
+
+
+@pytest.mark.parametrize("mtype", TYPES)
+@pytest.mark.parametrize("unit", list(LENGTH_UNITS))
+def test_a_dxf_dimensions_every_link_and_has_a_title_block(mtype, unit):
+    """Each link's dimension, read back as a CAD program shows it: the text in its block is
+    the design's length to 6 decimals, in any unit; the title block names the type, the
+    unit and scale, the brute force's time ratio and stroke, and the project's version."""
+    p = designs(mtype)[0]
+    msp = read_dxf(synth.export(mtype, p, "dxf", 50.0, unit)).modelspace()
+    drawn = sorted(
+        p[name] for name, *_ in synth.mechanisms.get(mtype).drawing if p.get(name, 0) > 0
+    )
+    dims = msp.query('DIMENSION[layer=="DIMENSIONS"]')
+    assert sorted(d.get_measurement() for d in dims) == pytest.approx(drawn, rel=1e-9)
+    for d in dims:
+        (shown,) = [e.plain_text() for e in d.get_geometry_block() if e.dxftype() == "MTEXT"]
+        assert shown == f"{d.get_measurement():.6f}".rstrip("0").rstrip(".")
+    title = "\n".join(e.dxf.text for e in msp.query('TEXT[layer=="TITLE"]'))
+    b = bruteforce.simulate(mtype, p)
+    assert f"({mtype})" in title and f"lengths in {unit}, scale 1:1" in title
+    said = re.search(r"time ratio (\S+), stroke (\S+) " + unit, title)
+    assert said, title
+    assert float(said[1]) == pytest.approx(b["time_ratio"], rel=1e-8)
+    assert float(said[2]) == pytest.approx(b["stroke"], rel=1e-8)
+    assert f"quickreturn-synth {synth.__version__}" in title
+    assert len(msp.query('LWPOLYLINE[layer=="TITLE"]')) == 1
 
 
 @pytest.mark.parametrize("mtype", TYPES)
