@@ -456,7 +456,9 @@ class ExportRequest(Strict):
         description="svg: true size; dxf: each link on its own layer; json: the drawing and "
         "its symbols' shapes, for a page that draws them",
     )
-    crank_angle_deg: float = Field(0.0, ge=-1e6, le=1e6, description="where the crank is drawn")
+    crank_angle_deg: float | None = Field(
+        None, ge=-1e6, le=1e6, description="where the crank is drawn; omitted: mid working stroke"
+    )
     length_unit: Literal[tuple(LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
         "mm", description="the unit of the design's lengths: the SVG's size, the DXF's units"
     )

@@ -407,13 +407,13 @@ def _sweep_text(s: SweepResult, rows: list[dict[str, Any]]) -> str:
 @_params
 @click.option("--format", "fmt", type=click.Choice(FORMATS), default="svg", show_default=True,
               help="svg: true size; dxf: each link on its own layer")  # fmt: skip
-@click.option("--crank-angle", type=float, default=0.0, show_default=True, help="degrees")
+@click.option("--crank-angle", type=float, help="degrees (default: mid working stroke)")
 @click.option("--length-unit", type=click.Choice(list(LENGTH_UNITS)), default="mm",
               show_default=True, help="the unit of the design's lengths")  # fmt: skip
 @click.option("--paths", is_flag=True, help="each moving pin's path over a turn")
 @click.option("-o", "--out", type=click.Path(dir_okay=False, writable=True),
               help="the file (default: standard output)")  # fmt: skip
-def export(mechanism: str, params: tuple[str, ...], fmt: str, crank_angle: float,
+def export(mechanism: str, params: tuple[str, ...], fmt: str, crank_angle: float | None,
            length_unit: str, paths: bool, out: str | None) -> None:  # fmt: skip
     try:
         doc = _export(mechanism, _numbers(params, "--param"), fmt, crank_angle, length_unit, paths)

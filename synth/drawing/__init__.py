@@ -77,13 +77,21 @@ class Drawing:
 
 
 def drawing(
-    mechanism: str, params: Mapping[str, float], crank_angle_deg: float = 0.0, paths: bool = False
+    mechanism: str,
+    params: Mapping[str, float],
+    crank_angle_deg: float | None = None,
+    paths: bool = False,
 ) -> Drawing:
-    """The drawing of a design at a crank angle (degrees); with ``paths``, each moving pin's
-    path over a turn. Raises what ``synth.analyze`` raises for a design that cannot run."""
+    """The drawing of a design at a crank angle (degrees; None: mid working stroke, where the
+    mechanism stands open); with ``paths``, each moving pin's path over a turn. Raises what
+    ``synth.analyze`` raises for a design that cannot run."""
     check_angle(crank_angle_deg)
     m = drawn(mechanism)
     a = analyze(mechanism, params)  # checks the design, and finds its dead centres
+    if crank_angle_deg is None:
+        e = a.extremes
+        start = e.max if a.working_stroke.direction < 0 else e.min
+        crank_angle_deg = (start.crank_angle_deg + a.working_stroke.crank_angle_deg / 2) % 360
     p = m.complete(a.params)
     assert m.frame is not None  # ``drawn`` saw it
     frame = m.frame(m.variant(p))
@@ -191,7 +199,7 @@ def drawn(mechanism: str) -> Mechanism:
     return m
 
 
-def check_angle(crank_angle_deg: float) -> None:
-    if not np.isfinite(crank_angle_deg):
+def check_angle(crank_angle_deg: float | None) -> None:
+    if crank_angle_deg is not None and not np.isfinite(crank_angle_deg):
         msg = f"crank_angle_deg must be finite, got {crank_angle_deg!r}"
         raise InvalidParameters(msg, ("crank_angle_deg",))

@@ -16,14 +16,14 @@ def export(
     mechanism: str,
     params: Mapping[str, float],
     format: str = "svg",
-    crank_angle_deg: float = 0.0,
+    crank_angle_deg: float | None = None,
     length_unit: str = "mm",
     paths: bool = False,
 ) -> bytes:
-    """The design drawn at ``crank_angle_deg``: ``format`` ``svg`` (true size, the lengths in
-    ``length_unit``), ``dxf`` (each link on its own layer, the unit set) or ``json`` (the
-    ``Drawing`` and its ``Sketch``, for a page that draws them); with ``paths``, each moving
-    pin's path over a turn.
+    """The design drawn at ``crank_angle_deg`` (None: mid working stroke): ``format`` ``svg``
+    (true size, the lengths in ``length_unit``), ``dxf`` (each link on its own layer, the unit
+    set) or ``json`` (the ``Drawing`` and its ``Sketch``, for a page that draws them); with
+    ``paths``, each moving pin's path over a turn.
 
     >>> doc = export("crank_shaper", {"crank": 120, "pivot_distance": 240, "lever": 450})
     >>> doc.startswith(b"<?xml") and b'width="' in doc
@@ -50,7 +50,7 @@ def check(
     mechanism: str,
     params: Mapping[str, float],
     format: str = "svg",
-    crank_angle_deg: float = 0.0,
+    crank_angle_deg: float | None = None,
     length_unit: str = "mm",
     **_: Any,
 ) -> None:

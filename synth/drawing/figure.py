@@ -15,7 +15,7 @@ from .svg import COLOURS
 def draw(
     mechanism: str,
     params: Mapping[str, float],
-    crank_angle_deg: float = 0.0,
+    crank_angle_deg: float | None = None,
     paths: bool = True,
     ax: Any = None,
 ) -> Any:

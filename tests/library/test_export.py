@@ -68,6 +68,20 @@ def test_a_dxf_reads_back_with_the_designs_lengths_and_stroke(mtype):
 
 
 @pytest.mark.parametrize("mtype", TYPES)
+def test_by_default_the_drawing_shows_the_mechanism_open_mid_working_stroke(mtype):
+    """Without a crank angle the crank stands half way through the working stroke (the brute
+    force's), the ram away from both dead centres (at 0° a crank shaper lay on one line)."""
+    for p in designs(mtype):
+        b = bruteforce.simulate(mtype, p)
+        start = b["theta_min"] if b["working_direction"] == 1 else b["theta_max"]
+        mid = math.degrees(start + b["working_angle"] / 2) % 360
+        root = ET.fromstring(synth.export(mtype, p))
+        assert float(root.get("data-crank-angle-deg")) == pytest.approx(mid, abs=1e-5)  # 9 digits
+        s = bruteforce.position(mtype, p, np.radians([mid]))[0]
+        assert b["s_min"] + 0.1 * b["stroke"] < s < b["s_max"] - 0.1 * b["stroke"]
+
+
+@pytest.mark.parametrize("mtype", TYPES)
 @pytest.mark.parametrize("unit", list(LENGTH_UNITS))
 def test_a_dxf_dimensions_every_link_and_has_a_title_block(mtype, unit):
     """Each link's dimension, read back as a CAD program shows it: the text in its block is
