@@ -457,7 +457,11 @@ class ExportRequest(Strict):
         "its symbols' shapes, for a page that draws them",
     )
     crank_angle_deg: float | None = Field(
-        None, ge=-1e6, le=1e6, description="where the crank is drawn; omitted: mid working stroke"
+        None,
+        ge=-1e6,
+        le=1e6,
+        description="where the crank is drawn; omitted: a third of the way through the working "
+        "stroke, where the mechanism stands open",
     )
     length_unit: Literal[tuple(LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
         "mm", description="the unit of the design's lengths: the SVG's size, the DXF's units"

@@ -407,7 +407,9 @@ def _sweep_text(s: SweepResult, rows: list[dict[str, Any]]) -> str:
 @_params
 @click.option("--format", "fmt", type=click.Choice(FORMATS), default="svg", show_default=True,
               help="svg: true size; dxf: each link on its own layer")  # fmt: skip
-@click.option("--crank-angle", type=float, help="degrees (default: mid working stroke)")
+@click.option(
+    "--crank-angle", type=float, help="degrees (default: a third into the working stroke)"
+)
 @click.option("--length-unit", type=click.Choice(list(LENGTH_UNITS)), default="mm",
               show_default=True, help="the unit of the design's lengths")  # fmt: skip
 @click.option("--paths", is_flag=True, help="each moving pin's path over a turn")

@@ -82,8 +82,9 @@ def drawing(
     crank_angle_deg: float | None = None,
     paths: bool = False,
 ) -> Drawing:
-    """The drawing of a design at a crank angle (degrees; None: mid working stroke, where the
-    mechanism stands open); with ``paths``, each moving pin's path over a turn. Raises what
+    """The drawing of a design at a crank angle (degrees; None: a third of the way through the
+    working stroke, where the mechanism stands open: half way, a crank shaper's links lie on
+    one line); with ``paths``, each moving pin's path over a turn. Raises what
     ``synth.analyze`` raises for a design that cannot run."""
     check_angle(crank_angle_deg)
     m = drawn(mechanism)
@@ -91,7 +92,7 @@ def drawing(
     if crank_angle_deg is None:
         e = a.extremes
         start = e.max if a.working_stroke.direction < 0 else e.min
-        crank_angle_deg = (start.crank_angle_deg + a.working_stroke.crank_angle_deg / 2) % 360
+        crank_angle_deg = (start.crank_angle_deg + a.working_stroke.crank_angle_deg / 3) % 360
     p = m.complete(a.params)
     assert m.frame is not None  # ``drawn`` saw it
     frame = m.frame(m.variant(p))

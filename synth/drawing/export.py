@@ -20,10 +20,10 @@ def export(
     length_unit: str = "mm",
     paths: bool = False,
 ) -> bytes:
-    """The design drawn at ``crank_angle_deg`` (None: mid working stroke): ``format`` ``svg``
-    (true size, the lengths in ``length_unit``), ``dxf`` (each link on its own layer, the unit
-    set) or ``json`` (the ``Drawing`` and its ``Sketch``, for a page that draws them); with
-    ``paths``, each moving pin's path over a turn.
+    """The design drawn at ``crank_angle_deg`` (None: a third into the working stroke):
+    ``format`` ``svg`` (true size, the lengths in ``length_unit``), ``dxf`` (each link on its
+    own layer, the unit set) or ``json`` (the ``Drawing`` and its ``Sketch``, for a page that
+    draws them); with ``paths``, each moving pin's path over a turn.
 
     >>> doc = export("crank_shaper", {"crank": 120, "pivot_distance": 240, "lever": 450})
     >>> doc.startswith(b"<?xml") and b'width="' in doc

@@ -4,6 +4,7 @@ stroke as the brute-force simulation's, the SVG in true size, the pins named; ba
 refused naming the field."""
 
 import io
+import itertools
 import math
 import re
 import xml.etree.ElementTree as ET
@@ -68,17 +69,29 @@ def test_a_dxf_reads_back_with_the_designs_lengths_and_stroke(mtype):
 
 
 @pytest.mark.parametrize("mtype", TYPES)
-def test_by_default_the_drawing_shows_the_mechanism_open_mid_working_stroke(mtype):
-    """Without a crank angle the crank stands half way through the working stroke (the brute
-    force's), the ram away from both dead centres (at 0° a crank shaper lay on one line)."""
+def test_by_default_the_drawing_shows_the_mechanism_open(mtype):
+    """Without a crank angle the crank stands a third of the way through the working stroke
+    (the brute force's), the ram away from both dead centres, no three pins of a link chain
+    on one line (at 0°, and half way, a crank shaper's links lay on one line)."""
     for p in designs(mtype):
         b = bruteforce.simulate(mtype, p)
         start = b["theta_min"] if b["working_direction"] == 1 else b["theta_max"]
-        mid = math.degrees(start + b["working_angle"] / 2) % 360
+        mid = math.degrees(start + b["working_angle"] / 3) % 360
         root = ET.fromstring(synth.export(mtype, p))
         assert float(root.get("data-crank-angle-deg")) == pytest.approx(mid, abs=1e-5)  # 9 digits
         s = bruteforce.position(mtype, p, np.radians([mid]))[0]
         assert b["s_min"] + 0.1 * b["stroke"] < s < b["s_max"] - 0.1 * b["stroke"]
+        at = {k: xy[0] for k, xy in synth.joints(mtype, p, [mid]).items()}
+        m = synth.mechanisms.get(mtype)
+        rigid = m.frame(m.variant(m.complete(p))).bodies  # members of one body keep their angle
+        links = [(k, a, c) for k, a, c in m.drawing if p.get(k, 0)]
+        for (k, a, c), (n, d, e) in itertools.combinations(links, 2):
+            shared = {a, c} & {d, e}
+            if len(shared) == 1 and not any({k, n} <= set(b) for b in rigid):
+                (o,) = shared  # two links at one pin: not folded onto one line
+                (ux, uy), (vx, vy) = (np.subtract(at[q], at[o]) for q in ({a, c, d, e} - shared))
+                sine = abs(ux * vy - uy * vx) / (math.hypot(ux, uy) * math.hypot(vx, vy))
+                assert sine > math.sin(math.radians(1.0)), (mtype, p, k, n)
 
 
 @pytest.mark.parametrize("mtype", TYPES)
