@@ -39,7 +39,7 @@ def test_every_type_exports_in_both_formats(client, mtype):
     for e in doc.modelspace().query("LINE"):
         if e.dxf.layer in p:
             assert (e.dxf.end - e.dxf.start).magnitude == pytest.approx(p[e.dxf.layer], rel=1e-9)
-    (dim,) = doc.modelspace().query("DIMENSION")
+    (dim,) = doc.modelspace().query('DIMENSION[layer=="STROKE"]')
     assert dim.get_measurement() == pytest.approx(bruteforce.simulate(mtype, p)["stroke"], rel=1e-9)
 
     r = client.post("/v1/export", json=body(mtype, p, format="json"))
