@@ -355,16 +355,17 @@ def motion(
                 if c is not None:  # its family's smallest member, and it where that differs
                     smallest = _smallest_member(m, i, c, t, s.variants, extras)
                     mine += [smallest] if aim.scale_free else [c, smallest]
-        if time.monotonic() >= t.deadline:  # where the search stopped is the clock's: not kept
+        cut = time.monotonic() >= t.deadline  # where the search stopped is the clock's
+        if cut:  # not kept: its one reason is the cut
             mine, bounds = exact, None
             infeasible.append(cut_short(m.type, o.name))
         if bounds:  # every variant's least certified (a limit only raises the optimum)
             mine = [certify.mark(c, min(bounds)) for c in mine]
         kept = [c for c in mine if o.allows(c, limit)]
-        if not kept and not mine:
+        if not kept and not mine and not cut:
             best = pool[0].params if pool else None
             infeasible.append(_locked(m, best, extras.get("load")) or diagnose(m, spec, best_t, s))
-        elif not kept:  # the limit left none
+        elif not kept and not cut:  # the limit left none
             assert o.limit is not None and limit is not None
             infeasible.append(_unreachable(m, spec, t, extras, o.limit, limit, mine))
         found += _distinct(kept, t.stroke, o.tie)

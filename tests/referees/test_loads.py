@@ -19,7 +19,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict
+from dataclasses import asdict, replace
 
 import numpy as np
 import pytest
@@ -250,32 +250,29 @@ def test_the_flywheel_matches_a_dense_integration(mtype):
             assert got.torque.mean == pytest.approx(mean, rel=1e-7, abs=1e-9 * got.torque.rms)
             om = load.omega
             assert got.flywheel.inertia == pytest.approx(swing / (0.05 * om**2), rel=1e-7)
+            _shafts(mtype, p, load, got, swing, mean)
 
 
-@pytest.mark.parametrize("mtype", TYPES)
-def test_the_flywheel_and_the_motor_where_a_designer_puts_them(mtype):
-    """On a shaft turning at flywheel_rpm the inertia is ΔE / (Cs ω_f²), ΔE from the dense
-    integration: (crank rpm / flywheel rpm)² of the crank shaft's. A solid steel disc of the
-    width given, with the diameter given, has it (I = m D² / 8). The motor's torque at
-    motor_rpm is the mean power over the efficiency, over the motor's speed."""
-    base = {"cutting_force": 2000.0, "slider_mass": 50.0, "link_mass_per_length": 5.0}
-    for p in random_designs(mtype, 1, seed=26):
-        crank = synth.analyze(mtype, p, load=Load("mm", RPM, **base)).loads
-        shafts = {"flywheel_rpm": 1450.0, "flywheel_width": 80.0, "motor_rpm": 960.0}
-        load = Load("mm", RPM, **base, speed_fluctuation=0.02, efficiency=0.85, **shafts)
-        got = synth.analyze(mtype, p, load=load).loads
-        swing, mean = _dense_swing(mtype, p, load)
-        fly = got.flywheel
-        assert fly.rpm == 1450.0 and crank.flywheel.rpm == RPM
-        assert fly.inertia == pytest.approx(swing / (0.02 * (1450 * math.pi / 30) ** 2), rel=1e-7)
-        scaled = crank.flywheel.inertia * (0.05 / 0.02) * (RPM / 1450) ** 2
-        assert fly.inertia == pytest.approx(scaled, rel=1e-12)
-        diameter, width = fly.disc_diameter * 1e-3, 0.080  # m
-        mass = 7850.0 * math.pi * diameter**2 / 4 * width
-        assert mass * diameter**2 / 8 == pytest.approx(fly.inertia, rel=1e-12)
-        motor = mean * (RPM * math.pi / 30) / 0.85 / (960 * math.pi / 30)
-        assert got.power.motor_torque == pytest.approx(motor, rel=1e-7)
-        assert crank.flywheel.disc_diameter is None and crank.power.motor_torque is None
+def _shafts(mtype, p, load, crank, swing, mean):
+    """The flywheel and the motor where a designer puts them: on a shaft turning at
+    flywheel_rpm the inertia is ΔE / (Cs ω_f²), ΔE the dense integration's, and (crank rpm /
+    flywheel rpm)² of the crank shaft's; a solid steel disc of the width given, with the
+    diameter given, has it (I = m D² / 8); the motor's torque at motor_rpm is the mean power
+    over the efficiency, over the motor's speed."""
+    shafts = {"flywheel_rpm": 1450.0, "flywheel_width": 80.0, "motor_rpm": 960.0}
+    shafted = replace(load, speed_fluctuation=0.02, efficiency=0.85, **shafts)
+    got = synth.analyze(mtype, p, load=shafted).loads
+    fly = got.flywheel
+    assert fly.rpm == 1450.0 and crank.flywheel.rpm == RPM
+    assert fly.inertia == pytest.approx(swing / (0.02 * (1450 * math.pi / 30) ** 2), rel=1e-7)
+    scaled = crank.flywheel.inertia * (0.05 / 0.02) * (RPM / 1450) ** 2
+    assert fly.inertia == pytest.approx(scaled, rel=1e-12)
+    diameter, width = fly.disc_diameter * 1e-3, 0.080  # m
+    mass = 7850.0 * math.pi * diameter**2 / 4 * width
+    assert mass * diameter**2 / 8 == pytest.approx(fly.inertia, rel=1e-12)
+    motor = mean * (RPM * math.pi / 30) / 0.85 / (960 * math.pi / 30)
+    assert got.power.motor_torque == pytest.approx(motor, rel=1e-7)
+    assert crank.flywheel.disc_diameter is None and crank.power.motor_torque is None
 
 
 @pytest.mark.parametrize("mtype", TYPES)
