@@ -227,6 +227,12 @@ class Extras(Strict):
     )
 
 
+def _ranged(name: str, default: Any, description: str) -> Any:
+    """A load's number as ``Load`` ranges it (``RANGES``)."""
+    lo, hi = RANGES[name]
+    return Field(default, ge=lo, le=hi, description=description)
+
+
 class LoadSpec(Strict):
     """What the design drives at constant crank speed: adds ``loads`` (the crank torque, power
     and flywheel, the joints' and the guide's largest forces) and, with curves, the torque
@@ -235,12 +241,7 @@ class LoadSpec(Strict):
     length_unit: Literal[tuple(LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
         ..., description="the unit of the design's lengths (forces and masses are SI)"
     )
-    crank_rpm: float = Field(
-        ...,
-        ge=RANGES["crank_rpm"][0],
-        le=RANGES["crank_rpm"][1],
-        description="the crank's constant speed",
-    )
+    crank_rpm: float = _ranged("crank_rpm", ..., "the crank's constant speed")
     cutting_force: float = Field(
         0.0, ge=0.0, le=1e12, description="N, resisting the ram through the cutting zone"
     )
@@ -255,38 +256,25 @@ class LoadSpec(Strict):
     link_mass_per_length: float = Field(
         0.0, ge=0.0, le=1e12, description="kg/m: each drawn link a uniform slender rod (0: none)"
     )
-    speed_fluctuation: float = Field(
-        0.05,
-        ge=RANGES["speed_fluctuation"][0],
-        le=RANGES["speed_fluctuation"][1],
-        description="Cs = (ω_max − ω_min)/ω the flywheel keeps the crank to",
+    speed_fluctuation: float = _ranged(
+        "speed_fluctuation", 0.05, "Cs = (ω_max − ω_min)/ω the flywheel keeps the crank to"
     )
-    efficiency: float = Field(
-        1.0,
-        ge=RANGES["efficiency"][0],
-        le=RANGES["efficiency"][1],
-        description="the drive's, motor to crank",
-    )
+    efficiency: float = _ranged("efficiency", 1.0, "the drive's, motor to crank")
     guide_friction: float = Field(
         0.0, ge=0.0, le=2.0, description="Coulomb coefficient at the ram's guide (0: none)"
     )
-    flywheel_rpm: float | None = Field(
+    flywheel_rpm: float | None = _ranged(
+        "flywheel_rpm",
         None,
-        ge=RANGES["flywheel_rpm"][0],
-        le=RANGES["flywheel_rpm"][1],
-        description="the speed of the shaft that carries the flywheel (omitted: the crank's)",
+        "the speed of the shaft that carries the flywheel (omitted: the crank's)",
     )
-    flywheel_width: float | None = Field(
+    flywheel_width: float | None = _ranged(
+        "flywheel_width",
         None,
-        ge=RANGES["flywheel_width"][0],
-        le=RANGES["flywheel_width"][1],
-        description="in length_unit: adds the diameter of a solid steel disc flywheel this wide",
+        "in length_unit: adds the diameter of a solid steel disc flywheel this wide",
     )
-    motor_rpm: float | None = Field(
-        None,
-        ge=RANGES["motor_rpm"][0],
-        le=RANGES["motor_rpm"][1],
-        description="the motor's speed: adds its rated torque there",
+    motor_rpm: float | None = _ranged(
+        "motor_rpm", None, "the motor's speed: adds its rated torque there"
     )
     gravity_deg: float | None = Field(
         None, ge=-360.0, le=360.0,

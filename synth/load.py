@@ -172,7 +172,7 @@ class Load:
     @property
     def omega(self) -> float:
         """The crank speed, rad/s."""
-        return 2 * math.pi * self.crank_rpm / 60
+        return _rad_s(self.crank_rpm)
 
     @property
     def flywheel_speed(self) -> float:
@@ -182,12 +182,12 @@ class Load:
     def inertia(self, energy: float) -> float:
         """The flywheel inertia (kg·m²) that holds its shaft's speed within
         ``speed_fluctuation`` against an energy swing ``energy`` (J): ΔE / (Cs ω²)."""
-        return energy / self.speed_fluctuation / (2 * math.pi * self.flywheel_speed / 60) ** 2
+        return energy / self.speed_fluctuation / _rad_s(self.flywheel_speed) ** 2
 
     def motor_torque(self, rated: float) -> float | None:
         """The motor's torque (N·m) at ``motor_rpm`` for its rated power ``rated`` (W); None
         without a motor speed."""
-        return None if self.motor_rpm is None else rated / (2 * math.pi * self.motor_rpm / 60)
+        return None if self.motor_rpm is None else rated / _rad_s(self.motor_rpm)
 
     def disc(self, inertia: float) -> float | None:
         """The diameter (``length_unit``) of a solid steel disc ``flywheel_width`` wide whose
@@ -218,6 +218,11 @@ class Load:
             return 0.0, 0.0
         a = math.radians(self.gravity_deg)
         return GRAVITY * math.cos(a), GRAVITY * math.sin(a)
+
+
+def _rad_s(rpm: float) -> float:
+    """A shaft's speed in rad/s, from rpm."""
+    return 2 * math.pi * rpm / 60
 
 
 def _number(v: Any) -> bool:

@@ -140,7 +140,8 @@ def _analysis(
     loaded = None
     if load is not None:
         st = quality.Strokes(*slider_extremes(rows, theta, values))
-        summary["loads"], loaded = loads.loads(m, variant, f, pv, st, upright(m, pv, st, load))
+        upright_load = upright(m, variant, pv, st, load)
+        summary["loads"], loaded = loads.loads(m, variant, f, pv, st, upright_load)
     if deg is not None:
         curves = _curves(f, pv, crank_speed, crank_acceleration, deg)
         if "pins" in include:
@@ -286,14 +287,15 @@ def joints(
     return {k: np.column_stack(v) for k, v in xy.items()}
 
 
-def upright(m: Mechanism, pv: np.ndarray, st: quality.Strokes, load: Load) -> Load:
+def upright(
+    m: Mechanism, variant: frozenset[str], pv: np.ndarray, st: quality.Strokes, load: Load
+) -> Load:
     """``load`` with its gravity in the design's drawing frame (``Load.drawn``): its working
     stroke along the type's path, the way the slider goes from ``st.s0`` to ``st.s1``; up,
     the path's normal pointing from the crank's pivot to the ram's pin."""
     if load.ram_incline_deg is None:
         return load
     p = dict(zip(m.names, pv.tolist(), strict=True))
-    variant = m.variant(p)
     assert m.frame is not None  # a type that carries loads
     frame = m.frame(variant)
     ux, uy = (float(c) for c in frame.path(p))

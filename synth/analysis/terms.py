@@ -33,7 +33,7 @@ def peak_torque_terms(
     ``metres`` each), and their derivatives in the parameters (``loads.peak_terms``), for an
     optimiser that bounds each; raises SynthError for a design that does not run."""
     m, variant, f, pv, st = _running(mechanism, params)
-    return loads.peak_terms(m, variant, f, pv, st, upright(m, pv, st, load), metres)
+    return loads.peak_terms(m, variant, f, pv, st, upright(m, variant, pv, st, load), metres)
 
 
 def _running(

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 from ..analysis.kinematics import analyze
 from ..errors import SynthError, Unreachable
 from ..mechanisms import Mechanism
-from ..mechanisms.reduced import Problem, differ
+from ..mechanisms.reduced import differ
 from ..results import TOL, Infeasible
 from ..targets import MAX_TRANSMISSION, time_ratio
 from . import scans
@@ -36,17 +36,17 @@ def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
     searchable = [v for v in s.variants if v.free or v.exact]
     if not searchable:
         return Infeasible(m.type, "FIXED_PARTS_CONTRADICT_TARGETS", _fixed_design(m, spec, t))
-    best = None
+    best, found = None, []
     if t.bound_deg > 0:
-        angles = [a for v in searchable for a in _angles(m, v, spec, t)]
-        best = max(angles, default=None)
+        found = [(v, _angles(m, v, spec, t)) for v in searchable]
+        best = max((mu for _, (angles, _) in found for mu in angles), default=None)
     if best is not None and best < t.bound_deg:
         return Infeasible(
             m.type,
             "TRANSMISSION_UNREACHABLE",
             f"{m.type} reaches at most a minimum transmission angle of {best:.4f}° at time "
             f"ratio {t.time_ratio:g} and stroke {t.stroke:g}{_with(spec)}, below the bound "
-            f"{t.bound_deg:g}°{_lifted(m, spec, t, searchable, best) or _defaults(m, spec, t)}",
+            f"{t.bound_deg:g}°{_lifted(m, spec, t, found, best) or _defaults(m, spec, t)}",
             best_transmission_angle_deg=best,
         )
     if time.monotonic() >= t.deadline:  # then what follows would end so: not begun
@@ -84,15 +84,20 @@ def diagnose(m: Mechanism, spec: Spec, t: Targets, s: Searched) -> Infeasible:
     )
 
 
-def _angles(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> list[float]:
+Exact = list[tuple[float, dict[str, float]]]  # the exact reduced optima: (angle, design)
+
+
+def _angles(m: Mechanism, v: Variant, spec: Spec, t: Targets) -> tuple[list[float], Exact | None]:
     """The minimum transmission angle of the variant's best designs at the targets (any
-    angle): exact where the reduced solver is, else IPOPT's local optima, verified. The
-    reduced problem is asked even where it was not exact for the request: without the bound
-    it may be (a bound no rod can meet leaves no start on its grid)."""
+    angle), and those designs where they are exact (else None): exact where the reduced
+    solver is, else IPOPT's local optima, verified. The reduced problem is asked even where it
+    was not exact for the request: without the bound it may be (a bound no rod can meet
+    leaves no start on its grid)."""
     found = _reduced(m, v, t, v.problem.beta)
     if found is not None:
-        return [mu for mu, _ in found]
-    return [mu for _, mu in _optima(m, v, spec, t, MAX_TRANSMISSION, 1.0)]
+        exact = list(found)
+        return [mu for mu, _ in exact], exact
+    return [mu for _, mu in _optima(m, v, spec, t, MAX_TRANSMISSION, 1.0)], None
 
 
 def _reduced(
@@ -237,30 +242,34 @@ def _defaults(m: Mechanism, spec: Spec, t: Targets) -> str:
     return f", with its free lengths within their default bounds ({ranges}; bounds widen them)"
 
 
-def _lifted(m: Mechanism, spec: Spec, t: Targets, variants: list[Variant], best: float) -> str:
-    """Where the best design (the reduced solvers' exact optimum) rests on a default bound:
-    that bound, and what lifting it reaches: the least limit that meets the request's bound
-    (bisected), else the angle with it ``LIFT`` times wider; '' elsewhere."""
-
-    def optima(v: Variant, problem: Problem) -> list[tuple[float, dict[str, float]]] | None:
-        found = _reduced(m, replace(v, problem=problem), t, v.problem.beta)
-        return None if found is None else list(found)
+def _lifted(
+    m: Mechanism,
+    spec: Spec,
+    t: Targets,
+    found: list[tuple[Variant, tuple[list[float], Exact | None]]],
+    best: float,
+) -> str:
+    """Where the best design (``found``: each variant's angles and exact optima, ``_angles``)
+    rests on a default bound: that bound, and what lifting it reaches: the least limit that
+    meets the request's bound (bisected), else the angle with it ``LIFT`` times wider; ''
+    where a variant's optima are not exact, or none rests on one."""
 
     def reach(k: str, end: int, limit: float) -> float:  # the best angle with k's end there
-        found = [-math.inf]
-        for v in variants:
+        out = [-math.inf]
+        for v, _ in found:
             if k in v.problem.bounds:
                 box = list(v.problem.bounds[k])
                 box[end] = limit / t.stroke
                 wider = {**v.problem.bounds, k: (box[0], box[1])}
                 lifted = replace(v.problem, bounds=wider, explicit=v.problem.explicit | {k})
-                found += [mu for mu, _ in optima(v, lifted) or ()]
-        return max(found)
+                out += [
+                    mu for mu, _ in _reduced(m, replace(v, problem=lifted), t, lifted.beta) or ()
+                ]
+        return max(out)
 
-    each = [(v, optima(v, v.problem)) for v in variants]
-    if any(found is None for _, found in each):
+    if any(exact is None for _, (_, exact) in found):
         return ""
-    tops = [(mu, v, d) for v, found in each for mu, d in found or ()]
+    tops = [(mu, v, d) for v, (_, exact) in found for mu, d in exact or ()]
     if not tops:
         return ""
     _, v, d = max(tops, key=lambda o: o[0])
