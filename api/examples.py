@@ -114,3 +114,19 @@ EXPORT = {
         },
     ),
 }
+
+REPORT = {
+    "whitworth_loaded": Example(
+        summary="The textbook's Whitworth drive against its targets, cutting 2 kN at 40 rpm",
+        value={
+            "mechanism": {"type": "whitworth", "params": WHITWORTH},
+            "targets": {"stroke": 300.0, "bound_deg": 30.0},
+            "load": {
+                "length_unit": "mm",
+                "crank_rpm": 40.0,
+                "cutting_force": 2000.0,
+                "slider_mass": 20.0,
+            },
+        },
+    ),
+}

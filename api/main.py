@@ -27,7 +27,7 @@ from .body_limit import too_large
 from .engine import Busy, Engine
 from .errors import capped, error_item, worded
 from .gate import NOSNIFF, Gate, Headers
-from .routers import analyze, atlas, export, mechanisms, sweep, synthesize
+from .routers import analyze, atlas, export, mechanisms, report, sweep, synthesize
 from .routers.common import Located
 from .schemas import Health
 
@@ -53,7 +53,7 @@ app = FastAPIOffline(  # /docs and /redoc load their scripts from this service, 
     lifespan=lifespan,
     swagger_ui_parameters={"validatorUrl": None},  # no badge from validator.swagger.io
 )
-for module in (mechanisms, analyze, synthesize, sweep, export, atlas):
+for module in (mechanisms, analyze, synthesize, sweep, export, report, atlas):
     app.include_router(module.router)
 app.add_middleware(Gate)
 # the playground: a page and its script and style, nothing from another origin

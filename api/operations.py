@@ -11,6 +11,7 @@ import synth
 from synth.analysis.kinematics import check as check_analysis
 from synth.analysis.sweep import check as check_sweep
 from synth.drawing.export import check as check_export
+from synth.drawing.report import check as check_report
 from synth.synthesis.driver import check as check_synthesis
 from synth.synthesis.driver import short as short_synthesis
 
@@ -45,4 +46,6 @@ OPERATIONS: dict[str, Operation] = {
     "sweep": Operation(synth.sweep, check_sweep),
     # a drawing: under 2 ms, ~20 ms as DXF with the pins' paths (ezdxf)
     "export": Operation(synth.export, check_export, lambda **_: True),
+    # a report: an analysis at 361 angles with every extra, and a drawing; ~20–40 ms
+    "report": Operation(synth.report, check_report, lambda **_: True),
 }

@@ -457,6 +457,36 @@ class ExportRequest(Strict):
     paths: bool = Field(False, description="each moving pin's path over a turn")
 
 
+class ReportTargets(Strict):
+    """What the report compares the design with (each optional)."""
+
+    time_ratio: float | None = Field(None, ge=1.0, le=1e3, description="slow/quick crank angle")
+    stroke: float | None = Field(
+        None, ge=LENGTH_MIN, le=LENGTH_MAX, description="in the design's length unit"
+    )
+    bound_deg: float | None = Field(
+        None, ge=0.0, le=90.0, description="the least transmission angle, degrees"
+    )
+
+
+class ReportRequest(Strict):
+    mechanism: Design
+    load: LoadSpec | None = Field(
+        None,
+        description="what the design drives: adds the loads, the torque diagram, the "
+        "flywheel and the joint forces",
+    )
+    targets: ReportTargets | None = Field(
+        None, description="compared with what the design achieves"
+    )
+    crank_angle_deg: float | None = Field(
+        None, ge=-1e6, le=1e6, description="the drawing's; omitted: where the mechanism stands open"
+    )
+    length_unit: Literal[tuple(LENGTH_UNITS)] | None = Field(  # type: ignore[valid-type]
+        None, description="the design's lengths; omitted: the load's, else mm"
+    )
+
+
 # --- responses ---------------------------------------------------------------------------
 
 

@@ -27,6 +27,7 @@ if TYPE_CHECKING:
     from .analysis.sweep import sweep
     from .drawing.export import export
     from .drawing.figure import animate, draw
+    from .drawing.report import report
     from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
     from .load import Load
     from .mechanisms import register
@@ -57,6 +58,7 @@ _WHERE = {
     "joints": ".analysis.kinematics",
     "mechanisms": None,
     "register": ".mechanisms",
+    "report": ".drawing.report",
     "sweep": ".analysis.sweep",
     "synthesize": ".synthesis",
 }
@@ -83,6 +85,7 @@ __all__ = [
     "joints",
     "mechanisms",
     "register",
+    "report",
     "sweep",
     "synthesize",
 ]

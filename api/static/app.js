@@ -750,6 +750,19 @@ async function exportDrawing(format) {
   if (r.ok) download(`${current.type}.${format}`, r.headers.get("Content-Type"), await r.blob());
 }
 
+async function exportReport() {
+  // the design's report: one HTML page that stands alone, with the load and bound shown
+  if (!current) return;
+  const body = { mechanism: { type: current.type, params: current.params },
+    crank_angle_deg: (frame * 360) / FRAMES };
+  if (current.load) body.load = current.load;
+  else body.length_unit = $("export-unit").value;
+  if (current.bound !== null && current.bound !== undefined) body.targets = { bound_deg: current.bound };
+  const r = await fetch(new URL("v1/report", BASE), { method: "POST",
+    headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
+  if (r.ok) download(`${current.type}-report.html`, r.headers.get("Content-Type"), await r.blob());
+}
+
 // ---- state in the address --------------------------------------------------------------------
 
 function saveState(view, state) {
@@ -814,6 +827,7 @@ async function init() {
     "application/json", JSON.stringify({ type: current.type, params: current.params, analysis: current.analysis }, null, 2)));
   $("export-svg").addEventListener("click", () => exportDrawing("svg"));
   $("export-dxf").addEventListener("click", () => exportDrawing("dxf"));
+  $("export-report").addEventListener("click", exportReport);
   window.addEventListener("hashchange", () => route(false));
   await route(true);
   document.body.dataset.ready = "true";

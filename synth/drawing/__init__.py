@@ -24,6 +24,7 @@ from ..mechanisms.registry import GROUND
 FORMATS = ("svg", "dxf", "json")
 PATH_SAMPLES = 181  # angles a pin's path is drawn through (2° apart)
 GUIDE_OVERRUN = 0.15  # the guide runs past each end of the stroke by this share of it
+CHAR = 0.8  # a character's width, of the text's height (sans-serif capitals, generously)
 
 
 Segment = tuple[tuple[float, float], tuple[float, float]]  # two points (x, y)
@@ -127,7 +128,8 @@ class Sketch:
     ``guide``: the guide's two rails, either side of the path; ``block``: the ram's block, a
     polygon around its pin; ``ground``: a triangle under each fixed pivot, ``hatch`` the
     strokes under it; ``dimension``: the stroke's dimension line beside the guide, its
-    ``label`` and where the label goes (``label_at``)."""
+    ``label`` and where the label's middle goes (``label_at``); ``names``: where each pin's
+    name starts, placed so that no two labels meet (``place``)."""
 
     size: float
     pin_radius: float
@@ -140,6 +142,20 @@ class Sketch:
     dimension: Segment
     label: str
     label_at: tuple[float, float]
+    names: dict[str, tuple[float, float]]
+
+    def extent(self, d: Drawing) -> tuple[float, float, float, float]:
+        """(x min, y min, x max, y max) of ``d`` and every label of this sketch."""
+        x0, y0, x1, y1 = d.bounds()
+        boxes = [text_box(self.label, self.label_at, self.text_height, middle=True)]
+        boxes += [text_box(n, at, self.text_height) for n, at in self.names.items()]
+        a = np.array(boxes)
+        return (
+            min(x0, a[:, 0].min()),
+            min(y0, a[:, 1].min()),
+            max(x1, a[:, 2].max()),
+            max(y1, a[:, 3].max()),
+        )
 
 
 def sketch(d: Drawing) -> Sketch:
@@ -167,13 +183,81 @@ def sketch(d: Drawing) -> Sketch:
     (sx, sy), (ex, ey) = d.stroke
     off = 3.0 * h
     dim = ((sx - off * nx, sy - off * ny), (ex - off * nx, ey - off * ny))
-    label_at = (
-        (dim[0][0] + dim[1][0]) / 2 - 1.2 * h * nx,
-        (dim[0][1] + dim[1][1]) / 2 - 1.2 * h * ny,
-    )
     label = f"stroke {np.hypot(ex - sx, ey - sy):.6g}"
-    return Sketch(size, 0.012 * size, 0.03 * size, 0.006 * size, (rails[0], rails[1]), block,
-                  tuple(tri), tuple(hatch), dim, label, label_at)  # fmt: skip
+    r, th = 0.012 * size, 0.03 * size
+    label_at, names = place(d, dim, (-nx, -ny), label, r, th)
+    return Sketch(
+        size,
+        r,
+        th,
+        0.006 * size,
+        (rails[0], rails[1]),
+        block,
+        tuple(tri),
+        tuple(hatch),
+        dim,
+        label,
+        label_at,
+        names,
+    )
+
+
+def text_box(
+    text: str, at: tuple[float, float], height: float, middle: bool = False
+) -> tuple[float, float, float, float]:
+    """The box a line of text takes (generously: ``CHAR`` of its height a character, the
+    ascent and descent of a sans-serif face), from ``at`` on its baseline, where it starts or
+    (``middle``) its middle."""
+    w = CHAR * height * len(text)
+    x = at[0] - w / 2 if middle else at[0]
+    return x, at[1] - 0.3 * height, x + w, at[1] + 1.0 * height
+
+
+def place(
+    d: Drawing,
+    dim: Segment,
+    out: tuple[float, float],
+    label: str,
+    r: float,
+    h: float,
+) -> tuple[tuple[float, float], dict[str, tuple[float, float]]]:
+    """Where the stroke's label (its middle, off the dimension line ``dim`` on the side
+    ``out``) and each pin's name (its start) go: the first of a few places about each that
+    meets no label placed before it and no other pin, the stroke's first."""
+    placed: list[tuple[float, float, float, float]] = []
+
+    def free(box: tuple[float, float, float, float], own: str | None = None) -> bool:
+        if any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in placed):
+            return False
+        return all(
+            not (box[0] - r < x < box[2] + r and box[1] - r < y < box[3] + r)
+            for name, (x, y) in d.pins.items()
+            if name != own
+        )
+
+    (ax, ay), (bx, by) = dim
+    spots = [
+        (ax + t * (bx - ax) + k * h * out[0], ay + t * (by - ay) + k * h * out[1])
+        for k in (1.2, 2.4)
+        for t in (0.5, 0.3, 0.7, 0.15, 0.85)
+    ]
+    label_at = next((s for s in spots if free(text_box(label, s, h, middle=True))), spots[0])
+    placed.append(text_box(label, label_at, h, middle=True))
+    names = {}
+    for name, (x, y) in d.pins.items():
+        w = CHAR * h * len(name)
+        spots = [
+            (
+                x + ux * k * r - (w if ux < 0 else w / 2 if ux == 0 else 0.0),
+                y + uy * k * r - (1.0 * h if uy < 0 else 0.35 * h if uy == 0 else -0.3 * h),
+            )
+            for k in (1.5, 3.0, 5.0)
+            for ux, uy in ((1, 1), (-1, 1), (1, -1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1))
+        ]
+        at = next((s for s in spots if free(text_box(name, s, h), name)), spots[0])
+        placed.append(text_box(name, at, h))
+        names[name] = at
+    return label_at, names
 
 
 def slot(pins: Mapping[str, tuple[float, float]], names: tuple[str, str, str]) -> Segment:

@@ -43,7 +43,7 @@ def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
     for name, p in d.pins.items():
         msp.add_circle(p, sk.pin_radius, dxfattribs={"layer": "PINS"})
         label = msp.add_text(name, height=sk.text_height, dxfattribs={"layer": "PINS"})
-        label.set_placement((p[0] + 1.5 * sk.pin_radius, p[1] + 1.5 * sk.pin_radius))
+        label.set_placement(sk.names[name])
     for tri in sk.ground:
         msp.add_lwpolyline(tri, close=True, dxfattribs={"layer": "PIVOTS"})
     for a, b in sk.hatch:

@@ -16,8 +16,8 @@ def svg(d: Drawing, length_unit: str = "mm") -> str:
     """``d`` as an SVG document, true size for lengths in ``length_unit`` (mm, m or in)."""
     k = unit_mm(length_unit)
     sk = sketch(d)
-    x0, y0, x1, y1 = d.bounds()
-    pad = 0.12 * sk.size
+    x0, y0, x1, y1 = sk.extent(d)
+    pad = 0.05 * sk.size
     x0, y0, x1, y1 = x0 - pad, y0 - pad, x1 + pad, y1 + pad
     w, h = x1 - x0, y1 - y0
 
@@ -34,19 +34,21 @@ def svg(d: Drawing, length_unit: str = "mm") -> str:
     lw = sk.line_width
     out = [
         '<?xml version="1.0" encoding="UTF-8"?>',
-        f'<svg xmlns="http://www.w3.org/2000/svg" width="{w * k:.6g}mm" height="{h * k:.6g}mm" '
+        f'<svg xmlns="http://www.w3.org/2000/svg" class="drawing" width="{w * k:.6g}mm" '
+        f'height="{h * k:.6g}mm" '
         f'viewBox="0 0 {w:.9g} {h:.9g}" data-type="{d.type}" '
         f'data-crank-angle-deg="{d.crank_angle_deg:.9g}" data-length-unit="{length_unit}">',
         f"<title>{escape(d.type)} at crank angle {d.crank_angle_deg:g}°</title>",
+        # every rule under the root's class: the drawing set in a page styles nothing else
         "<style>"
-        "line,polyline,polygon{stroke-linecap:round;fill:none;stroke:#222;"
+        ".drawing :is(line,polyline,polygon){stroke-linecap:round;fill:none;stroke:#222;"
         f"stroke-width:{lw * 0.5:.6g}}}"
-        f".link{{stroke-width:{lw * 1.6:.6g}}}"
-        f".path{{stroke:#999;stroke-dasharray:{lw * 2:.6g} {lw * 2:.6g}}}"
-        f".slot{{stroke:#777;stroke-width:{lw * 3.2:.6g};stroke-opacity:.35}}"
-        f".block{{fill:#ddd}}.ground{{fill:#bbb}}"
-        f".pin{{fill:#fff;stroke:#222;stroke-width:{lw * 0.5:.6g}}}"
-        f"text{{font-family:sans-serif;font-size:{sk.text_height:.6g}px;fill:#222}}"
+        f".drawing .link{{stroke-width:{lw * 1.6:.6g}}}"
+        f".drawing .path{{stroke:#999;stroke-dasharray:{lw * 2:.6g} {lw * 2:.6g}}}"
+        f".drawing .slot{{stroke:#777;stroke-width:{lw * 3.2:.6g};stroke-opacity:.35}}"
+        f".drawing .block{{fill:#ddd}}.drawing .ground{{fill:#bbb}}"
+        f".drawing .pin{{fill:#fff;stroke:#222;stroke-width:{lw * 0.5:.6g}}}"
+        f".drawing text{{font-family:sans-serif;font-size:{sk.text_height:.6g}px;fill:#222}}"
         "</style>",
     ]
     for name, xy in (d.paths or {}).items():
@@ -70,7 +72,7 @@ def svg(d: Drawing, length_unit: str = "mm") -> str:
         out.append(
             f'<circle class="pin" data-pin="{name}" cx="{cx}" cy="{cy}" r="{sk.pin_radius:.6g}"/>'
         )
-        tx, ty = pt((p[0] + 1.5 * sk.pin_radius, p[1] + 1.5 * sk.pin_radius)).split(",")
+        tx, ty = pt(sk.names[name]).split(",")
         out.append(f'<text class="pin-label" x="{tx}" y="{ty}">{escape(name)}</text>')
     out.append("</svg>")
     return "\n".join(out)

@@ -22,6 +22,7 @@ import synth
 
 from ..support import bruteforce
 from ..support.assertions import assert_meets
+from .test_report import Page
 
 CLI = shutil.which("quickreturn", path=str(Path(sys.executable).parent)) or "quickreturn"
 WHITWORTH = ["-p", "crank=75", "-p", "pivot_distance=50", "-p", "lever=150",
@@ -240,6 +241,25 @@ def test_export_writes_a_drawing_cad_reads(tmp_path):
     svg = run("export", "crank_shaper", "-p", "crank=120", "-p", "pivot_distance=240",
               "-p", "lever=450").stdout  # fmt: skip
     assert svg.startswith("<?xml") and 'width="' in svg
+
+
+def test_report_writes_a_page_with_the_design_and_its_loads(tmp_path):
+    out = tmp_path / "whitworth.html"
+    load = json.dumps({"length_unit": "mm", "crank_rpm": 40, "cutting_force": 2000})
+    flags = ["--stroke", "300", "--bound", "30", "--load", load, "-o", str(out)]
+    r = run("report", "whitworth", *WHITWORTH, *flags)
+    assert r.returncode == 0, r.stderr
+    page = Page(out.read_text())
+    b = bruteforce.simulate(
+        "whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200}
+    )
+    assert float(page.value("targets", "time ratio", 2)) == pytest.approx(b["time_ratio"], rel=1e-9)
+    assert page.value("targets", "stroke", 3) == (
+        "met" if abs(b["stroke"] - 300) < 3e-7 else "missed"
+    )
+    assert "loads" in page.tables
+    bad = run("report", "whitworth", *WHITWORTH, "--length-unit", "in", "--load", load)
+    assert bad.returncode == 2 and "length_unit" in bad.stderr
 
 
 def test_atlas_writes_its_tables(tmp_path):

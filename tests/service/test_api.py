@@ -316,6 +316,14 @@ def test_every_worked_example_of_the_docs_answers(client):
     assert tried >= 6
 
 
+def test_a_report_is_a_page_that_stands_alone(client):
+    r = client.post("/v1/report", json={**ANALYZE, "load": LOAD, "targets": {"bound_deg": 20.0}})
+    assert r.status_code == 200 and r.headers["content-type"] == "text/html; charset=utf-8"
+    assert r.text.startswith("<!doctype html>") and "<script" not in r.text
+    for section in ("drawing", "targets", "design", "motion", "loads", "sensitivities", "limits"):
+        assert f'<section id="{section}">' in r.text
+
+
 def test_an_analysis_takes_a_force_profile(client):
     """A profile's force, linear between its points: the mean torque is its work a turn
     (the trapezoid's area under the profile, times the stroke) over 2π."""
@@ -497,6 +505,10 @@ BAD = [
     ("/v1/sweep", {**SWEEP, "start": 60.0}, "start 60 > stop 50"),
     ("/v1/sweep", {**SWEEP, "vary": "colour"}, "crank_shaper has no parameter 'colour'"),
     ("/v1/sweep", {**SWEEP, "start": -10.0}, "start"),
+    ("/v1/report", {**ANALYZE, "targets": {"bound_deg": 91.0}}, "bound_deg"),
+    ("/v1/report", {**ANALYZE, "targets": {"speed": 1.0}}, "speed"),
+    ("/v1/report", {**ANALYZE, "load": LOAD, "length_unit": "in"}, "length_unit"),
+    ("/v1/report", {**ANALYZE, "crank_angle_deg": "inf"}, "crank_angle_deg"),
 ]  # fmt: skip
 
 

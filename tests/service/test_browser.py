@@ -270,6 +270,12 @@ def test_the_analysis_takes_a_load(page):
     pg.click("#a-run")
     pg.wait_for_function("document.querySelector('#loads-summary').textContent"
                          ".includes('on a shaft at 1450 rpm, a steel disc')")  # fmt: skip
+    with pg.expect_download() as d:  # the design's report, with the load shown
+        pg.click("#export-report")
+    assert d.value.suggested_filename == f"{pg.evaluate('current.type')}-report.html"
+    report = Path(d.value.path()).read_text()
+    assert '<section id="loads">' in report and "flywheel inertia at 1450 rpm" in report
+    assert "lengths in m," in report
     pg.click("#a-load summary")  # closed: no load
     pg.click("#a-run")
     pg.wait_for_selector("#loads", state="hidden")

@@ -1,173 +1,36 @@
-"""``quickreturn`` (and ``python -m synth``): the library from a shell, for people and for build
-scripts.
-
-    quickreturn synthesize --time-ratio 1.8 --stroke 250 --bound 40 --type crank_shaper \\
-        --fix crank=60
-    quickreturn analyze whitworth -p crank=75 -p pivot_distance=50 -p lever=150 \\
-        -p connecting_rod=200 --include motion
-    quickreturn sweep crank_shaper -p crank=120 -p pivot_distance=240 -p lever=450 \\
-        --vary crank --start 100 --stop 200
-    quickreturn export crank_shaper -p crank=120 -p pivot_distance=240 -p lever=450 \\
-        --format dxf --crank-angle 30 -o shaper.dxf
-    quickreturn atlas --out atlas        quickreturn serve --port 8000
-
-The flags are the API's names (the README, *Over HTTP*) with dashes. Each command prints a
-table, or with ``--json`` the API's JSON reply and with ``--csv`` rows for a spreadsheet. Exit
-status: 0 with an answer, 1 when every type refuses (each reason printed), 2 on bad input (the
-library's message, naming the field).
-"""
+"""The commands that compute: synthesize, analyze and sweep; and those that start another
+program: atlas, serve."""
 
 from __future__ import annotations
 
-import csv
-import io
-import json
-import math
 import sys
-from collections.abc import Callable, Iterable, Sequence
-from typing import Any, NoReturn
+from typing import Any
 
 import click
 
-from .analysis.kinematics import analyze as _analyze
-from .analysis.sweep import sweep as _sweep
-from .drawing import FORMATS
-from .drawing.export import export as _export
-from .errors import InvalidParameters, SynthError
-from .load import LENGTH_UNITS, Load
-from .mechanisms import all_types, get
-from .objectives import all_objectives
-from .objectives import get as objective_of
-from .results import Analysis, Loads, Sensitivities, SweepResult, SynthesisResult
-from .synthesis import synthesize as _synthesize
-from .targets import PARETO
-
-INCLUDE = ("motion", "sensitivities", "envelope", "pins", "forces")
-CURVES = ("crank_angle_deg", "position", "velocity", "acceleration", "transmission_deg", "torque")
-
-
-def _fail(e: SynthError) -> NoReturn:
-    """Bad input: the library's message (and the field, as the API's 422 locates it), exit
-    status 2."""
-    where = ".".join(map(str, e.loc)) if isinstance(e, InvalidParameters) else ""
-    click.echo(f"error: {where + ': ' if where else ''}{e.msg}", err=True)
-    sys.exit(2)
-
-
-def _pairs(values: Iterable[str], flag: str) -> dict[str, str]:
-    """``name=value`` flags as a mapping."""
-    out = {}
-    for v in values:
-        name, eq, value = v.partition("=")
-        if not eq or not name:
-            raise click.BadParameter(f"{v!r}: expected name=value", param_hint=flag)
-        out[name.strip()] = value.strip()
-    return out
-
-
-def _numbers(values: Iterable[str], flag: str) -> dict[str, float]:
-    out = {}
-    for k, v in _pairs(values, flag).items():
-        try:
-            out[k] = float(v)
-        except ValueError:
-            raise click.BadParameter(f"{k}={v!r}: not a number", param_hint=flag) from None
-    return out
-
-
-def _ranges(values: Iterable[str]) -> dict[str, tuple[float, float]]:
-    out = {}
-    for k, v in _pairs(values, "--bounds").items():
-        try:
-            lo, hi = v.split(":")
-            out[k] = (float(lo), float(hi))
-        except ValueError:
-            msg = f"{k}={v!r}: expected low:high"
-            raise click.BadParameter(msg, param_hint="--bounds") from None
-    return out
-
-
-def _load(text: str | None) -> Load | None:
-    """``--load``: the API's load object as JSON (``length_unit``, ``crank_rpm``, …)."""
-    if text is None:
-        return None
-    try:
-        fields = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise click.BadParameter(f"not JSON: {e.msg}", param_hint="--load") from None
-    if not isinstance(fields, dict):
-        raise click.BadParameter("a JSON object, e.g. '{\"length_unit\": \"mm\", ...}'",
-                                 param_hint="--load")  # fmt: skip
-    try:
-        return Load.of(fields)
-    except InvalidParameters as e:
-        raise click.BadParameter(str(e), param_hint="--load") from None
-
-
-def _emit(fmt: str, reply: dict[str, Any], rows: list[dict[str, Any]], text: str) -> None:
-    if fmt == "json":
-        click.echo(json.dumps(_plain(reply), indent=2, allow_nan=False))
-    elif fmt == "csv":
-        out = io.StringIO()
-        if rows:
-            w = csv.DictWriter(out, fieldnames=list(rows[0]), lineterminator="\n")
-            w.writeheader()
-            w.writerows(rows)
-        click.echo(out.getvalue(), nl=False)
-    else:
-        click.echo(text)
-
-
-def _plain(x: Any) -> Any:
-    """``x`` as JSON takes it, as the API gives it: arrays as lists, a non-finite number as
-    null."""
-    if hasattr(x, "tolist"):
-        x = x.tolist()
-    if isinstance(x, dict):
-        return {k: _plain(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_plain(v) for v in x]
-    return None if isinstance(x, float) and not math.isfinite(x) else x
-
-
-def _table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
-    """Left-aligned text columns; numbers to 6 significant digits."""
-    cells = [[_cell(v) for v in r] for r in rows]
-    widths = [max(len(h), *(len(r[i]) for r in cells)) for i, h in enumerate(header)]
-    lines = ["  ".join(h.ljust(w) for h, w in zip(header, widths, strict=True))]
-    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in cells]
-    return "\n".join(line.rstrip() for line in lines)
-
-
-def _cell(v: Any) -> str:
-    if isinstance(v, float):
-        return "" if not math.isfinite(v) else f"{v:.6g}"
-    return "" if v is None else str(v)
-
-
-def _formats(f: Callable[..., Any]) -> Callable[..., Any]:
-    """``--json`` and ``--csv`` (the table by default)."""
-    f = click.option("--json", "fmt", flag_value="json", help="the reply the API gives, as JSON")(f)
-    f = click.option("--csv", "fmt", flag_value="csv", help="rows for a spreadsheet")(f)
-    return click.option("--table", "fmt", flag_value="table", default=True, hidden=True)(f)
-
-
-def _params(f: Callable[..., Any]) -> Callable[..., Any]:
-    f = click.argument("mechanism", type=click.Choice(all_types()))(f)
-    return click.option("-p", "--param", "params", multiple=True, metavar="NAME=LENGTH",
-                        help="a parameter of the design (repeat for each)")(f)  # fmt: skip
-
-
-@click.group(
-    help="Quick-return mechanisms from the shell: link lengths for a time ratio, stroke and "
-    "transmission bound (synthesize), a design's motion and loads (analyze), a parameter's "
-    "effect (sweep), a drawing for CAD (export), which type reaches which targets (atlas), "
-    "the service (serve). Each command prints a table, --json the API's reply, --csv rows. "
-    "Exit status: 0 with an answer, 1 when every type refuses, 2 on bad input."
+from ..analysis.kinematics import analyze as _analyze
+from ..analysis.sweep import sweep as _sweep
+from ..errors import SynthError
+from ..load import Load
+from ..mechanisms import all_types, get
+from ..objectives import all_objectives
+from ..objectives import get as objective_of
+from ..results import Analysis, Loads, Sensitivities, SweepResult, SynthesisResult
+from ..synthesis import synthesize as _synthesize
+from ..targets import PARETO
+from .base import (
+    CURVES,
+    INCLUDE,
+    design_args,
+    emit,
+    fail,
+    formats,
+    main,
+    numbers,
+    parse_load,
+    ranges,
+    table,
 )
-@click.version_option(package_name="quickreturn-synth")
-def main() -> None:
-    pass
 
 
 @main.command(help="Link lengths for the targets, verified, best first (POST /v1/synthesize).")
@@ -215,23 +78,23 @@ def main() -> None:
 @click.option("--load", "load_json", metavar="JSON", help="the API's load object")
 @click.option("--max-peak-torque", type=float, help="N·m, with min_peak_torque")
 @click.option("--max-working-speed-fluctuation", type=float, help="with the motion objectives")
-@_formats
+@formats
 def synthesize(time_ratio: float, stroke: float, bound: float, types: tuple[str, ...],
                fix: tuple[str, ...], bounds: tuple[str, ...], objective: str,
                max_candidates: int | None, time_budget_ms: float, include: tuple[str, ...],
                load_json: str | None, max_peak_torque: float | None,
                max_working_speed_fluctuation: float | None, fmt: str) -> None:  # fmt: skip
-    fixed, ranges = _numbers(fix, "--fix"), _ranges(bounds)
+    fixed, boxes = numbers(fix, "--fix"), ranges(bounds)
     names = types or [t for t in all_types() if get(t).quick_return]
-    specs = [{"type": t, "fixed": fixed, "bounds": ranges} for t in names]
+    specs = [{"type": t, "fixed": fixed, "bounds": boxes} for t in names]
     try:
         r = _synthesize(time_ratio, stroke, bound, specs, objective, max_candidates,
-                        time_budget_ms, include=include, load=_load(load_json),
+                        time_budget_ms, include=include, load=parse_load(load_json),
                         max_peak_torque=max_peak_torque,
                         max_working_speed_fluctuation=max_working_speed_fluctuation)  # fmt: skip
     except SynthError as e:
-        _fail(e)
-    _emit(fmt, r.to_dict(), _candidate_rows(r), _candidate_text(r, objective))
+        fail(e)
+    emit(fmt, r.to_dict(), _candidate_rows(r), _candidate_text(r, objective))
     if not r.candidates:
         sys.exit(1)
 
@@ -267,7 +130,7 @@ def _candidate_text(r: SynthesisResult, objective: str) -> str:
         # a front's candidates: their size
         measure = "size" if objective_of(objective).found == "front" else objective
         loaded = ("peak torque N·m", "motor W", "flywheel kg·m²") if r.candidates[0].loads else ()
-        out.append(_table(("#", "type", "lengths", "μ min °", measure, "at limit", *loaded), rows))
+        out.append(table(("#", "type", "lengths", "μ min °", measure, "at limit", *loaded), rows))
         out += dict.fromkeys(f"{c.type}: {c.family.relation}"
                              for c in r.candidates if c.family)  # fmt: skip
         for i, c in enumerate(r.candidates):
@@ -281,7 +144,7 @@ def _candidate_text(r: SynthesisResult, objective: str) -> str:
 
 
 @main.command(help="One design over a crank revolution (POST /v1/analyze).")
-@_params
+@design_args
 @click.option("--samples", type=int, help="curves at this many evenly spaced angles")
 @click.option(
     "--crank-angle",
@@ -293,18 +156,18 @@ def _candidate_text(r: SynthesisResult, objective: str) -> str:
 @click.option("--include", multiple=True, type=click.Choice(INCLUDE), help="repeat")
 @click.option("--crank-speed", type=float, help="rad/s for the curves (default 1)")
 @click.option("--load", "load_json", metavar="JSON", help="the API's load object")
-@_formats
+@formats
 def analyze(mechanism: str, params: tuple[str, ...], samples: int | None,
             angles: tuple[float, ...], include: tuple[str, ...], crank_speed: float | None,
             load_json: str | None, fmt: str) -> None:  # fmt: skip
     try:
-        load = _load(load_json)
-        a = _analyze(mechanism, _numbers(params, "--param"), crank_speed=crank_speed,
+        load = parse_load(load_json)
+        a = _analyze(mechanism, numbers(params, "--param"), crank_speed=crank_speed,
                      crank_angles_deg=list(angles) or None, samples=samples, include=include,
                      load=load)  # fmt: skip
     except SynthError as e:
-        _fail(e)
-    _emit(fmt, a.to_dict(), _analysis_rows(a), _analysis_text(a, load))
+        fail(e)
+    emit(fmt, a.to_dict(), _analysis_rows(a), _analysis_text(a, load))
 
 
 def _analysis_rows(a: Analysis) -> list[dict[str, Any]]:
@@ -368,7 +231,7 @@ def _sensitivities(s: Sensitivities) -> list[str]:
     transmission angle, and with a tolerance their worst-case deviations."""
     angle = s.min_transmission_angle_deg or {}
     rows = [(k, s.time_ratio[k], s.stroke[k], angle.get(k)) for k in s.time_ratio]
-    out = [_table(("d/d", "time ratio", "stroke", "μ min °"), rows)]
+    out = [table(("d/d", "time ratio", "stroke", "μ min °"), rows)]
     if s.deviation is not None:
         out.append(
             "worst-case deviation: "
@@ -378,54 +241,29 @@ def _sensitivities(s: Sensitivities) -> list[str]:
 
 
 @main.command(help="One parameter varied, the rest held (POST /v1/sweep).")
-@_params
+@design_args
 @click.option("--vary", required=True, help="the parameter to vary")
 @click.option("--start", type=float, required=True, help="its first value")
 @click.option("--stop", type=float, required=True, help="its last value")
 @click.option("--points", type=int, default=101, show_default=True,
               help="values from start to stop, evenly spaced")  # fmt: skip
-@_formats
+@formats
 def sweep(mechanism: str, params: tuple[str, ...], vary: str, start: float, stop: float,
           points: int, fmt: str) -> None:  # fmt: skip
     try:
-        s = _sweep(mechanism, _numbers(params, "--param"), vary, start, stop, points)
+        s = _sweep(mechanism, numbers(params, "--param"), vary, start, stop, points)
     except SynthError as e:
-        _fail(e)
+        fail(e)
     cols = ("values", "time_ratio", "stroke", "min_transmission_angle_deg", "valid")
     rows = [dict(zip((vary, *cols[1:]), r, strict=True))
             for r in zip(*(getattr(s, k) for k in cols), strict=True)]  # fmt: skip
-    _emit(fmt, s.to_dict(), rows, _sweep_text(s, rows))
+    emit(fmt, s.to_dict(), rows, _sweep_text(s, rows))
 
 
 def _sweep_text(s: SweepResult, rows: list[dict[str, Any]]) -> str:
-    text = _table(list(rows[0]), [list(r.values()) for r in rows]) if rows else ""
+    text = table(list(rows[0]), [list(r.values()) for r in rows]) if rows else ""
     valid = ", ".join(f"[{a:.6g}, {b:.6g}]" for a, b in s.valid_interval) or "none"
     return f"{text}\nvalid {s.vary}: {valid}"
-
-
-@main.command(help="A design's drawing for CAD or a document (POST /v1/export).")
-@_params
-@click.option("--format", "fmt", type=click.Choice(FORMATS), default="svg", show_default=True,
-              help="svg: true size; dxf: each link on its own layer")  # fmt: skip
-@click.option(
-    "--crank-angle", type=float, help="degrees (default: a third into the working stroke)"
-)
-@click.option("--length-unit", type=click.Choice(list(LENGTH_UNITS)), default="mm",
-              show_default=True, help="the unit of the design's lengths")  # fmt: skip
-@click.option("--paths", is_flag=True, help="each moving pin's path over a turn")
-@click.option("-o", "--out", type=click.Path(dir_okay=False, writable=True),
-              help="the file (default: standard output)")  # fmt: skip
-def export(mechanism: str, params: tuple[str, ...], fmt: str, crank_angle: float | None,
-           length_unit: str, paths: bool, out: str | None) -> None:  # fmt: skip
-    try:
-        doc = _export(mechanism, _numbers(params, "--param"), fmt, crank_angle, length_unit, paths)
-    except SynthError as e:
-        _fail(e)
-    if out is None:
-        sys.stdout.buffer.write(doc)
-    else:
-        with open(out, "wb") as f:
-            f.write(doc)
 
 
 @main.command(
@@ -434,7 +272,7 @@ def export(mechanism: str, params: tuple[str, ...], fmt: str, crank_angle: float
 )
 @click.argument("args", nargs=-1, type=click.UNPROCESSED)
 def atlas(args: tuple[str, ...]) -> None:
-    from .atlas.__main__ import main as atlas_main
+    from ..atlas.__main__ import main as atlas_main
 
     atlas_main(list(args))
 

@@ -1,0 +1,112 @@
+"""The commands that write a file: a drawing (export) and a design report (report)."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from ..drawing import FORMATS
+from ..drawing.export import export as _export
+from ..drawing.report import TARGETS
+from ..drawing.report import report as _report
+from ..errors import SynthError
+from ..load import LENGTH_UNITS
+from .base import design_args, fail, main, numbers, parse_load
+
+
+@main.command(help="A design's drawing for CAD or a document (POST /v1/export).")
+@design_args
+@click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(FORMATS),
+    default="svg",
+    show_default=True,
+    help="svg: true size; dxf: each link on its own layer",
+)
+@click.option(
+    "--crank-angle", type=float, help="degrees (default: a third into the working stroke)"
+)
+@click.option(
+    "--length-unit",
+    type=click.Choice(list(LENGTH_UNITS)),
+    default="mm",
+    show_default=True,
+    help="the unit of the design's lengths",
+)
+@click.option("--paths", is_flag=True, help="each moving pin's path over a turn")
+@click.option(
+    "-o",
+    "--out",
+    type=click.Path(dir_okay=False, writable=True),
+    help="the file (default: standard output)",
+)
+def export(
+    mechanism: str,
+    params: tuple[str, ...],
+    fmt: str,
+    crank_angle: float | None,
+    length_unit: str,
+    paths: bool,
+    out: str | None,
+) -> None:
+    try:
+        doc = _export(mechanism, numbers(params, "--param"), fmt, crank_angle, length_unit, paths)
+    except SynthError as e:
+        fail(e)
+    write(doc, out)
+
+
+@main.command(help="A design's report: one printable HTML page, standing alone (POST /v1/report).")
+@design_args
+@click.option("--load", "load_json", metavar="JSON", help="the API's load object: adds the loads")
+@click.option("--time-ratio", type=float, help="a target to compare the design with")
+@click.option("--stroke", type=float, help="a target, in the design's length unit")
+@click.option("--bound", type=float, help="a target: the least transmission angle, degrees")
+@click.option("--crank-angle", type=float, help="the drawing's, degrees (default: where it opens)")
+@click.option(
+    "--length-unit",
+    type=click.Choice(list(LENGTH_UNITS)),
+    help="the design's (default: the load's, else mm)",
+)
+@click.option(
+    "-o",
+    "--out",
+    type=click.Path(dir_okay=False, writable=True),
+    help="the file (default: standard output)",
+)
+def report(
+    mechanism: str,
+    params: tuple[str, ...],
+    load_json: str | None,
+    time_ratio: float | None,
+    stroke: float | None,
+    bound: float | None,
+    crank_angle: float | None,
+    length_unit: str | None,
+    out: str | None,
+) -> None:
+    given = dict(zip(TARGETS, (time_ratio, stroke, bound), strict=True))
+    targets = {k: v for k, v in given.items() if v is not None}
+    try:
+        page = _report(
+            mechanism,
+            numbers(params, "--param"),
+            load=parse_load(load_json),
+            targets=targets,
+            crank_angle_deg=crank_angle,
+            length_unit=length_unit,
+        )
+    except SynthError as e:
+        fail(e)
+    write(page.encode(), out)
+
+
+def write(doc: bytes, out: str | None) -> None:
+    """``doc`` to the file ``out``, or to standard output."""
+    if out is None:
+        sys.stdout.buffer.write(doc)
+    else:
+        with open(out, "wb") as f:
+            f.write(doc)
