@@ -442,7 +442,8 @@ class ExportRequest(Strict):
     format: Literal[FORMATS] = Field(  # type: ignore[valid-type]
         "svg",
         description="svg: true size; dxf: each link on its own layer; json: the drawing and "
-        "its symbols' shapes, for a page that draws them",
+        "its symbols' shapes, for a page that draws them; gif: a turn of the crank from "
+        "crank_angle_deg, animated",
     )
     crank_angle_deg: float | None = Field(
         None,

@@ -26,7 +26,8 @@ if TYPE_CHECKING:
     from .analysis.kinematics import analyze, analyze_many, joints
     from .analysis.sweep import sweep
     from .drawing.export import export
-    from .drawing.figure import animate, draw
+    from .drawing.figure import draw
+    from .drawing.gif import animate
     from .drawing.report import report
     from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
     from .load import Load
@@ -51,7 +52,7 @@ _WHERE = {
     "UnknownMechanism": ".errors",
     "analyze": ".analysis.kinematics",
     "analyze_many": ".analysis.kinematics",
-    "animate": ".drawing.figure",
+    "animate": ".drawing.gif",
     "atlas": None,
     "draw": ".drawing.figure",
     "export": ".drawing.export",

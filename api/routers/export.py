@@ -11,7 +11,12 @@ from ..schemas import REFUSALS, ExportRequest
 from .common import EngineDep, run_design
 
 router = APIRouter(tags=["analysis"], route_class=Route)
-MEDIA = {"svg": "image/svg+xml", "dxf": "image/vnd.dxf", "json": "application/json"}
+MEDIA = {
+    "svg": "image/svg+xml",
+    "dxf": "image/vnd.dxf",
+    "json": "application/json",
+    "gif": "image/gif",
+}
 
 
 @router.post(
@@ -28,7 +33,8 @@ async def export(
     """The design drawn at ``crank_angle_deg``: ``svg`` in true size (its width and height in
     millimetres for the lengths' ``length_unit``), or ``dxf`` for CAD (each link a centre line
     on its own layer, as long as the design says; the pins, the fixed pivots, the ram's guide
-    and block, the stroke as a dimension; each moving pin's path with ``paths``)."""
+    and block, the stroke as a dimension; each moving pin's path with ``paths``), or ``gif``
+    (a turn of the crank from there, animated)."""
     doc: bytes = await run_design(
         request,
         engine,

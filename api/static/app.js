@@ -741,7 +741,7 @@ function download(name, type, text) {
 }
 
 async function exportDrawing(format) {
-  // the service's drawing at the frame shown: SVG in true size, DXF for CAD
+  // the service's drawing at the frame shown: SVG in true size, DXF for CAD, a GIF of a turn
   if (!current) return;
   const body = { mechanism: { type: current.type, params: current.params }, format,
     crank_angle_deg: (frame * 360) / FRAMES, length_unit: $("export-unit").value, paths: true };
@@ -827,6 +827,7 @@ async function init() {
     "application/json", JSON.stringify({ type: current.type, params: current.params, analysis: current.analysis }, null, 2)));
   $("export-svg").addEventListener("click", () => exportDrawing("svg"));
   $("export-dxf").addEventListener("click", () => exportDrawing("dxf"));
+  $("export-gif").addEventListener("click", () => exportDrawing("gif"));
   $("export-report").addEventListener("click", exportReport);
   window.addEventListener("hashchange", () => route(false));
   await route(true);

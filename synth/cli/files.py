@@ -1,4 +1,5 @@
-"""The commands that write a file: a drawing (export) and a design report (report)."""
+"""The commands that write a file: a drawing (export), a design report (report) and a turn of
+the crank, animated (animate)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,8 @@ import click
 
 from ..drawing import FORMATS
 from ..drawing.export import export as _export
+from ..drawing.gif import FPS, FRAMES
+from ..drawing.gif import animate as _animate
 from ..drawing.report import TARGETS
 from ..drawing.report import report as _report
 from ..errors import SynthError
@@ -23,7 +26,7 @@ from .base import design_args, fail, main, numbers, parse_load
     type=click.Choice(FORMATS),
     default="svg",
     show_default=True,
-    help="svg: true size; dxf: each link on its own layer",
+    help="svg: true size; dxf: each link on its own layer; gif: a turn, animated",
 )
 @click.option(
     "--crank-angle", type=float, help="degrees (default: a third into the working stroke)"
@@ -101,6 +104,26 @@ def report(
     except SynthError as e:
         fail(e)
     write(page.encode(), out)
+
+
+@main.command(help="A turn of the crank as an animated GIF (POST /v1/export, format gif).")
+@design_args
+@click.option("--frames", type=int, default=FRAMES, show_default=True, help="equal crank steps")
+@click.option("--fps", type=float, default=FPS, show_default=True, help="frames a second")
+@click.option(
+    "-o",
+    "--out",
+    type=click.Path(dir_okay=False, writable=True),
+    help="the file (default: standard output)",
+)
+def animate(
+    mechanism: str, params: tuple[str, ...], frames: int, fps: float, out: str | None
+) -> None:
+    try:
+        doc = _animate(mechanism, numbers(params, "--param"), frames, fps)
+    except SynthError as e:
+        fail(e)
+    write(doc, out)
 
 
 def write(doc: bytes, out: str | None) -> None:

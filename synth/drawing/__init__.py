@@ -21,7 +21,7 @@ from ..load import LENGTH_UNITS
 from ..mechanisms import Mechanism, get
 from ..mechanisms.registry import GROUND
 
-FORMATS = ("svg", "dxf", "json")
+FORMATS = ("svg", "dxf", "json", "gif")
 PATH_SAMPLES = 181  # angles a pin's path is drawn through (2° apart)
 GUIDE_OVERRUN = 0.15  # the guide runs past each end of the stroke by this share of it
 CHAR = 0.8  # a character's width, of the text's height (sans-serif capitals, generously)

@@ -9,6 +9,7 @@ from typing import Any
 
 from ..errors import InvalidParameters
 from . import FORMATS, check_angle, drawing, drawn, sketch, unit_mm
+from .gif import gif
 from .svg import svg
 
 
@@ -22,8 +23,9 @@ def export(
 ) -> bytes:
     """The design drawn at ``crank_angle_deg`` (None: a third into the working stroke):
     ``format`` ``svg`` (true size, the lengths in ``length_unit``), ``dxf`` (each link on its
-    own layer, the unit set) or ``json`` (the ``Drawing`` and its ``Sketch``, for a page that
-    draws them); with ``paths``, each moving pin's path over a turn.
+    own layer, the unit set), ``json`` (the ``Drawing`` and its ``Sketch``, for a page that
+    draws them) or ``gif`` (a turn of the crank from that angle, animated); with ``paths``,
+    each moving pin's path over a turn.
 
     >>> doc = export("crank_shaper", {"crank": 120, "pivot_distance": 240, "lever": 450})
     >>> doc.startswith(b"<?xml") and b'width="' in doc
@@ -37,6 +39,8 @@ def export(
         ).encode()
     if format == "svg":
         return svg(d, length_unit).encode()
+    if format == "gif":  # a turn of the crank from that angle
+        return gif(d)
     from .dxf import dxf  # ezdxf: ~0.2 s to import, so on the first DXF
 
     return dxf(d, length_unit)

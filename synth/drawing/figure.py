@@ -4,10 +4,8 @@ SVG and DXF exports, equal axes in the design's unit."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import replace
 from typing import Any
 
-from ..analysis.kinematics import joints
 from . import Drawing, drawing, sketch, slot
 from .svg import COLOURS
 
@@ -63,46 +61,3 @@ def _render(d: Drawing, ax: Any) -> None:
     ax.set_title(f"{d.type} at crank angle {d.crank_angle_deg:g}°", fontsize=10)
     ax.legend(fontsize=7, loc="best", frameon=False)
     ax.grid(True, lw=0.3, alpha=0.5)
-
-
-def animate(
-    mechanism: str,
-    params: Mapping[str, float],
-    frames: int = 36,
-    fps: float = 12.0,
-    path: str | None = None,
-) -> bytes:
-    """A turn of the crank as an animated GIF (``frames`` drawings, equal crank steps, the
-    pins' paths in each), for notebooks and documents; written to ``path`` too if given
-    (matplotlib and pillow, imported here)."""
-    import io
-
-    import matplotlib.pyplot as plt
-    from PIL import Image
-
-    # one drawing (its analysis, the pins' paths), its pins moved to each frame's angle
-    first = drawing(mechanism, params, 0.0, paths=True)
-    angles = [360.0 * k / frames for k in range(frames)]
-    at = joints(mechanism, first.params, angles)
-    fig, ax = plt.subplots(figsize=(6, 4.5))
-    x0, x1, y0, y1 = None, None, None, None
-    images = []
-    for k, angle in enumerate(angles):
-        ax.clear()
-        pins = {name: (float(xy[k, 0]), float(xy[k, 1])) for name, xy in at.items()}
-        _render(replace(first, crank_angle_deg=angle, pins=pins), ax)
-        if x0 is None:  # every frame in the first one's box: the drawing does not jump
-            (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
-        ax.set_xlim(x0, x1)
-        ax.set_ylim(y0, y1)
-        buf = io.BytesIO()
-        fig.savefig(buf, format="png", dpi=80)
-        images.append(Image.open(buf).convert("P", palette=Image.Palette.ADAPTIVE))
-    plt.close(fig)
-    out = io.BytesIO()
-    images[0].save(out, format="GIF", save_all=True, append_images=images[1:],
-                   duration=round(1000 / fps), loop=0)  # fmt: skip
-    if path is not None:
-        with open(path, "wb") as f:
-            f.write(out.getvalue())
-    return out.getvalue()

@@ -262,6 +262,18 @@ def test_report_writes_a_page_with_the_design_and_its_loads(tmp_path):
     assert bad.returncode == 2 and "length_unit" in bad.stderr
 
 
+def test_animate_writes_a_gif_of_a_turn(tmp_path):
+    from PIL import Image
+
+    out = tmp_path / "whitworth.gif"
+    r = run("animate", "whitworth", *WHITWORTH, "--frames", "12", "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    img = Image.open(out)
+    assert img.format == "GIF" and img.n_frames == 12
+    bad = run("animate", "whitworth", *WHITWORTH, "--frames", "0")
+    assert bad.returncode == 2 and "frames" in bad.stderr
+
+
 def test_atlas_writes_its_tables(tmp_path):
     r = run("atlas", "--types", "crank_shaper", "--ratios", "1.5:2:2", "--bounds", "20",
             "--out", str(tmp_path), "--inline")  # fmt: skip

@@ -2,6 +2,7 @@
 
 import dataclasses
 import inspect
+import io
 import json
 import math
 
@@ -322,6 +323,18 @@ def test_a_report_is_a_page_that_stands_alone(client):
     assert r.text.startswith("<!doctype html>") and "<script" not in r.text
     for section in ("drawing", "targets", "design", "motion", "loads", "sensitivities", "limits"):
         assert f'<section id="{section}">' in r.text
+
+
+def test_an_export_as_gif_is_a_turn_of_the_crank(client):
+    from PIL import Image
+
+    r = client.post("/v1/export", json={**ANALYZE, "format": "gif", "crank_angle_deg": 10.0})
+    assert r.status_code == 200 and r.headers["content-type"] == "image/gif"
+    img = Image.open(io.BytesIO(r.content))
+    assert img.n_frames == 36
+    first = np.asarray(img.convert("RGB"))
+    img.seek(18)  # half a turn on
+    assert not np.array_equal(first, np.asarray(img.convert("RGB")))
 
 
 def test_an_analysis_takes_a_force_profile(client):

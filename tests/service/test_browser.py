@@ -368,6 +368,10 @@ def test_every_field_has_a_label_and_the_design_exports(page):
         pg.click("#export-svg")
     svg = ET.fromstring(Path(d.value.path()).read_bytes())
     assert svg.get("width").endswith("mm") and svg.get("data-length-unit") == "mm"
+    with pg.expect_download() as d:  # a turn of the crank
+        pg.click("#export-gif")
+    assert d.value.suggested_filename == "drag_link_slider.gif"
+    assert Path(d.value.path()).read_bytes().startswith(b"GIF89a")
     pg.select_option("#export-unit", "m")
     with pg.expect_download() as d:
         pg.click("#export-dxf")
