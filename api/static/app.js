@@ -518,7 +518,13 @@ function drawLinkage() {
     world.append(el("line", { ...stroke, class: "dimension", x1: d1x, y1: d1y, x2: d2x, y2: d2y, stroke: "#333" }));
     svg.append(el("text", { class: "dimension", x: sk.label_at[0], y: -sk.label_at[1], "text-anchor": "middle",
       style: `font-size:${sk.text_height}px` }, sk.label));
-    world.append(el("polygon", { ...stroke, id: "block", class: "slider", points: pts(sk.block), fill: "#ddd", stroke: "#333" }));
+    // the ram's block and the slot it carries across its path (a slot drive's, a yoke's): one body
+    const ram = el("g", { id: "block" });
+    for (const [[x1, y1], [x2, y2]] of current.sketch.drawing.yokes) {
+      ram.append(el("line", { ...stroke, class: "yoke", x1, y1, x2, y2, stroke: "#bbb", "stroke-width": 7 }));
+    }
+    ram.append(el("polygon", { ...stroke, class: "slider", points: pts(sk.block), fill: "#ddd", stroke: "#333" }));
+    world.append(ram);
   }
   const moving = el("g", { id: "moving" });
   for (const names of (current.sketch && current.sketch.drawing.slots) || []) {

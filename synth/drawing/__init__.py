@@ -19,11 +19,12 @@ from ..analysis.kinematics import analyze, joints
 from ..errors import InvalidParameters
 from ..load import LENGTH_UNITS
 from ..mechanisms import Mechanism, get
-from ..mechanisms.registry import GROUND
+from ..mechanisms.registry import GROUND, RAM
 
 FORMATS = ("svg", "dxf", "json", "gif")
 PATH_SAMPLES = 181  # angles a pin's path is drawn through (2° apart)
 GUIDE_OVERRUN = 0.15  # the guide runs past each end of the stroke by this share of it
+YOKE_OVERRUN = 0.1  # a slot the ram carries runs past its pin's travel by this share of it
 CHAR = 0.8  # a character's width, of the text's height (sans-serif capitals, generously)
 
 
@@ -50,8 +51,10 @@ class Drawing:
     line's far pin), drawn along its line to the farther of the other two (``slot``);
     ``ground``: the pins fixed to the frame; ``ram``: the ram's pin, on its ``path`` (a unit
     vector); ``stroke``: the ram pin at its two dead centres; ``guide``: the guide's ends, the
-    stroke and ``GUIDE_OVERRUN`` of it each side; ``paths``: each moving pin's path over a
-    turn (asked only)."""
+    stroke and ``GUIDE_OVERRUN`` of it each side; ``yokes``: each slot the ram carries
+    across its path (a slot drive's, a Scotch yoke's), as long as its pin's travel across
+    the path over a turn and ``YOKE_OVERRUN`` of it each side (it moves with the ram);
+    ``paths``: each moving pin's path over a turn (asked only)."""
 
     type: str
     params: dict[str, float]
@@ -64,11 +67,17 @@ class Drawing:
     path: tuple[float, float]
     stroke: Segment
     guide: Segment
+    yokes: tuple[Segment, ...] = ()
     paths: dict[str, np.ndarray] | None = None
+
+    def yokes_at(self, pins: Mapping[str, tuple[float, float]]) -> list[Segment]:
+        """The ``yokes`` where the ram's pin is at ``pins``' (they move with the ram)."""
+        dx, dy = np.subtract(pins[self.ram], self.pins[self.ram])
+        return [((a[0] + dx, a[1] + dy), (b[0] + dx, b[1] + dy)) for a, b in self.yokes]
 
     def bounds(self) -> tuple[float, float, float, float]:
         """(x min, y min, x max, y max) of everything drawn."""
-        pts = [*self.pins.values(), *self.guide, *self.stroke]
+        pts = [*self.pins.values(), *self.guide, *self.stroke, *(p for y in self.yokes for p in y)]
         for xy in (self.paths or {}).values():
             pts += [tuple(xy.min(axis=0)), tuple(xy.max(axis=0))]
         a = np.array(pts, dtype=float)
@@ -112,12 +121,20 @@ def drawing(
                   if a.params.get(name, 0.0) > 0)  # fmt: skip
     ground = tuple(pin for pin, b1, b2 in frame.pins if GROUND in (b1, b2))
     slots = tuple((line[0], block, line[1]) for block, _, _, line in frame.slots if line)
-    traced = None
-    if paths:
+    across = [block for block, _, slotted, line in frame.slots if slotted == RAM and line is None]
+    turn = {}
+    if paths or across:
         turn = joints(mechanism, a.params, np.linspace(0.0, 360.0, PATH_SAMPLES).tolist())
-        traced = {k: v for k, v in turn.items() if np.ptp(v, axis=0).max() > 0}
+    yokes = []
+    for pin in across:  # its travel across the path, from the ram's pin
+        off = (turn[pin] - turn[ram]) @ np.array([-ty, tx])
+        lo, hi = float(off.min()), float(off.max())
+        lo, hi = lo - YOKE_OVERRUN * (hi - lo), hi + YOKE_OVERRUN * (hi - lo)
+        (rx, ry) = pins[ram]
+        yokes.append(((rx - lo * ty, ry + lo * tx), (rx - hi * ty, ry + hi * tx)))
+    traced = {k: v for k, v in turn.items() if np.ptp(v, axis=0).max() > 0} if paths else None
     return Drawing(mechanism, dict(a.params), float(crank_angle_deg), pins, links, ground, slots,
-                   ram, (tx, ty), ends, guide, traced)  # fmt: skip
+                   ram, (tx, ty), ends, guide, tuple(yokes), traced)  # fmt: skip
 
 
 @dataclass(frozen=True)

@@ -38,8 +38,8 @@ def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
     for i, link in enumerate(d.links):
         doc.layers.add(link.name, color=i % 6 + 1)
         msp.add_line(d.pins[link.a], d.pins[link.b], dxfattribs={"layer": link.name})
-    for names in d.slots:
-        msp.add_line(*slot(d.pins, names), dxfattribs={"layer": "SLOTS"})
+    for a, b in (*(slot(d.pins, names) for names in d.slots), *d.yokes):
+        msp.add_line(a, b, dxfattribs={"layer": "SLOTS"})
     for name, p in d.pins.items():
         msp.add_circle(p, sk.pin_radius, dxfattribs={"layer": "PINS"})
         label = msp.add_text(name, height=sk.text_height, dxfattribs={"layer": "PINS"})

@@ -46,9 +46,8 @@ def _render(d: Drawing, ax: Any) -> None:
     for end, pin in ((a, sa), (b, sb)):
         ax.plot(*zip(end, pin, strict=True), color="#222", lw=0.5 * lw)
     ax.text(*sk.label_at, sk.label, ha="center", va="center", fontsize=8)
-    for names in d.slots:
-        ax.plot(*zip(*slot(d.pins, names), strict=True), color="#777", lw=7 * lw, alpha=0.35,
-                zorder=3.5)  # fmt: skip
+    for a, b in (*(slot(d.pins, names) for names in d.slots), *d.yokes):
+        ax.plot(*zip(a, b, strict=True), color="#777", lw=7 * lw, alpha=0.35, zorder=3.5)
     for i, link in enumerate(d.links):
         (ax_, ay), (bx, by) = d.pins[link.a], d.pins[link.b]
         label = f"{link.name} {link.length:.6g}"

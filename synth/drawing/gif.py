@@ -55,8 +55,8 @@ def gif(d: Drawing, frames: int = FRAMES, fps: float = FPS, width: int = WIDTH) 
         draw.polygon([px(np.add(p, shift)) for p in sk.block], fill="#dddddd", outline="#333333")
         draw.line([px(p) for p in sk.dimension], fill="#222222", width=1)
         draw.text(px(sk.label_at), sk.label, fill="#222222", font=font, anchor="ms")
-        for names in d.slots:
-            draw.line([px(p) for p in slot(pins, names)], fill="#cccccc", width=3 * lw)
+        for a, b in (*(slot(pins, names) for names in d.slots), *d.yokes_at(pins)):
+            draw.line([px(a), px(b)], fill="#cccccc", width=3 * lw)
         for i, link in enumerate(d.links):
             colour = COLOURS[i % len(COLOURS)]
             draw.line([px(pins[link.a]), px(pins[link.b])], fill=colour, width=2 * lw)

@@ -63,6 +63,7 @@ def svg(d: Drawing, length_unit: str = "mm") -> str:
     lx, ly = pt(sk.label_at).split(",")
     out.append(f'<text class="dimension" x="{lx}" y="{ly}" text-anchor="middle">{sk.label}</text>')
     out += [line(*slot(d.pins, names), "slot") for names in d.slots]
+    out += [line(a, b, "slot yoke") for a, b in d.yokes]
     for i, link in enumerate(d.links):
         colour = COLOURS[i % len(COLOURS)]
         extra = f' style="stroke:{colour}" data-length="{link.length:.17g}"'

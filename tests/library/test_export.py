@@ -144,6 +144,33 @@ def test_an_svg_is_true_size_with_the_links_and_pins(mtype, unit):
     assert label == f"stroke {bruteforce.simulate(mtype, p)['stroke']:.6g}"
 
 
+SLOT_DRIVES = {  # the slot across the ram's path, and the pin it holds
+    "scotch_yoke": ({"crank": 100.0}, "B"),
+    "crank_shaper": ({"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0}, "P"),
+    "crank_rocker_slider": (
+        {"ground": 240.0, "crank": 80.0, "coupler": 240.0, "rocker": 200.0, "rocker_arm": 300.0},
+        "C",
+    ),
+}
+
+
+@pytest.mark.parametrize("mtype", list(SLOT_DRIVES))
+def test_a_slot_across_the_ram_holds_its_pin_at_every_angle(mtype):
+    """What the SVG shows: at each crank angle the pin lies on the slot the ram carries (a
+    slot drive's, the Scotch yoke's), between its ends."""
+    p, pin = SLOT_DRIVES[mtype]
+    for angle in range(0, 360, 15):
+        root = ET.fromstring(synth.export(mtype, p, "svg", float(angle)))
+        (slot,) = [e for e in root.iter(f"{SVG}line") if "yoke" in e.get("class", "").split()]
+        a = np.array([float(slot.get("x1")), float(slot.get("y1"))])
+        b = np.array([float(slot.get("x2")), float(slot.get("y2"))])
+        (c,) = [e for e in root.iter(f"{SVG}circle") if e.get("data-pin") == pin]
+        q = np.array([float(c.get("cx")), float(c.get("cy"))])
+        t = (q - a) @ (b - a) / ((b - a) @ (b - a))
+        assert 0.0 < t < 1.0, (angle, t)
+        assert np.linalg.norm(a + t * (b - a) - q) <= 1e-9 * np.linalg.norm(b - a), angle
+
+
 def test_the_drawing_puts_the_ram_on_its_guide_between_the_dead_centres():
     from synth.drawing import drawing
 
