@@ -188,7 +188,11 @@ async function synthesize(choose = 0) {
   const cands = r.data.candidates;
   cands.forEach((c, i) => {
     const tr = el("tr", { "data-index": i, "data-type": c.type });
-    const links = el("td", { class: "lengths" }, Object.entries(c.params).map(([k, v]) => `${k} = ${short(v, 7)}`).join(", "));
+    const links = el("td", { class: "lengths", "data-label": "Lengths" });
+    Object.entries(c.params).forEach(([k, v], j) => { // a line breaks between lengths, not within one
+      if (j) links.append(", ");
+      links.append(el("span", { class: "length" }, `${k} = ${short(v, 7)}`));
+    });
     // what the service says of the design beyond its lengths: its measure for the objective,
     // the limits it rests on, the free choice its family leaves
     const notes = [];
@@ -209,9 +213,10 @@ async function synthesize(choose = 0) {
       await choose_(cands, i, body);
       if (window.innerWidth <= 800) $("detail").scrollIntoView(); // below the table on a phone
     });
-    tr.append(el("td", {}, c.type), el("td", {}, short(c.min_transmission_angle_deg)),
-      el("td", {}, short(c.size)), links, el("td", {}, c.method.replaceAll("_", " ")));
-    if (body.load) tr.append(el("td", {}, short(c.loads.torque.max, 5)), el("td", {}, short(c.loads.flywheel.inertia, 4)));
+    const cell = (label, text) => el("td", { "data-label": label }, text);
+    tr.append(el("td", { class: "type" }, c.type), cell("Min. transmission (°)", short(c.min_transmission_angle_deg)),
+      cell(`Size (${$("y-unit").value})`, short(c.size)), links, cell("Method", c.method.replaceAll("_", " ")));
+    if (body.load) tr.append(cell("Peak torque (N·m)", short(c.loads.torque.max, 5)), cell("Flywheel (kg·m²)", short(c.loads.flywheel.inertia, 4)));
     const last = el("td"); last.append(btn); tr.append(last);
     tbody.append(tr);
   });
@@ -230,12 +235,21 @@ function choose_(cands, i, body) {
   }
   const c = cands[i];
   saveState("synthesize", { ...synthState(), choose: String(i) });
-  return showDesign(c.type, c.params, body.min_transmission_angle_deg || 0, null, body.load || null);
+  return showDesign(c.type, c.params, body.min_transmission_angle_deg || 0, null, body.load || null,
+    num("y-rpm"), $("y-unit").value);
+}
+
+function showUnits() {
+  // each unit a select sets, where the page shows it
+  for (const span of document.querySelectorAll(".unit-shown")) {
+    const from = $(span.dataset.of);
+    if (from && from.tagName === "SELECT") span.textContent = from.value;
+  }
 }
 
 function synthState() {
   const s = { tr: $("time_ratio").value, stroke: $("stroke").value, bound: $("bound").value,
-    objective: $("objective").value,
+    objective: $("objective").value, unit: $("y-unit").value, rpm: $("y-rpm").value,
     types: [...document.querySelectorAll("input[name=type]:checked")].map((x) => x.value).join(",") };
   for (const f of $("types").querySelectorAll("input[type=number]")) if (f.value !== "") s[f.id] = f.value;
   return { ...s, ...loadState("y") };
@@ -244,6 +258,8 @@ function synthState() {
 function loadSynthState(q) {
   const set = (id, k) => { if (q.has(k)) $(id).value = q.get(k); };
   set("time_ratio", "tr"); set("stroke", "stroke"); set("bound", "bound"); set("objective", "objective");
+  set("y-unit", "unit"); set("y-rpm", "rpm");
+  showUnits();
   if (q.has("types")) {
     const on = new Set(q.get("types").split(","));
     for (const cb of document.querySelectorAll("input[name=type]")) cb.checked = on.has(cb.value);
@@ -306,8 +322,9 @@ function designFieldId(prefix) {
   };
 }
 
-// a load's fields: [name, label, default]; the cutting zone's two ends and the unit aside
-const LOAD_FIELDS = [["crank_rpm", "Crank speed (rpm)", 40], ["cutting_force", "Cutting force (N)", 2000],
+// a load's fields: [name, label, default]; the cutting zone's two ends aside, and its unit and
+// the crank's speed the view's own fields (one of each a view)
+const LOAD_FIELDS = [["cutting_force", "Cutting force (N)", 2000],
   ["slider_mass", "Ram and tool (kg)", 60], ["link_mass_per_length", "Links (kg/m)", 0],
   ["guide_friction", "Guide friction (μ)", 0], ["efficiency", "Drive efficiency, motor to crank", 1],
   ["speed_fluctuation", "Speed fluctuation the flywheel allows (Cs)", 0.05],
@@ -322,17 +339,17 @@ function loadBox(prefix) {
   const fields = el("div", { class: "fields" });
   const row = (k, label, input) => fields.append(el("label", { for: id(k) }, label), input,
     el("p", { class: "error", id: `${id(k)}-error`, role: "alert" }));
-  const unit = el("select", { id: id("length_unit") });
-  unit.append(...["mm", "m", "in"].map((u) => el("option", { value: u }, u)));
-  row("length_unit", "Lengths in", unit);
   const number = (k, v) => { const x = el("input", { id: k, type: "number", step: "any" }); x.value = v; return x; };
-  for (const [k, label, v] of LOAD_FIELDS.slice(0, 2)) row(k, label, number(id(k), v));
+  for (const [k, label, v] of LOAD_FIELDS.slice(0, 1)) row(k, label, number(id(k), v));
   fields.append(el("label", { for: id("cutting_zone") }, "Cuts from (fraction of the working stroke)"),
     number(id("cutting_zone"), 0.1), el("label", { for: id("cutting_zone-end") }, "to"),
     number(id("cutting_zone-end"), 0.9), el("p", { class: "error", id: `${id("cutting_zone")}-error`, role: "alert" }));
-  for (const [k, label, v] of LOAD_FIELDS.slice(2)) row(k, label, number(id(k), v));
+  for (const [k, label, v] of LOAD_FIELDS.slice(1)) row(k, label, number(id(k), v));
   const box = el("details", { id: `${prefix}-load` });
-  box.append(el("summary", {}, "Load: torque, flywheel, joint forces"), fields);
+  box.append(el("summary", {}, "Load: torque, flywheel, joint forces (lengths in the view's unit)"), fields);
+  box.addEventListener("toggle", () => { // a load turns at a speed: the view's, 40 where none is given
+    if (box.open && $(`${prefix}-rpm`).value.trim() === "") $(`${prefix}-rpm`).value = "40";
+  });
   return box;
 }
 
@@ -352,7 +369,7 @@ function setLoadState(prefix, q) {
 function loadOf(prefix) {
   // a view's load, while its box is open (else none)
   if (!$(`${prefix}-load`).open) return null;
-  const load = { length_unit: $(`${prefix}-load-length_unit`).value,
+  const load = { length_unit: $(`${prefix}-unit`).value, crank_rpm: num(`${prefix}-rpm`),
     cutting_zone: [num(`${prefix}-load-cutting_zone`), num(`${prefix}-load-cutting_zone-end`)] };
   for (const [k] of LOAD_FIELDS) load[k] = num(`${prefix}-load-${k}`);
   return load;
@@ -361,7 +378,8 @@ function loadOf(prefix) {
 function loadFieldId(prefix, loc) {
   // the load field an error is at, or null
   const i = loc.indexOf("load");
-  return i >= 0 && typeof loc[i + 1] === "string" ? `${prefix}-load-${loc[i + 1]}` : null;
+  const own = { length_unit: `${prefix}-unit`, crank_rpm: `${prefix}-rpm` }; // the view's fields
+  return i >= 0 && typeof loc[i + 1] === "string" ? own[loc[i + 1]] || `${prefix}-load-${loc[i + 1]}` : null;
 }
 
 function analysisFieldId(loc) {
@@ -373,9 +391,10 @@ async function analyzeView() {
   const form = $("analyze-form");
   clearErrors(form);
   const d = designOf("a");
-  saveState("analyze", { type: d.type, ...d.params, ...loadState("a") });
+  saveState("analyze", { type: d.type, ...d.params, __unit: $("a-unit").value, __rpm: $("a-rpm").value,
+    ...loadState("a") });
   await busy(form, () => showDesign(d.type, d.params, 0,
-    (detail) => showErrors(detail, analysisFieldId, "a-form-error"), loadOf("a"), num("a-rpm")));
+    (detail) => showErrors(detail, analysisFieldId, "a-form-error"), loadOf("a"), num("a-rpm"), $("a-unit").value));
 }
 
 function setSweepRange() {
@@ -393,7 +412,7 @@ async function sweepView() {
   const body = { mechanism: d, vary: $("s-vary").value, start: num("s-start"), stop: num("s-stop"),
     points: num("s-points") };
   saveState("sweep", { type: d.type, ...d.params, __vary: body.vary, __start: $("s-start").value,
-    __stop: $("s-stop").value, __points: $("s-points").value });
+    __stop: $("s-stop").value, __points: $("s-points").value, __unit: $("s-unit").value });
   const r = await busy(form, () => api("v1/sweep", body));
   const svg = $("sweep-plot");
   svg.replaceChildren();
@@ -403,10 +422,13 @@ async function sweepView() {
   $("s-status").textContent = s.complete ? "" : !s.values.length
     ? "The time budget ran out before any value was analysed."
     : `The time budget ran out: the sweep ends at ${s.vary} = ${fmt(s.values.at(-1), 7)}.`;
+  const here = num(`s-param-${s.vary}`);
   plot(svg, s.values, [
     { ys: s.time_ratio, color: COLORS[0], label: "time ratio" },
     { ys: s.min_transmission_angle_deg, color: COLORS[1], label: "min. transmission (°)", right: true },
-  ], { xlabel: s.vary, shade: s.valid_interval });
+  ], { xlabel: `${s.vary} (${$("s-unit").value})`, ylabel: "time ratio (slow / quick)",
+    ylabel2: "min. transmission angle (°)", shade: s.valid_interval,
+    mark: typeof here === "number" ? { x: here, label: "this design" } : undefined });
 }
 
 // ---- one design: drawing, animation, curves -------------------------------------------------
@@ -416,11 +438,12 @@ function pinsOf(curves) {
   return curves.pins || {};
 }
 
-async function showDesign(type, params, bound, onError, load = null, rpm = null) {
-  // the curves at the load's crank speed, else at rpm strokes a minute, else per unit ω
+async function showDesign(type, params, bound, onError, load = null, rpm = null, unit = "mm") {
+  // the curves at the load's crank speed, else at rpm strokes a minute, else per unit ω; the
+  // lengths in unit
   const mine = ++shown;
   const loaded = load ? { load } : rpm !== null ? { crank_speed: typeof rpm === "number" ? (rpm * Math.PI) / 30 : rpm } : {};
-  const summary = await api("v1/analyze", { mechanism: { type, params }, include: ["motion"], ...loaded });
+  const summary = await api("v1/analyze", { mechanism: { type, params }, include: ["motion", "sensitivities"], ...loaded });
   if (mine !== shown) return;
   if (!summary.ok) {
     if (onError) onError(summary.data.detail);
@@ -439,14 +462,15 @@ async function showDesign(type, params, bound, onError, load = null, rpm = null)
     [...Array(PLOT_POINTS).keys()], extra);
   const [r, drawn] = await Promise.all([
     api("v1/analyze", { mechanism: { type, params }, crank_angles_deg: angles,
-      include: TYPES[type].drawing.length ? ["pins"] : [], ...loaded }),
+      include: (TYPES[type].drawing.length ? ["pins"] : []).concat(load ? ["forces"] : []), ...loaded }),
     api("v1/export", { mechanism: { type, params }, format: "json" }), // its symbols' shapes
   ]);
   if (mine !== shown) return;
   if (!r.ok) { if (onError) onError(r.data.detail); $("detail").hidden = true; return; }
   current = { type, params: a.params, analysis: a, curves: r.data.curves, bound, load,
-    rpm: load ? load.crank_rpm : rpm,
+    rpm: load ? load.crank_rpm : rpm, unit,
     sketch: drawn.ok ? drawn.data : null };
+  for (const span of document.querySelectorAll(".unit-shown[data-of=design-unit]")) span.textContent = unit;
   $("detail").hidden = false;
   $("detail-title").textContent = `${TYPES[type].title}`;
   $("detail-summary").textContent = `time ratio ${fmt(a.time_ratio, 8)}, stroke ${fmt(a.stroke, 8)}, ` +
@@ -455,6 +479,7 @@ async function showDesign(type, params, bound, onError, load = null, rpm = null)
   drawLinkage();
   curvePlots();
   loadsView();
+  sensitivitiesView();
   setFrame(0);
   play(true);
   $("detail").dataset.shown = String(mine); // drawn: for tests and tools that wait on it
@@ -596,8 +621,9 @@ function sortedCurves() {
   const idx = [...c.crank_angle_deg.keys()].slice(FRAMES)
     .map((k) => [((c.crank_angle_deg[k] % 360) + 360) % 360, k]).sort((p, q) => p[0] - q[0]);
   const pick = (v) => (v ? idx.map(([, k]) => v[k]) : null);
+  const forces = c.forces ? Object.fromEntries(Object.entries(c.forces).map(([k, v]) => [k, pick(v)])) : null;
   return { th: idx.map(([x]) => x), position: pick(c.position), velocity: pick(c.velocity),
-    acceleration: pick(c.acceleration), transmission: pick(c.transmission_deg), torque: pick(c.torque) };
+    acceleration: pick(c.acceleration), transmission: pick(c.transmission_deg), torque: pick(c.torque), forces };
 }
 
 function curvePlots() {
@@ -605,36 +631,60 @@ function curvePlots() {
   const a = current.analysis;
   const dead = [a.extremes.min.crank_angle_deg, a.extremes.max.crank_angle_deg];
   const common = { xlabel: "crank angle (°)", xticks: [0, 90, 180, 270, 360], vlines: dead, cursor: true, phases: true };
-  const unit = current.load ? current.load.length_unit : "length";
-  const rate = current.rpm ? `${unit}/s at ${current.rpm} rpm` : `${unit} per rad, ω = 1`;
-  const rate2 = current.rpm ? `${unit}/s² at ${current.rpm} rpm` : `${unit} per rad², ω = 1`;
-  plot($("plot-position"), c.th, [{ ys: c.position, color: COLORS[0], label: `position (${unit})` }], common);
-  plot($("plot-velocity"), c.th, [{ ys: c.velocity, color: COLORS[0], label: `velocity (${rate})` }], common);
-  plot($("plot-acceleration"), c.th, [{ ys: c.acceleration, color: COLORS[0], label: `acceleration (${rate2})` }], common);
-  plot($("plot-transmission"), c.th, [{ ys: c.transmission, color: COLORS[0], label: "transmission angle (°)" }],
-    { ...common, hlines: current.bound > 0 ? [{ y: current.bound, label: `bound ${current.bound}°` }] : [] });
+  const unit = current.unit;
+  const rate = current.rpm ? `${unit}/s` : `${unit}/rad`, rate2 = current.rpm ? `${unit}/s²` : `${unit}/rad²`;
+  const at = current.rpm ? `at ${current.rpm} rpm` : "per radian of crank (ω = 1)";
+  plot($("plot-position"), c.th, [{ ys: c.position, color: COLORS[0], label: "position" }], { ...common, ylabel: `position (${unit})` });
+  plot($("plot-velocity"), c.th, [{ ys: c.velocity, color: COLORS[0], label: `velocity ${at}` }],
+    { ...common, ylabel: `velocity (${rate})`, legend: true });
+  plot($("plot-acceleration"), c.th, [{ ys: c.acceleration, color: COLORS[0], label: `acceleration ${at}` }],
+    { ...common, ylabel: `acceleration (${rate2})`, legend: true });
+  plot($("plot-transmission"), c.th, [{ ys: c.transmission, color: COLORS[0], label: "transmission angle" }],
+    { ...common, ylabel: "transmission angle (°)", hlines: current.bound > 0 ? [{ y: current.bound, label: `bound ${current.bound}°` }] : [] });
 }
 
 function loadsView() {
-  // with a load: its figures, and the torque over the turn against its mean, the areas between
-  // them shaded (above the mean the flywheel gives, below it takes)
+  // with a load: its figures as a small table, the torque over the turn against its mean (the
+  // areas between them shaded: above the mean the flywheel gives, below it takes), and the
+  // joints' and the guide's forces
   const l = current.analysis.loads;
   $("loads").hidden = !l;
   if (!l) return;
+  const n = (x, d = 4) => short(x, d);
   const top = Object.entries(l.joints).reduce((a, b) => (b[1].max > a[1].max ? b : a));
-  $("loads-summary").textContent = `torque ${fmt(l.torque.min, 4)} … ${fmt(l.torque.max, 4)} N·m ` +
-    `(mean ${fmt(l.torque.mean, 4)}, rms ${fmt(l.torque.rms, 4)}); power mean ${fmt(l.power.mean, 4)} W, ` +
-    `peak ${fmt(l.power.peak, 4)} W, motor ${fmt(l.power.rated, 4)} W` +
-    (l.power.motor_torque == null ? "" : ` (${fmt(l.power.motor_torque, 4)} N·m at its speed)`) +
-    `; flywheel: energy swing ${fmt(l.flywheel.energy, 4)} J, inertia ${fmt(l.flywheel.inertia, 4)} kg·m² ` +
-    `on a shaft at ${Number(l.flywheel.rpm.toPrecision(6))} rpm` +
-    (l.flywheel.disc_diameter == null ? "" : `, a steel disc ${fmt(l.flywheel.disc_diameter, 4)} across`) +
-    `; largest joint force ${fmt(top[1].max, 4)} N at ${top[0]}, guide ${fmt(l.guide.max, 4)} N.`;
+  const rows = [
+    ["Crank torque", `${n(l.torque.min)} … ${n(l.torque.max)} N·m, mean ${n(l.torque.mean)}, rms ${n(l.torque.rms)}`],
+    ["Power", `mean ${n(l.power.mean)} W, peak ${n(l.power.peak)} W`],
+    ["Motor", `${n(l.power.rated)} W` + (l.power.motor_torque == null ? "" : `, ${n(l.power.motor_torque)} N·m at its speed`)],
+    ["Flywheel", `energy swing ${n(l.flywheel.energy)} J; inertia ${n(l.flywheel.inertia)} kg·m² ` +
+      `on a shaft at ${short(l.flywheel.rpm, 6)} rpm` +
+      (l.flywheel.disc_diameter == null ? "" : `, a steel disc ${n(l.flywheel.disc_diameter)} ${current.unit} across`)],
+    ["Largest joint force", `${n(top[1].max)} N at ${top[0]}`],
+    ["Guide", `${n(l.guide.max)} N`],
+  ];
+  $("loads-summary").tBodies[0].replaceChildren(...rows.map(([k, v]) => {
+    const tr = el("tr"); tr.append(el("th", { scope: "row" }, k), el("td", {}, v)); return tr;
+  }));
   const c = sortedCurves();
   const dead = [current.analysis.extremes.min.crank_angle_deg, current.analysis.extremes.max.crank_angle_deg];
-  plot($("plot-torque"), c.th, [{ ys: c.torque, color: COLORS[0], label: "crank torque (N·m)" }],
-    { xlabel: "crank angle (°)", xticks: [0, 90, 180, 270, 360], vlines: dead, cursor: true, phases: true, fillTo: l.torque.mean,
-      hlines: [{ y: l.torque.mean, label: `mean ${fmt(l.torque.mean, 4)}` }] });
+  const common = { xlabel: "crank angle (°)", xticks: [0, 90, 180, 270, 360], vlines: dead, cursor: true, phases: true };
+  plot($("plot-torque"), c.th, [{ ys: c.torque, color: COLORS[0], label: "crank torque" }],
+    { ...common, ylabel: "torque (N·m)", fillTo: l.torque.mean, hlines: [{ y: l.torque.mean, label: `mean ${n(l.torque.mean)}` }] });
+  const forces = Object.entries(c.forces || {});
+  plot($("plot-forces"), c.th, forces.map(([k, ys], i) => ({ ys, color: COLORS[i % COLORS.length], label: k })),
+    { ...common, ylabel: "force (N)", shared: true });
+}
+
+function sensitivitiesView() {
+  // how each figure moves with each part (per one of the design's unit)
+  const s = current.analysis.sensitivities;
+  const mu = s.min_transmission_angle_deg || {};
+  $("sensitivities").tBodies[0].replaceChildren(...Object.keys(s.time_ratio).map((k) => {
+    const tr = el("tr");
+    tr.append(el("th", { scope: "row" }, k), el("td", {}, short(s.time_ratio[k], 4)),
+      el("td", {}, short(s.stroke[k], 4)), el("td", {}, k in mu ? short(mu[k], 4) : "–"));
+    return tr;
+  }));
 }
 
 function ticks(lo, hi, n = 4) {
@@ -647,44 +697,56 @@ function ticks(lo, hi, n = 4) {
   return out;
 }
 
-// A small line plot in an SVG: series against xs (a second scale on the right for `right`
-// series), dashed vertical lines, horizontal lines, shaded x intervals, a cursor.
+// A small line plot in an SVG: series against xs, on one scale (`shared`) or each its own (a
+// second scale on the right for `right` series); axis titles with their units (`xlabel`,
+// `ylabel`, `ylabel2` for the right), the legend above the plotting area; dashed vertical
+// lines, horizontal lines, shaded x intervals, a cursor.
 function plot(svg, xs, series, opts = {}) {
   svg.replaceChildren();
-  const W = 400, H = 180, L = 46, R = series.some((s) => s.right) ? 46 : 16, T = 18, B = 26;
+  const right = series.some((s) => s.right);
+  const W = 400, H = 190, L = 58, R = right ? 58 : 14, T = 22, B = 34;
   svg.setAttribute("viewBox", `0 0 ${W} ${H}`);
   const finite = (v) => v.filter((y) => y !== null && Number.isFinite(y));
   const range = (v) => { const f = finite(v); const lo = Math.min(...f), hi = Math.max(...f); return hi > lo ? [lo, hi] : [lo - 1, hi + 1]; };
   const [x0, x1] = range(xs);
   const sx = (x) => L + ((x - x0) / (x1 - x0)) * (W - L - R);
-  const scale = (ys, extra = []) => { const [a, b] = range(ys.concat(extra)); return (y) => H - B - ((y - a) / (b - a)) * (H - T - B); };
+  const extra = (opts.hlines || []).map((h) => h.y);
+  const shared = opts.shared ? series.flatMap((s) => s.ys) : null;
+  const bounds = (s) => range((shared || s.ys).concat(extra));
+  const scale = (s) => { const [a, b] = bounds(s); return (y) => H - B - ((y - a) / (b - a)) * (H - T - B); };
   for (const [lo, hi] of opts.shade || []) {
     svg.append(el("rect", { class: "valid", x: sx(lo), y: T, width: Math.max(sx(hi) - sx(lo), 1), height: H - T - B, fill: "#e8f3e8" }));
   }
   if (opts.phases && current) {
     for (let k = 0; k < xs.length; k++) {
-      if (phase(xs[k]) === "return") svg.append(el("rect", { x: sx(xs[k]), y: H - B, width: (W - L - R) / xs.length + 0.5, height: 4, fill: RETURN }));
-      else svg.append(el("rect", { x: sx(xs[k]), y: H - B, width: (W - L - R) / xs.length + 0.5, height: 4, fill: WORKING }));
+      svg.append(el("rect", { x: sx(xs[k]), y: H - B, width: (W - L - R) / xs.length + 0.5, height: 4,
+        fill: phase(xs[k]) === "return" ? RETURN : WORKING }));
     }
   }
   svg.append(el("line", { x1: L, y1: H - B, x2: W - R, y2: H - B, stroke: "#999" }));
   svg.append(el("line", { x1: L, y1: T, x2: L, y2: H - B, stroke: "#999" }));
   for (const x of opts.xticks || ticks(x0, x1)) { // grid lines and their numbers
     svg.append(el("line", { class: "grid", x1: sx(x), x2: sx(x), y1: T, y2: H - B, stroke: "#eee" }));
-    svg.append(el("text", { class: "tick", x: sx(x), y: H - B + 13, "text-anchor": "middle" }, short(x)));
+    svg.append(el("text", { class: "tick", x: sx(x), y: H - B + 14, "text-anchor": "middle" }, short(x)));
   }
-  if (opts.xlabel) svg.append(el("text", { x: W - R, y: H - 2, "text-anchor": "end" }, opts.xlabel));
+  const title = (text, x, y, turn) => svg.append(el("text", { class: "axis-title", x, y, "text-anchor": "middle",
+    ...(turn ? { transform: `rotate(${turn} ${x} ${y})` } : {}) }, text));
+  if (opts.xlabel) title(opts.xlabel, (L + W - R) / 2, H - 3);
+  if (opts.ylabel) title(opts.ylabel, 11, (T + H - B) / 2, -90);
+  if (opts.ylabel2) title(opts.ylabel2, W - 6, (T + H - B) / 2, 90);
+  let legendAt = L;
   series.forEach((s, i) => {
-    const extra = (opts.hlines || []).map((h) => h.y);
-    const sy = scale(s.ys, extra);
-    const [lo, hi] = range(s.ys.concat(extra));
-    for (const y of ticks(lo, hi)) {
-      if (i === 0) svg.append(el("line", { class: "grid", x1: L, x2: W - R, y1: sy(y), y2: sy(y), stroke: "#eee" }));
-      svg.append(el("text", { class: "tick", x: s.right ? W - R + 3 : L - 3, y: sy(y) + 4,
-        "text-anchor": s.right ? "start" : "end", style: `fill:${s.color}` }, short(y)));
+    const sy = scale(s);
+    if (!shared || i === 0) {
+      for (const y of ticks(...bounds(s))) {
+        if (i === 0) svg.append(el("line", { class: "grid", x1: L, x2: W - R, y1: sy(y), y2: sy(y), stroke: "#eee" }));
+        svg.append(el("text", { class: "tick", x: s.right ? W - R + 3 : L - 3, y: sy(y) + 4,
+          "text-anchor": s.right ? "start" : "end", style: `fill:${shared ? "#666" : s.color}` }, short(y)));
+      }
     }
     // the legend, in the series' colour (inline: the page's text colour would override it)
-    svg.append(el("text", { class: "legend", x: L + 4 + 180 * i, y: 12, style: `fill:${s.color}` }, s.label));
+    svg.append(el("text", { class: "legend", x: legendAt, y: 13, style: `fill:${s.color}` }, s.label));
+    legendAt += 7 * s.label.length + 12;
     if (opts.fillTo !== undefined) { // the areas between the series and a level, by sign
       for (let k = 0; k + 1 < xs.length; k++) {
         const y = (s.ys[k] + s.ys[k + 1]) / 2;
@@ -706,6 +768,10 @@ function plot(svg, xs, series, opts = {}) {
   for (const v of opts.vlines || []) {
     svg.append(el("line", { class: "dead-centre", x1: sx(v), x2: sx(v), y1: T, y2: H - B, stroke: DEAD, "stroke-dasharray": "3 3" }));
   }
+  if (opts.mark !== undefined && opts.mark.x >= x0 && opts.mark.x <= x1) { // a value of x to point out (the design a sweep varies)
+    svg.append(el("line", { class: "mark", x1: sx(opts.mark.x), x2: sx(opts.mark.x), y1: T, y2: H - B, stroke: "#333", "stroke-width": 1.5 }));
+    svg.append(el("text", { class: "mark-label", x: sx(opts.mark.x) + 3, y: T + 11 }, opts.mark.label));
+  }
   if (opts.cursor) {
     svg.append(el("line", { class: "cursor", x1: L, x2: L, y1: T, y2: H - B, stroke: "#333",
       "data-scale": (W - L - R) / (x1 - x0), "data-offset": L - (x0 * (W - L - R)) / (x1 - x0) }));
@@ -713,29 +779,47 @@ function plot(svg, xs, series, opts = {}) {
 }
 
 function frontPlot(cands, body) {
+  // each type's candidates, size against the least transmission angle; a point shows its design
   const svg = $("front-plot");
   svg.replaceChildren();
   if (!cands.length) return;
   const types = [...new Set(cands.map((c) => c.type))];
-  const W = 400, H = 180, L = 46, R = 10, T = 18, B = 26;
+  const W = 400, H = 200, L = 58, R = 14, T = 22, B = 34;
   svg.setAttribute("viewBox", `0 0 ${W} ${H}`);
-  const sizes = cands.map((c) => c.size), mus = cands.map((c) => c.min_transmission_angle_deg);
-  const lo = (v) => Math.min(...v), hi = (v) => Math.max(...v) > Math.min(...v) ? Math.max(...v) : Math.min(...v) + 1;
-  const sx = (x) => L + ((x - lo(sizes)) / (hi(sizes) - lo(sizes))) * (W - L - R);
-  const sy = (y) => H - B - ((y - lo(mus)) / (hi(mus) - lo(mus))) * (H - T - B);
+  const span = (v) => { const lo = Math.min(...v), hi = Math.max(...v); return hi > lo ? [lo, hi] : [lo - 1, hi + 1]; };
+  const xt = ticks(...span(cands.map((c) => c.size))), yt = ticks(...span(cands.map((c) => c.min_transmission_angle_deg)));
+  const [x0, x1] = [Math.min(xt[0], ...cands.map((c) => c.size)), Math.max(xt.at(-1), ...cands.map((c) => c.size))];
+  const [y0, y1] = [Math.min(yt[0], ...cands.map((c) => c.min_transmission_angle_deg)),
+    Math.max(yt.at(-1), ...cands.map((c) => c.min_transmission_angle_deg))];
+  const pad = 0.04;
+  const sx = (x) => L + (pad + (1 - 2 * pad) * (x - x0) / (x1 - x0 || 1)) * (W - L - R);
+  const sy = (y) => H - B - (pad + (1 - 2 * pad) * (y - y0) / (y1 - y0 || 1)) * (H - T - B);
+  for (const x of xt) {
+    svg.append(el("line", { class: "grid", x1: sx(x), x2: sx(x), y1: T, y2: H - B, stroke: "#eee" }));
+    svg.append(el("text", { class: "tick", x: sx(x), y: H - B + 14, "text-anchor": "middle" }, short(x)));
+  }
+  for (const y of yt) {
+    svg.append(el("line", { class: "grid", x1: L, x2: W - R, y1: sy(y), y2: sy(y), stroke: "#eee" }));
+    svg.append(el("text", { class: "tick", x: L - 3, y: sy(y) + 4, "text-anchor": "end" }, short(y)));
+  }
   svg.append(el("line", { x1: L, y1: H - B, x2: W - R, y2: H - B, stroke: "#999" }), el("line", { x1: L, y1: T, x2: L, y2: H - B, stroke: "#999" }));
-  svg.append(el("text", { x: L, y: H - 6 }, `size ${fmt(lo(sizes), 4)} … ${fmt(hi(sizes), 4)}`));
-  svg.append(el("text", { x: 2, y: T + 8 }, `${fmt(hi(mus), 4)}°`), el("text", { x: 2, y: H - B - 2 }, `${fmt(lo(mus), 4)}°`));
+  const unit = $("y-unit").value;
+  svg.append(el("text", { class: "axis-title", x: (L + W - R) / 2, y: H - 3, "text-anchor": "middle" }, `size (Σ lengths, ${unit})`));
+  svg.append(el("text", { class: "axis-title", x: 11, y: (T + H - B) / 2, "text-anchor": "middle",
+    transform: `rotate(-90 11 ${(T + H - B) / 2})` }, "min. transmission angle (°)"));
+  let legendAt = L;
   types.forEach((t, i) => {
+    const colour = COLORS[i % COLORS.length];
     const mine = cands.map((c, k) => [c, k]).filter(([c]) => c.type === t);
-    svg.append(el("polyline", { fill: "none", stroke: COLORS[i % COLORS.length], "stroke-width": 1,
+    svg.append(el("polyline", { fill: "none", stroke: colour, "stroke-width": 1,
       points: mine.map(([c]) => `${sx(c.size)},${sy(c.min_transmission_angle_deg)}`).join(" ") }));
     for (const [c, k] of mine) {
-      const dot = el("circle", { cx: sx(c.size), cy: sy(c.min_transmission_angle_deg), r: 4, fill: COLORS[i % COLORS.length], "data-index": k });
+      const dot = el("circle", { cx: sx(c.size), cy: sy(c.min_transmission_angle_deg), r: 4, fill: colour, "data-index": k });
       dot.addEventListener("click", () => choose_(cands, k, body));
       svg.append(dot);
     }
-    svg.append(el("text", { x: L + 6, y: T + 12 * i + 2, fill: COLORS[i % COLORS.length] }, t));
+    svg.append(el("text", { class: "legend", x: legendAt, y: 13, style: `fill:${colour}` }, t));
+    legendAt += 7 * t.length + 12;
   });
 }
 
@@ -750,7 +834,7 @@ async function exportDrawing(format) {
   // the service's drawing at the frame shown: SVG in true size, DXF for CAD, a GIF of a turn
   if (!current) return;
   const body = { mechanism: { type: current.type, params: current.params }, format,
-    crank_angle_deg: (frame * 360) / FRAMES, length_unit: $("export-unit").value, paths: true };
+    crank_angle_deg: (frame * 360) / FRAMES, length_unit: current.unit, paths: true };
   const r = await fetch(new URL("v1/export", BASE), { method: "POST",
     headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
   if (r.ok) download(`${current.type}.${format}`, r.headers.get("Content-Type"), await r.blob());
@@ -761,8 +845,8 @@ async function exportReport() {
   if (!current) return;
   const body = { mechanism: { type: current.type, params: current.params },
     crank_angle_deg: (frame * 360) / FRAMES };
-  if (current.load) body.load = current.load;
-  else body.length_unit = $("export-unit").value;
+  if (current.load) body.load = current.load; // in the design's unit
+  else body.length_unit = current.unit;
   if (current.bound !== null && current.bound !== undefined) body.targets = { bound_deg: current.bound };
   const r = await fetch(new URL("v1/report", BASE), { method: "POST",
     headers: { "Content-Type": "application/json" }, body: JSON.stringify(body) });
@@ -794,8 +878,10 @@ async function route(run) {
     const given = query ? Object.fromEntries(q) : null;
     await paramInputs(prefix, t, given);
     if (prefix === "a") setLoadState("a", q);
-    if (prefix === "s" && given) {
-      for (const k of ["start", "stop", "points"]) if (given[`__${k}`]) $(`s-${k}`).value = given[`__${k}`];
+    if (given) {
+      for (const k of ["start", "stop", "points", "unit", "rpm"]) {
+        if (given[`__${k}`] !== undefined && $(`${prefix}-${k}`)) $(`${prefix}-${k}`).value = given[`__${k}`];
+      }
     }
     if (run && query) await (name === "analyze" ? analyzeView() : sweepView());
   }
@@ -824,6 +910,7 @@ async function init() {
     sel.addEventListener("change", () => paramInputs(prefix, sel.value));
   }
   $("s-vary").addEventListener("change", setSweepRange);
+  for (const u of document.querySelectorAll("select.unit")) u.addEventListener("change", showUnits);
   $("synth-form").addEventListener("submit", (e) => { e.preventDefault(); synthesize(0); });
   $("analyze-form").addEventListener("submit", (e) => { e.preventDefault(); analyzeView(); });
   $("sweep-form").addEventListener("submit", (e) => { e.preventDefault(); sweepView(); });

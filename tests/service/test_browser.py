@@ -203,10 +203,11 @@ def test_the_address_holds_the_state(site):
     again.close()
 
 
-def test_the_address_holds_the_load(site):
+@pytest.mark.parametrize("viewport", [DESKTOP, PHONE], ids=["desktop", "phone"])
+def test_the_address_holds_the_load(site, viewport):
     """A shared link with a load opens the load as it was sent: the candidates carry its
     torque (the with-loads table), the cutting force as typed."""
-    first = Page(site)
+    first = Page(site, viewport=viewport)
     pg = first.page
     project(pg)
     pg.click("#y-load summary")
@@ -216,7 +217,7 @@ def test_the_address_holds_the_load(site):
     pg.wait_for_function("location.hash.includes('y-load-cutting_force=1234')")
     url = pg.url
     first.close()
-    again = Page(site, at=url[len(site[1]) :])
+    again = Page(site, viewport=viewport, at=url[len(site[1]) :])
     pg = again.page
     pg.wait_for_selector("#candidates.with-loads tbody tr")
     assert pg.input_value("#y-load-cutting_force") == "1234"
@@ -253,11 +254,11 @@ def test_the_analysis_takes_a_load(page):
     pg.click("#tab-analyze")
     pg.wait_for_selector("#a-param-coupler")
     pg.click("#a-load summary")
-    pg.fill("#a-load-crank_rpm", "-5")
+    pg.fill("#a-rpm", "-5")
     pg.click("#a-run")
-    pg.wait_for_selector("#a-load-crank_rpm-error:not(:empty)")
-    pg.fill("#a-load-crank_rpm", "40")
-    pg.select_option("#a-load-length_unit", "m")
+    pg.wait_for_selector("#a-rpm-error:not(:empty)")
+    pg.fill("#a-rpm", "40")
+    pg.select_option("#a-unit", "m")
     pg.click("#a-run")
     pg.wait_for_selector("#plot-torque polyline.series", state="attached")
     for area in ("gives", "takes"):  # the flywheel's
@@ -372,7 +373,9 @@ def test_every_field_has_a_label_and_the_design_exports(page):
         pg.click("#export-gif")
     assert d.value.suggested_filename == "drag_link_slider.gif"
     assert Path(d.value.path()).read_bytes().startswith(b"GIF89a")
-    pg.select_option("#export-unit", "m")
+    pg.select_option("#y-unit", "m")  # the design's unit: the drawing's
+    pg.locator("#candidates button.choose").first.click()
+    pg.wait_for_function("current && current.unit === 'm'")
     with pg.expect_download() as d:
         pg.click("#export-dxf")
     assert d.value.suggested_filename == "drag_link_slider.dxf"
@@ -431,6 +434,47 @@ def test_no_view_scrolls_sideways_on_a_phone(site):
             pg.wait_for_selector(ready)
             width = pg.evaluate("document.documentElement.scrollWidth")
             assert width <= PHONE["width"], (tab, width)
+    finally:
+        p.close()
+
+
+# each plot shown: its id and its axis titles
+TITLES = """() => [...document.querySelectorAll("svg.plot")]
+  .filter((s) => s.getBoundingClientRect().width > 0)
+  .map((s) => [s.id, [...s.querySelectorAll("text.axis-title")].map((t) => t.textContent)])"""
+
+
+@pytest.mark.parametrize("viewport", [DESKTOP, PHONE], ids=["desktop", "phone"])
+def test_an_answer_with_its_loads_titles_every_axis_and_stays_on_the_screen(site, viewport):
+    """A new user's task at either width: every plot's axes titled, each with its unit (the
+    lengths' the one chosen); nothing scrolls sideways (on a phone the candidates are cards);
+    a refusal after it leaves no candidate and no design of it on screen."""
+    p = Page(site, viewport=viewport)
+    pg = p.page
+    try:
+        only(pg, "crank_shaper")
+        for k, v in (("time_ratio", "1.7"), ("stroke", "0.25"), ("bound", "35")):
+            pg.fill(f"#{k}", v)
+        pg.select_option("#y-unit", "m")
+        pg.click("#y-load summary")
+        pg.fill("#y-rpm", "30")
+        pg.click("#run")
+        pg.wait_for_selector("#plot-forces polyline.series", state="attached")
+        titles = dict(pg.evaluate(TITLES))
+        assert {"front-plot", "plot-position", "plot-torque", "plot-forces"} <= set(titles)
+        for plot, shown in titles.items():
+            assert len(shown) >= 2, (plot, shown)
+            assert all(re.search(r"\([^()]+\)$", t) for t in shown), (plot, shown)
+        assert "position (m)" in titles["plot-position"]
+        assert "size (Σ lengths, m)" in titles["front-plot"]
+        assert pg.evaluate("document.documentElement.scrollWidth") <= viewport["width"]
+        assert pg.locator("#candidates thead").is_visible() == (viewport is DESKTOP)
+        only(pg, "offset_slider_crank")
+        pg.fill("#bound", "80")  # no offset slider-crank meets it
+        pg.click("#run")
+        pg.wait_for_selector("#refusals li")
+        assert pg.locator("#candidates tbody tr").count() == 0
+        assert pg.locator("#detail").is_hidden()
     finally:
         p.close()
 
@@ -515,7 +559,7 @@ def test_plots_tell_their_series_apart_and_reach_the_exact_extremes(page):
     pg.click("#tab-analyze")
     pg.wait_for_selector("#a-param-coupler")
     pg.click("#a-load summary")
-    pg.fill("#a-load-crank_rpm", "40")
+    pg.fill("#a-rpm", "40")
     pg.click("#a-run")
     pg.wait_for_selector("#plot-torque polyline.series", state="attached")
     for plot in ("position", "velocity", "acceleration", "transmission", "torque"):
@@ -587,7 +631,8 @@ def test_tied_candidates_say_which_rule_placed_them(page):
     for k, v in (("time_ratio", "1.7"), ("stroke", "250"), ("bound", "35")):
         pg.fill(f"#{k}", v)
     pg.click("#y-load summary")
-    for k, v in (("crank_rpm", "30"), ("cutting_force", "3000"), ("slider_mass", "40")):
+    pg.fill("#y-rpm", "30")
+    for k, v in (("cutting_force", "3000"), ("slider_mass", "40")):
         pg.fill(f"#y-load-{k}", v)
     pg.select_option("#objective", "min_peak_torque")
     pg.click("#run")
