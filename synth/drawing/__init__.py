@@ -20,12 +20,13 @@ from ..errors import InvalidParameters
 from ..load import LENGTH_UNITS
 from ..mechanisms import Mechanism, get
 from ..mechanisms.registry import GROUND, RAM
+from ..version import __version__
+from .layout import Box, Layout, Point, span, text_box, title, title_block
 
 FORMATS = ("svg", "dxf", "json", "gif")
 PATH_SAMPLES = 181  # angles a pin's path is drawn through (2° apart)
 GUIDE_OVERRUN = 0.15  # the guide runs past each end of the stroke by this share of it
 YOKE_OVERRUN = 0.1  # a slot the ram carries runs past its pin's travel by this share of it
-CHAR = 0.8  # a character's width, of the text's height (sans-serif capitals, generously)
 
 
 Segment = tuple[tuple[float, float], tuple[float, float]]  # two points (x, y)
@@ -54,6 +55,7 @@ class Drawing:
     stroke and ``GUIDE_OVERRUN`` of it each side; ``yokes``: each slot the ram carries
     across its path (a slot drive's, a Scotch yoke's), as long as its pin's travel across
     the path over a turn and ``YOKE_OVERRUN`` of it each side (it moves with the ram);
+    ``facts``: what the design achieves (time ratio, stroke, least transmission angle);
     ``paths``: each moving pin's path over a turn (asked only)."""
 
     type: str
@@ -67,6 +69,7 @@ class Drawing:
     path: tuple[float, float]
     stroke: Segment
     guide: Segment
+    facts: tuple[float, float, float] = (math.nan, math.nan, math.nan)
     yokes: tuple[Segment, ...] = ()
     paths: dict[str, np.ndarray] | None = None
 
@@ -133,8 +136,9 @@ def drawing(
         (rx, ry) = pins[ram]
         yokes.append(((rx - lo * ty, ry + lo * tx), (rx - hi * ty, ry + hi * tx)))
     traced = {k: v for k, v in turn.items() if np.ptp(v, axis=0).max() > 0} if paths else None
+    facts = (a.time_ratio, a.stroke, a.transmission.min_deg)
     return Drawing(mechanism, dict(a.params), float(crank_angle_deg), pins, links, ground, slots,
-                   ram, (tx, ty), ends, guide, tuple(yokes), traced)  # fmt: skip
+                   ram, (tx, ty), ends, guide, facts, tuple(yokes), traced)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -146,7 +150,8 @@ class Sketch:
     polygon around its pin; ``ground``: a triangle under each fixed pivot, ``hatch`` the
     strokes under it; ``dimension``: the stroke's dimension line beside the guide, its
     ``label`` and where the label's middle goes (``label_at``); ``names``: where each pin's
-    name starts, placed so that no two labels meet (``place``)."""
+    name starts; ``dims``: each link's length and where its middle goes (all placed by
+    ``layout``: no two meet)."""
 
     size: float
     pin_radius: float
@@ -160,19 +165,23 @@ class Sketch:
     label: str
     label_at: tuple[float, float]
     names: dict[str, tuple[float, float]]
+    dims: tuple[tuple[str, tuple[float, float]], ...]
 
-    def extent(self, d: Drawing) -> tuple[float, float, float, float]:
-        """(x min, y min, x max, y max) of ``d`` and every label of this sketch."""
-        x0, y0, x1, y1 = d.bounds()
-        boxes = [text_box(self.label, self.label_at, self.text_height, middle=True)]
-        boxes += [text_box(n, at, self.text_height) for n, at in self.names.items()]
-        a = np.array(boxes)
-        return (
-            min(x0, a[:, 0].min()),
-            min(y0, a[:, 1].min()),
-            max(x1, a[:, 2].max()),
-            max(y1, a[:, 3].max()),
-        )
+    def extent(self, d: Drawing) -> Box:
+        """(x min, y min, x max, y max) of ``d`` and every word of this sketch."""
+        h = self.text_height
+        boxes = [d.bounds(), text_box(self.label, self.label_at, h, middle=True)]
+        boxes += [text_box(n, at, h) for n, at in self.names.items()]
+        boxes += [text_box(t, at, h, middle=True) for t, at in self.dims]
+        return span(boxes)
+
+    def title(self, d: Drawing, length_unit: str) -> tuple[list[str], list[Point], Box]:
+        """The title block below the drawing: its lines, where each starts, its frame."""
+        m = get(d.type)
+        named = {f"{m.parameter(k).symbol} {k}": v for k, v in d.params.items()}
+        lines = title(m.title, d.type, d.facts, named, length_unit, d.crank_angle_deg, __version__)
+        x0, y0, _, _ = self.extent(d)
+        return lines, *title_block(lines, x0, y0, self.text_height)
 
 
 def sketch(d: Drawing) -> Sketch:
@@ -202,7 +211,19 @@ def sketch(d: Drawing) -> Sketch:
     dim = ((sx - off * nx, sy - off * ny), (ex - off * nx, ey - off * ny))
     label = f"stroke {np.hypot(ex - sx, ey - sy):.6g}"
     r, th = 0.012 * size, 0.03 * size
-    label_at, names = place(d, dim, (-nx, -ny), label, r, th)
+    m = get(d.type)
+    lay = Layout(d.pins, r, th)
+    label_at = lay.along(*dim, (-nx, -ny), label, (1,))
+    names = {pin: lay.name(pin) for pin in d.pins}
+    dims = []
+    for link in d.links:  # beside its middle, either side
+        (ax, ay), (bx, by) = d.pins[link.a], d.pins[link.b]
+        n = math.hypot(bx - ax, by - ay) or 1.0
+        out = (-(by - ay) / n, (bx - ax) / n)
+        text = (
+            f"{m.parameter(link.name).symbol} {link.length:.6g}"  # r2 120: the title says r2's name
+        )
+        dims.append((text, lay.along((ax, ay), (bx, by), out, text, (1, -1))))
     return Sketch(
         size,
         r,
@@ -216,65 +237,8 @@ def sketch(d: Drawing) -> Sketch:
         label,
         label_at,
         names,
+        tuple(dims),
     )
-
-
-def text_box(
-    text: str, at: tuple[float, float], height: float, middle: bool = False
-) -> tuple[float, float, float, float]:
-    """The box a line of text takes (generously: ``CHAR`` of its height a character, the
-    ascent and descent of a sans-serif face), from ``at`` on its baseline, where it starts or
-    (``middle``) its middle."""
-    w = CHAR * height * len(text)
-    x = at[0] - w / 2 if middle else at[0]
-    return x, at[1] - 0.3 * height, x + w, at[1] + 1.0 * height
-
-
-def place(
-    d: Drawing,
-    dim: Segment,
-    out: tuple[float, float],
-    label: str,
-    r: float,
-    h: float,
-) -> tuple[tuple[float, float], dict[str, tuple[float, float]]]:
-    """Where the stroke's label (its middle, off the dimension line ``dim`` on the side
-    ``out``) and each pin's name (its start) go: the first of a few places about each that
-    meets no label placed before it and no other pin, the stroke's first."""
-    placed: list[tuple[float, float, float, float]] = []
-
-    def free(box: tuple[float, float, float, float], own: str | None = None) -> bool:
-        if any(box[0] < b[2] and b[0] < box[2] and box[1] < b[3] and b[1] < box[3] for b in placed):
-            return False
-        return all(
-            not (box[0] - r < x < box[2] + r and box[1] - r < y < box[3] + r)
-            for name, (x, y) in d.pins.items()
-            if name != own
-        )
-
-    (ax, ay), (bx, by) = dim
-    spots = [
-        (ax + t * (bx - ax) + k * h * out[0], ay + t * (by - ay) + k * h * out[1])
-        for k in (1.2, 2.4)
-        for t in (0.5, 0.3, 0.7, 0.15, 0.85)
-    ]
-    label_at = next((s for s in spots if free(text_box(label, s, h, middle=True))), spots[0])
-    placed.append(text_box(label, label_at, h, middle=True))
-    names = {}
-    for name, (x, y) in d.pins.items():
-        w = CHAR * h * len(name)
-        spots = [
-            (
-                x + ux * k * r - (w if ux < 0 else w / 2 if ux == 0 else 0.0),
-                y + uy * k * r - (1.0 * h if uy < 0 else 0.35 * h if uy == 0 else -0.3 * h),
-            )
-            for k in (1.5, 3.0, 5.0)
-            for ux, uy in ((1, 1), (-1, 1), (1, -1), (-1, -1), (1, 0), (-1, 0), (0, 1), (0, -1))
-        ]
-        at = next((s for s in spots if free(text_box(name, s, h), name)), spots[0])
-        placed.append(text_box(name, at, h))
-        names[name] = at
-    return label_at, names
 
 
 def slot(pins: Mapping[str, tuple[float, float]], names: tuple[str, str, str]) -> Segment:

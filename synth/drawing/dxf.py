@@ -6,7 +6,6 @@ and its version) below the drawing; the drawing's unit set."""
 
 from __future__ import annotations
 
-import datetime
 import io
 
 from ezdxf import units
@@ -14,9 +13,6 @@ from ezdxf.document import Drawing as Document
 from ezdxf.filemanagement import new
 from ezdxf.layouts.layout import Modelspace
 
-from ..analysis.kinematics import analyze
-from ..mechanisms import get
-from ..version import __version__
 from . import Drawing, Sketch, sketch, slot, unit_mm
 
 UNITS = {"mm": units.MM, "m": units.M, "in": units.IN}
@@ -80,24 +76,10 @@ def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
 
 
 def _title(msp: Modelspace, d: Drawing, sk: Sketch, length_unit: str) -> None:
-    """The title block, below the drawing: a framed column of lines."""
-    a = analyze(d.type, d.params)
-    lines = [
-        f"{get(d.type).title} ({d.type})",
-        f"time ratio {a.time_ratio:.9g}, stroke {a.stroke:.9g} {length_unit}, minimum "
-        f"transmission angle {a.transmission.min_deg:.4f} deg",
-        ", ".join(f"{k} {v:.9g}" for k, v in d.params.items()),
-        f"lengths in {length_unit}, scale 1:1, crank at {d.crank_angle_deg:g} deg, "
-        f"{datetime.datetime.now(datetime.UTC).date().isoformat()}",
-        f"quickreturn-synth {__version__}",
-    ]
-    x0, y0, _, _ = d.bounds()
-    h, gap = sk.text_height, 1.6 * sk.text_height
-    top = y0 - 4 * h
-    for i, text in enumerate(lines):
-        label = msp.add_text(text, height=h, dxfattribs={"layer": "TITLE"})
-        label.set_placement((x0 + h, top - (i + 1) * gap))
-    width = max(len(t) for t in lines) * 0.62 * h + 2 * h  # ~0.55 h a character
-    bottom = top - (len(lines) + 0.8) * gap
-    corners = [(x0, top), (x0 + width, top), (x0 + width, bottom), (x0, bottom)]
+    """The title block, below the drawing: a framed column of lines (``Sketch.title``)."""
+    lines, starts, (x0, y0, x1, y1) = sk.title(d, length_unit)
+    for text, at in zip(lines, starts, strict=True):
+        label = msp.add_text(text, height=sk.text_height, dxfattribs={"layer": "TITLE"})
+        label.set_placement(at)
+    corners = [(x0, y1), (x1, y1), (x1, y0), (x0, y0)]
     msp.add_lwpolyline(corners, close=True, dxfattribs={"layer": "TITLE"})

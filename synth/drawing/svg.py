@@ -7,6 +7,7 @@ from collections.abc import Iterable
 from xml.sax.saxutils import escape
 
 from . import Drawing, sketch, slot, unit_mm
+from .layout import span
 
 # each link's colour, in the order of the type's drawing (told apart in print too)
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#17becf")
@@ -16,7 +17,8 @@ def svg(d: Drawing, length_unit: str = "mm") -> str:
     """``d`` as an SVG document, true size for lengths in ``length_unit`` (mm, m or in)."""
     k = unit_mm(length_unit)
     sk = sketch(d)
-    x0, y0, x1, y1 = sk.extent(d)
+    lines, starts, frame = sk.title(d, length_unit)
+    x0, y0, x1, y1 = span([sk.extent(d), frame])
     pad = 0.05 * sk.size
     x0, y0, x1, y1 = x0 - pad, y0 - pad, x1 + pad, y1 + pad
     w, h = x1 - x0, y1 - y0
@@ -75,5 +77,16 @@ def svg(d: Drawing, length_unit: str = "mm") -> str:
         )
         tx, ty = pt(sk.names[name]).split(",")
         out.append(f'<text class="pin-label" x="{tx}" y="{ty}">{escape(name)}</text>')
+    for text, at in sk.dims:  # each link's length
+        tx, ty = pt(at).split(",")
+        out.append(
+            f'<text class="link-dimension" x="{tx}" y="{ty}" text-anchor="middle">'
+            f"{escape(text)}</text>"
+        )
+    fx0, fy0, fx1, fy1 = frame
+    out.append(poly([(fx0, fy0), (fx1, fy0), (fx1, fy1), (fx0, fy1)], "title-block"))
+    for text, at in zip(lines, starts, strict=True):
+        tx, ty = pt(at).split(",")
+        out.append(f'<text class="title" x="{tx}" y="{ty}">{escape(text)}</text>')
     out.append("</svg>")
     return "\n".join(out)

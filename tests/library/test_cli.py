@@ -6,6 +6,7 @@ import csv
 import io
 import json
 import math
+import re
 import shutil
 import socket
 import subprocess
@@ -22,6 +23,7 @@ import synth
 
 from ..support import bruteforce
 from ..support.assertions import assert_meets
+from ..support.motion_bruteforce import brute_motion
 from .test_report import Page
 
 CLI = shutil.which("quickreturn", path=str(Path(sys.executable).parent)) or "quickreturn"
@@ -272,6 +274,45 @@ def test_animate_writes_a_gif_of_a_turn(tmp_path):
     assert img.format == "GIF" and img.n_frames == 12
     bad = run("animate", "whitworth", *WHITWORTH, "--frames", "0")
     assert bad.returncode == 2 and "frames" in bad.stderr
+
+
+def test_analyze_prints_each_section_asked_for():
+    """--include's sections in the table, each checked from outside: the motion by the brute
+    force's maximiser, the stroke's sensitivity by its central difference, the envelope's link
+    lengths by their sum; the forces' curves as CSV columns, one per joint and the guide."""
+    design = {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0}
+    flags = [f"--include={k}" for k in ("motion", "sensitivities", "envelope")]
+    r = run("analyze", "whitworth", *WHITWORTH, *flags)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    (motion,) = [x for x in lines if x.startswith("cutting-speed fluctuation")]
+    numbers = [float(x) for x in re.findall(r"\d+\.?\d*", motion)]
+    _, middle, working, returning = brute_motion("whitworth", design)
+    assert numbers[0] == pytest.approx(middle, rel=1e-5)
+    assert numbers[1:3] == pytest.approx([working, returning], rel=1e-5)
+    assert motion.endswith("in ω²·stroke")
+    (envelope,) = [x for x in lines if x.startswith("envelope")]
+    assert envelope.endswith(f"link lengths {sum(design.values()):g}")
+    (lever,) = [x.split() for x in lines if x.startswith("lever ")]
+    h = 1e-4
+    up, down = (bruteforce.simulate("whitworth", {**design, "lever": 150.0 + d}) for d in (h, -h))
+    assert float(lever[2]) == pytest.approx((up["stroke"] - down["stroke"]) / (2 * h), rel=1e-5)
+    load = json.dumps({"length_unit": "mm", "crank_rpm": 40, "cutting_force": 2000})
+    curves = run(
+        "analyze",
+        "whitworth",
+        *WHITWORTH,
+        "--include",
+        "forces",
+        "--samples",
+        "6",
+        "--load",
+        load,
+        "--csv",
+    )
+    header = curves.stdout.splitlines()[0].split(",")
+    joints = synth.analyze("whitworth", design, load=json.loads(load)).loads.joints
+    assert {f"force_{k}" for k in [*joints, "guide"]} <= set(header)
 
 
 def test_atlas_writes_its_tables(tmp_path):

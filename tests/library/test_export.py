@@ -144,6 +144,25 @@ def test_an_svg_is_true_size_with_the_links_and_pins(mtype, unit):
     assert label == f"stroke {bruteforce.simulate(mtype, p)['stroke']:.6g}"
 
 
+@pytest.mark.parametrize("mtype", TYPES)
+def test_an_svg_dimensions_every_link_and_has_a_title_block(mtype):
+    """What the SVG says: each link's symbol and length (6 figures), and a title block with
+    the type, the brute force's time ratio and stroke in the unit, and the project's version."""
+    p = designs(mtype)[0]
+    root = ET.fromstring(synth.export(mtype, p, "svg", 50.0, "in"))
+    m = synth.mechanisms.get(mtype)
+    shown = sorted(e.text for e in root.iter(f"{SVG}text") if e.get("class") == "link-dimension")
+    drawn = [(name, p[name]) for name, *_ in m.drawing if p.get(name, 0) > 0]
+    assert shown == sorted(f"{m.parameter(n).symbol} {v:.6g}" for n, v in drawn)
+    title = "\n".join(e.text for e in root.iter(f"{SVG}text") if e.get("class") == "title")
+    b = bruteforce.simulate(mtype, p)
+    said = re.search(r"time ratio (\S+), stroke (\S+) in", title)
+    assert said and f"({mtype})" in title and "lengths in in, scale 1:1" in title, title
+    assert float(said[1]) == pytest.approx(b["time_ratio"], rel=1e-8)
+    assert float(said[2]) == pytest.approx(b["stroke"], rel=1e-8)
+    assert f"quickreturn-synth {synth.__version__}" in title
+
+
 SLOT_DRIVES = {  # the slot across the ram's path, and the pin it holds
     "scotch_yoke": ({"crank": 100.0}, "B"),
     "crank_shaper": ({"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0}, "P"),
