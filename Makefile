@@ -56,8 +56,11 @@ $(VENV)/.compiled: $(VENV)/.runtime $(shell find synth -name '*.py')
 serve: $(VENV)/.runtime $(VENV)/.compiled
 	$(BIN)/python -m api.serve
 
+# the suite: all but the serial tests on every core (pytest-xdist), then the serial ones alone
+# (they time a live service, or answer within a budget that sharing the cores would cut)
 test: $(VENV)/.dev $(VENV)/.compiled
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto -m "not serial"; a=$$?; \
+	$(BIN)/python -m pytest -q -m serial; b=$$?; exit $$(( a || b ))
 
 # the numerical-stability suite at full length (≥ 10 000 hypothesis cases per type and property)
 # and the full global-search cross-check of the synthesis optima (≥ 20 targets per type), and

@@ -347,9 +347,6 @@ function loadBox(prefix) {
   for (const [k, label, v] of LOAD_FIELDS.slice(1)) row(k, label, number(id(k), v));
   const box = el("details", { id: `${prefix}-load` });
   box.append(el("summary", {}, "Load: torque, flywheel, joint forces (lengths in the view's unit)"), fields);
-  box.addEventListener("toggle", () => { // a load turns at a speed: the view's, 40 where none is given
-    if (box.open && $(`${prefix}-rpm`).value.trim() === "") $(`${prefix}-rpm`).value = "40";
-  });
   return box;
 }
 
@@ -369,6 +366,8 @@ function setLoadState(prefix, q) {
 function loadOf(prefix) {
   // a view's load, while its box is open (else none)
   if (!$(`${prefix}-load`).open) return null;
+  // a load turns at a speed: the view's, 40 strokes a minute where none is given (shown there)
+  if ($(`${prefix}-rpm`).value.trim() === "") $(`${prefix}-rpm`).value = "40";
   const load = { length_unit: $(`${prefix}-unit`).value, crank_rpm: num(`${prefix}-rpm`),
     cutting_zone: [num(`${prefix}-load-cutting_zone`), num(`${prefix}-load-cutting_zone-end`)] };
   for (const [k] of LOAD_FIELDS) load[k] = num(`${prefix}-load-${k}`);
@@ -391,10 +390,11 @@ async function analyzeView() {
   const form = $("analyze-form");
   clearErrors(form);
   const d = designOf("a");
+  const load = loadOf("a"); // first: it gives the speed its default
   saveState("analyze", { type: d.type, ...d.params, __unit: $("a-unit").value, __rpm: $("a-rpm").value,
     ...loadState("a") });
   await busy(form, () => showDesign(d.type, d.params, 0,
-    (detail) => showErrors(detail, analysisFieldId, "a-form-error"), loadOf("a"), num("a-rpm"), $("a-unit").value));
+    (detail) => showErrors(detail, analysisFieldId, "a-form-error"), load, num("a-rpm"), $("a-unit").value));
 }
 
 function setSweepRange() {

@@ -19,9 +19,13 @@ from concurrent.futures import ProcessPoolExecutor
 from itertools import cycle
 from multiprocessing import get_context
 
+import pytest
+
 from benchmarks import analysis
 
 from ..support.server import serving
+
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
 
 CLIENTS = 48
 SECONDS = 20.0

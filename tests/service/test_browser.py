@@ -21,6 +21,8 @@ import pytest
 
 from ..support.server import ROOT, serving
 
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
+
 CHROMIUM = os.environ.get("CHROMIUM") or shutil.which("chromium")
 # as root, without a sandbox; no background connections (this machine's network is closed)
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

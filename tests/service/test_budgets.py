@@ -24,6 +24,8 @@ import pytest
 from ..support.server import alive, descendants, serving
 from .test_admission import LOAD  # a shaper's: 2 kN, a 60 kg ram, links of 8 kg/m
 
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
+
 REQUESTS = int(os.environ.get("SYNTH_BUDGET_REQUESTS", "200"))
 CLIENTS = 3
 SLACK_MS = 50.0

@@ -18,9 +18,13 @@ import time
 import urllib.error
 import urllib.request
 
+import pytest
+
 from benchmarks.common import spinning
 
 from ..support.server import serving
+
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
 
 REQUEST = {"time_ratio": 1.02, "stroke": 300.0, "min_transmission_angle_deg": 30.0}
 COPIES = 32
@@ -114,6 +118,7 @@ CUT_SHORT = ("crank_rocker_slider", TORQUE, 1.6, 300.0, 20.0, {"load": HEAVY})
 FRESH = """
 import json, sys
 import synth
+
 kw = json.loads(sys.argv[1])
 if kw.get("load"):
     kw["load"] = synth.Load(**kw["load"])

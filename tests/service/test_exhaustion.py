@@ -30,6 +30,8 @@ from api.serve import configure
 from ..support.server import descendants, free_port, serving
 from .test_faults import SYNTH, post  # SYNTH: ~0.3 s of SLSQP in a solver
 
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
+
 WRITE_TIMEOUT_S = 2.0
 REQUEST_TIMEOUT_S = 1.0
 MAX_UNSENT_MB = 24  # per process: four ~5 MB replies not yet read, not five

@@ -18,9 +18,13 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
+import pytest
+
 from api.examples import DRAG_LINK
 
 from ..support.server import alive, descendants, serving
+
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
 
 SYNTH = {
     "time_ratio": 1.6,

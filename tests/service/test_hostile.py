@@ -29,6 +29,8 @@ from synth.mechanisms import all_types, get
 
 from ..support.server import serving
 
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
+
 SMALL = 16 * 1024  # bytes: the most an error body for a bad request may take
 MB = 1_000_000
 # refusals that close the connection without reading the rest: a body over the limit (JSON

@@ -13,10 +13,14 @@ import threading
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from benchmarks.overload import loaded_mix
 from tests.support.bruteforce import TYPES
 from tests.support.designs import random_designs
 from tests.support.server import descendants, serving
+
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
 
 REQUESTS = 1000
 FIRST = 50  # requests before the baseline: what a process builds once is in it by then

@@ -11,6 +11,8 @@ import pytest
 from api.config import Settings
 from api.engine import Busy, Engine, Slots
 
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
+
 
 def run(coro):
     return asyncio.run(coro)

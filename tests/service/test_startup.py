@@ -32,6 +32,8 @@ from synth.synthesis import certify, formulation, measures, motion, screen, solv
 
 from ..support.server import ROOT, call, serving
 
+pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
+
 HEAVY = ("scipy.stats", "scipy.optimize", "ezdxf", "matplotlib", "synth.atlas")
 
 
