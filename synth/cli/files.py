@@ -17,6 +17,14 @@ from ..errors import SynthError
 from ..load import LENGTH_UNITS
 from .base import design_args, fail, main, numbers, parse_load
 
+# -o/--out: where a command writes its file
+to_file = click.option(
+    "-o",
+    "--out",
+    type=click.Path(dir_okay=False, writable=True),
+    help="the file (default: standard output)",
+)
+
 
 @main.command(help="A design's drawing for CAD or a document (POST /v1/export).")
 @design_args
@@ -39,12 +47,7 @@ from .base import design_args, fail, main, numbers, parse_load
     help="the unit of the design's lengths",
 )
 @click.option("--paths", is_flag=True, help="each moving pin's path over a turn")
-@click.option(
-    "-o",
-    "--out",
-    type=click.Path(dir_okay=False, writable=True),
-    help="the file (default: standard output)",
-)
+@to_file
 def export(
     mechanism: str,
     params: tuple[str, ...],
@@ -73,12 +76,7 @@ def export(
     type=click.Choice(list(LENGTH_UNITS)),
     help="the design's (default: the load's, else mm)",
 )
-@click.option(
-    "-o",
-    "--out",
-    type=click.Path(dir_okay=False, writable=True),
-    help="the file (default: standard output)",
-)
+@to_file
 def report(
     mechanism: str,
     params: tuple[str, ...],
@@ -110,12 +108,7 @@ def report(
 @design_args
 @click.option("--frames", type=int, default=FRAMES, show_default=True, help="equal crank steps")
 @click.option("--fps", type=float, default=FPS, show_default=True, help="frames a second")
-@click.option(
-    "-o",
-    "--out",
-    type=click.Path(dir_okay=False, writable=True),
-    help="the file (default: standard output)",
-)
+@to_file
 def animate(
     mechanism: str, params: tuple[str, ...], frames: int, fps: float, out: str | None
 ) -> None:

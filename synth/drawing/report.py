@@ -19,6 +19,7 @@ import numpy as np
 from ..analysis.kinematics import analyze
 from ..errors import InvalidParameters
 from ..load import Load
+from ..mechanisms import get
 from ..results import Analysis, Loads
 from ..version import __version__
 from . import check_angle, drawing, drawn, unit_mm
@@ -58,11 +59,16 @@ def report(
     >>> page.startswith("<!doctype html>") and "time ratio" in page
     True
     """
+    check(
+        mechanism,
+        params,
+        load=load,
+        targets=targets,
+        crank_angle_deg=crank_angle_deg,
+        length_unit=length_unit,
+    )
     q = Load.of(load)
-    unit = _unit(q, length_unit)
-    goals = _targets(targets)
-    check_angle(crank_angle_deg)
-    m = drawn(mechanism)
+    unit, goals, m = _unit(q, length_unit), dict(targets or {}), get(mechanism)
     angles = np.linspace(0.0, 360.0, SAMPLES)
     include = ("motion", "sensitivities", "envelope", *(("forces",) if q else ()))
     a = analyze(mechanism, params, crank_angles_deg=angles.tolist(), include=include, load=q)
@@ -133,15 +139,13 @@ def _unit(load: Load | None, length_unit: str | None) -> str:
     return unit
 
 
-def _targets(targets: Mapping[str, float] | None) -> dict[str, float]:
-    goals = dict(targets or {})
-    for k, v in goals.items():
+def _targets(targets: Mapping[str, float] | None) -> None:
+    for k, v in (targets or {}).items():
         if k not in TARGETS:
             msg = f"targets may name {', '.join(TARGETS)}, got {k!r}"
             raise InvalidParameters(msg, ("targets", k))
         if not math.isfinite(v):
             raise InvalidParameters(f"targets.{k} must be finite, got {v!r}", ("targets", k))
-    return goals
 
 
 def _section(key: str, title: str, body: str) -> str:
