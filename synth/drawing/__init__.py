@@ -69,8 +69,8 @@ class Drawing:
     path: tuple[float, float]
     stroke: Segment
     guide: Segment
-    facts: tuple[float, float, float] = (math.nan, math.nan, math.nan)
-    yokes: tuple[Segment, ...] = ()
+    facts: tuple[float, float, float]
+    yokes: tuple[Segment, ...]
     paths: dict[str, np.ndarray] | None = None
 
     def yokes_at(self, pins: Mapping[str, tuple[float, float]]) -> list[Segment]:
@@ -220,9 +220,8 @@ def sketch(d: Drawing) -> Sketch:
         (ax, ay), (bx, by) = d.pins[link.a], d.pins[link.b]
         n = math.hypot(bx - ax, by - ay) or 1.0
         out = (-(by - ay) / n, (bx - ax) / n)
-        text = (
-            f"{m.parameter(link.name).symbol} {link.length:.6g}"  # r2 120: the title says r2's name
-        )
+        # its symbol and length ("r2 120"): the title block says whose symbol it is
+        text = f"{m.parameter(link.name).symbol} {link.length:.6g}"
         dims.append((text, lay.along((ax, ay), (bx, by), out, text, (1, -1))))
     return Sketch(
         size,
