@@ -4,20 +4,19 @@ program: atlas, serve."""
 from __future__ import annotations
 
 import sys
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import click
 
-from ..analysis.kinematics import analyze as _analyze
-from ..analysis.sweep import sweep as _sweep
 from ..errors import SynthError
 from ..load import Load
 from ..mechanisms import all_types, get
 from ..objectives import all_objectives
 from ..objectives import get as objective_of
-from ..results import Analysis, Loads, Sensitivities, SweepResult, SynthesisResult
-from ..synthesis import synthesize as _synthesize
 from ..targets import PARETO
+
+if TYPE_CHECKING:
+    from ..results import Analysis, Loads, Sensitivities, SweepResult, SynthesisResult
 from .base import (
     CURVES,
     INCLUDE,
@@ -88,6 +87,8 @@ def synthesize(time_ratio: float, stroke: float, bound: float, types: tuple[str,
     names = types or [t for t in all_types() if get(t).quick_return]
     specs = [{"type": t, "fixed": fixed, "bounds": boxes} for t in names]
     try:
+        from ..synthesis import synthesize as _synthesize  # on use: --help stays quick
+
         r = _synthesize(time_ratio, stroke, bound, specs, objective, max_candidates,
                         time_budget_ms, include=include, load=parse_load(load_json),
                         max_peak_torque=max_peak_torque,
@@ -162,6 +163,8 @@ def analyze(mechanism: str, params: tuple[str, ...], samples: int | None,
             load_json: str | None, fmt: str) -> None:  # fmt: skip
     try:
         load = parse_load(load_json)
+        from ..analysis.kinematics import analyze as _analyze
+
         a = _analyze(mechanism, numbers(params, "--param"), crank_speed=crank_speed,
                      crank_angles_deg=list(angles) or None, samples=samples, include=include,
                      load=load)  # fmt: skip
@@ -251,6 +254,8 @@ def _sensitivities(s: Sensitivities) -> list[str]:
 def sweep(mechanism: str, params: tuple[str, ...], vary: str, start: float, stop: float,
           points: int, fmt: str) -> None:  # fmt: skip
     try:
+        from ..analysis.sweep import sweep as _sweep
+
         s = _sweep(mechanism, numbers(params, "--param"), vary, start, stop, points)
     except SynthError as e:
         fail(e)

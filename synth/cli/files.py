@@ -7,12 +7,7 @@ import sys
 
 import click
 
-from ..drawing import FORMATS
-from ..drawing.export import export as _export
-from ..drawing.gif import FPS, FRAMES
-from ..drawing.gif import animate as _animate
-from ..drawing.report import TARGETS
-from ..drawing.report import report as _report
+from ..drawing import FORMATS, FPS, FRAMES, TARGETS
 from ..errors import SynthError
 from ..load import LENGTH_UNITS
 from .base import design_args, fail, main, numbers, parse_load
@@ -58,6 +53,8 @@ def export(
     out: str | None,
 ) -> None:
     try:
+        from ..drawing.export import export as _export  # the library on use: --help stays quick
+
         doc = _export(mechanism, numbers(params, "--param"), fmt, crank_angle, length_unit, paths)
     except SynthError as e:
         fail(e)
@@ -91,6 +88,8 @@ def report(
     given = dict(zip(TARGETS, (time_ratio, stroke, bound), strict=True))
     targets = {k: v for k, v in given.items() if v is not None}
     try:
+        from ..drawing.report import report as _report
+
         page = _report(
             mechanism,
             numbers(params, "--param"),
@@ -113,6 +112,8 @@ def animate(
     mechanism: str, params: tuple[str, ...], frames: int, fps: float, out: str | None
 ) -> None:
     try:
+        from ..drawing.gif import animate as _animate
+
         doc = _animate(mechanism, numbers(params, "--param"), frames, fps)
     except SynthError as e:
         fail(e)

@@ -13,7 +13,7 @@ from ezdxf.document import Drawing as Document
 from ezdxf.filemanagement import new
 from ezdxf.layouts.layout import Modelspace
 
-from . import Drawing, Sketch, sketch, slot, unit_mm
+from .model import Drawing, Sketch, sketch, slot, unit_mm
 
 UNITS = {"mm": units.MM, "m": units.M, "in": units.IN}
 # the symbols' layers (none a parameter's name: layer names ignore case) and their colours

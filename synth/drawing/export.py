@@ -8,8 +8,9 @@ from dataclasses import asdict
 from typing import Any
 
 from ..errors import InvalidParameters
-from . import FORMATS, check_angle, drawing, drawn, sketch, unit_mm
+from . import FORMATS
 from .gif import gif
+from .model import check_angle, drawing, drawn, sketch, unit_mm
 from .svg import svg
 
 

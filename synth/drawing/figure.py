@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from . import Drawing, drawing, sketch, slot
+from .model import Drawing, drawing, sketch, slot
 from .svg import COLOURS
 
 

@@ -12,10 +12,10 @@ from PIL import Image, ImageDraw, ImageFont
 
 from ..analysis.kinematics import joints
 from ..errors import InvalidParameters
-from . import Drawing, drawing, sketch, slot
+from . import FPS, FRAMES
+from .model import Drawing, drawing, sketch, slot
 from .svg import COLOURS
 
-FRAMES, FPS = 36, 12.0  # a turn in 3 s
 WIDTH = 640  # pixels
 MOST_FRAMES = 360  # a frame a degree
 

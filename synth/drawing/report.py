@@ -22,12 +22,12 @@ from ..load import Load
 from ..mechanisms import get
 from ..results import Analysis, Loads
 from ..version import __version__
-from . import check_angle, drawing, drawn, unit_mm
+from . import TARGETS
+from .model import check_angle, drawing, drawn, unit_mm
 from .plot import Series, chart
 from .svg import svg
 
 SAMPLES = 361  # the curves' crank angles (1° apart)
-TARGETS = ("time_ratio", "stroke", "bound_deg")  # what a report may compare the design with
 ANGLE_TICKS = [60.0 * k for k in range(7)]
 STYLE = """
 body{font-family:sans-serif;color:#222;max-width:190mm;margin:1em auto;padding:0 1em}

@@ -6,8 +6,8 @@ from __future__ import annotations
 from collections.abc import Iterable
 from xml.sax.saxutils import escape
 
-from . import Drawing, sketch, slot, unit_mm
 from .layout import span
+from .model import Drawing, sketch, slot, unit_mm
 
 # each link's colour, in the order of the type's drawing (told apart in print too)
 COLOURS = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#17becf")

@@ -191,7 +191,7 @@ def test_a_slot_across_the_ram_holds_its_pin_at_every_angle(mtype):
 
 
 def test_the_drawing_puts_the_ram_on_its_guide_between_the_dead_centres():
-    from synth.drawing import drawing
+    from synth.drawing.model import drawing
 
     for mtype in TYPES:
         for p in designs(mtype):
@@ -240,7 +240,7 @@ def test_a_design_that_cannot_run_is_not_drawn():
 
 
 def test_paths_close_over_a_turn():
-    from synth.drawing import drawing
+    from synth.drawing.model import drawing
 
     d = drawing("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
                               "connecting_rod": 200}, paths=True)  # fmt: skip
