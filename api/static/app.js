@@ -636,9 +636,9 @@ function curvePlots() {
   const at = current.rpm ? `at ${current.rpm} rpm` : "per radian of crank (ω = 1)";
   plot($("plot-position"), c.th, [{ ys: c.position, color: COLORS[0], label: "position" }], { ...common, ylabel: `position (${unit})` });
   plot($("plot-velocity"), c.th, [{ ys: c.velocity, color: COLORS[0], label: `velocity ${at}` }],
-    { ...common, ylabel: `velocity (${rate})`, legend: true });
+    { ...common, ylabel: `velocity (${rate})` });
   plot($("plot-acceleration"), c.th, [{ ys: c.acceleration, color: COLORS[0], label: `acceleration ${at}` }],
-    { ...common, ylabel: `acceleration (${rate2})`, legend: true });
+    { ...common, ylabel: `acceleration (${rate2})` });
   plot($("plot-transmission"), c.th, [{ ys: c.transmission, color: COLORS[0], label: "transmission angle" }],
     { ...common, ylabel: "transmission angle (°)", hlines: current.bound > 0 ? [{ y: current.bound, label: `bound ${current.bound}°` }] : [] });
 }
