@@ -6,6 +6,7 @@
 const BASE = new URL("..", location.href); // the service's root: this page is at /app/
 const FRAMES = 72; // drawn frames per crank revolution
 const PLOT_POINTS = 360; // the curves' angles a turn (1° apart), the exact extremes besides
+const LEAST_TEXT_PX = 11; // the drawing's words are never set smaller on screen
 const COLORS = ["#1f5fbf", "#d9730d", "#2e8b57", "#8e44ad", "#b0131f", "#555", "#008b8b"];
 const SVGNS = "http://www.w3.org/2000/svg";
 // the strokes' and dead centres' colours (literal: an exported drawing carries them)
@@ -507,6 +508,10 @@ function drawLinkage() {
   const pad = 0.08 * Math.max(xmax - xmin, ymax - ymin, 1e-12);
   svg.setAttribute("viewBox", `${xmin - pad} ${-(ymax + pad)} ${xmax - xmin + 2 * pad} ${ymax - ymin + 2 * pad}`);
   svg.setAttribute("preserveAspectRatio", "xMidYMid meet");
+  // the words at the drawing's size, but never smaller on screen than LEAST_TEXT_PX (a phone)
+  const box = svg.getBoundingClientRect();
+  const perUnit = Math.min(box.width / (xmax - xmin + 2 * pad), box.height / (ymax - ymin + 2 * pad)) || 1;
+  const textSize = Math.max(sk ? sk.text_height : pad * 0.3, LEAST_TEXT_PX / perUnit);
   const world = el("g", { transform: "scale(1,-1)", id: "world" });
   svg.append(world);
   const drawing = TYPES[current.type].drawing;
@@ -542,7 +547,7 @@ function drawLinkage() {
     const [[d1x, d1y], [d2x, d2y]] = sk.dimension;
     world.append(el("line", { ...stroke, class: "dimension", x1: d1x, y1: d1y, x2: d2x, y2: d2y, stroke: "#333" }));
     svg.append(el("text", { class: "dimension", x: sk.label_at[0], y: -sk.label_at[1], "text-anchor": "middle",
-      style: `font-size:${sk.text_height}px` }, sk.label));
+      style: `font-size:${textSize}px` }, sk.label));
     // the ram's block and the slot it carries across its path (a slot drive's, a yoke's): one body
     const ram = el("g", { id: "block" });
     for (const [[x1, y1], [x2, y2]] of current.sketch.drawing.yokes) {
@@ -566,7 +571,7 @@ function drawLinkage() {
   }
   world.append(moving);
   for (const n of names) { // upright: outside the flipped group, at (x, −y)
-    svg.append(el("text", { class: "pin-label", "data-name": n, style: `font-size:${sk ? sk.text_height : pad * 0.3}px` }, n));
+    svg.append(el("text", { class: "pin-label", "data-name": n, style: `font-size:${textSize}px` }, n));
   }
 }
 

@@ -471,6 +471,10 @@ def test_an_answer_with_its_loads_titles_every_axis_and_stays_on_the_screen(site
         assert "size (Σ lengths, m)" in titles["front-plot"]
         assert pg.evaluate("document.documentElement.scrollWidth") <= viewport["width"]
         assert pg.locator("#candidates thead").is_visible() == (viewport is DESKTOP)
+        heights = pg.eval_on_selector_all(
+            "#linkage text", "ts => ts.map(t => t.getBoundingClientRect().height)"
+        )
+        assert heights and min(heights) >= 11, heights  # the drawing's words readable
         only(pg, "offset_slider_crank")
         pg.fill("#bound", "80")  # no offset slider-crank meets it
         pg.click("#run")
