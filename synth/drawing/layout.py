@@ -1,5 +1,6 @@
 """Where a drawing's words go: the stroke's label, each pin's name, each link's length and the
-title block, placed so that no two meet, none lies on a pin, and the sheet holds them all. A
+title block, placed so that no two meet, none lies on a pin or a fixed pivot's symbol, and the
+sheet holds them all. A
 text's box is estimated generously (``text_box``), as a browser or a CAD program would set it
 in a sans-serif face; the places tried are few and fixed, so the same drawing gets the same
 places."""

@@ -196,12 +196,13 @@ def sketch(d: Drawing) -> Sketch:
     rx, ry = d.pins[d.ram]
     corners = ((-1.6, -0.8), (1.6, -0.8), (1.6, 0.8), (-1.6, 0.8))  # along, across, × h
     block = tuple((rx + h * (u * tx + v * nx), ry + h * (u * ty + v * ny)) for u, v in corners)
-    tri, hatch = [], []
+    tri, hatch, symbols = [], [], []
     for pin in d.ground:
         px, py = d.pins[pin]
         w = 0.9 * h
         base = py - 1.6 * w
         tri.append(((px, py), (px - w, base), (px + w, base)))
+        symbols.append((px - 1.6 * w, base - 0.6 * w, px + 1.4 * w, py))  # with its hatch
         hatch.append(((px - 1.4 * w, base), (px + 1.4 * w, base)))
         hatch += [((px + k * w * 0.7, base), (px + k * w * 0.7 - 0.5 * w, base - 0.6 * w))
                   for k in (-1.5, -0.5, 0.5, 1.5)]  # fmt: skip
@@ -212,6 +213,7 @@ def sketch(d: Drawing) -> Sketch:
     r, th = 0.012 * size, 0.03 * size
     m = get(d.type)
     lay = Layout(d.pins, r, th)
+    lay.boxes += symbols  # no word on a fixed pivot's symbol
     label_at = lay.along(*dim, (-nx, -ny), label, (1,))
     names = {pin: lay.name(pin) for pin in d.pins}
     dims = []
