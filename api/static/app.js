@@ -631,11 +631,16 @@ function sortedCurves() {
     acceleration: pick(c.acceleration), transmission: pick(c.transmission_deg), torque: pick(c.torque), forces };
 }
 
+function crankAxis() {
+  // what every plot against the crank angle shares: its axis, the dead centres, the strokes, the cursor
+  const e = current.analysis.extremes;
+  return { xlabel: "crank angle (°)", xticks: [0, 90, 180, 270, 360],
+    vlines: [e.min.crank_angle_deg, e.max.crank_angle_deg], cursor: true, phases: true };
+}
+
 function curvePlots() {
   const c = sortedCurves();
-  const a = current.analysis;
-  const dead = [a.extremes.min.crank_angle_deg, a.extremes.max.crank_angle_deg];
-  const common = { xlabel: "crank angle (°)", xticks: [0, 90, 180, 270, 360], vlines: dead, cursor: true, phases: true };
+  const common = crankAxis();
   const unit = current.unit;
   const rate = current.rpm ? `${unit}/s` : `${unit}/rad`, rate2 = current.rpm ? `${unit}/s²` : `${unit}/rad²`;
   const at = current.rpm ? `at ${current.rpm} rpm` : "per radian of crank (ω = 1)";
@@ -671,8 +676,7 @@ function loadsView() {
     const tr = el("tr"); tr.append(el("th", { scope: "row" }, k), el("td", {}, v)); return tr;
   }));
   const c = sortedCurves();
-  const dead = [current.analysis.extremes.min.crank_angle_deg, current.analysis.extremes.max.crank_angle_deg];
-  const common = { xlabel: "crank angle (°)", xticks: [0, 90, 180, 270, 360], vlines: dead, cursor: true, phases: true };
+  const common = crankAxis();
   plot($("plot-torque"), c.th, [{ ys: c.torque, color: COLORS[0], label: "crank torque" }],
     { ...common, ylabel: "torque (N·m)", fillTo: l.torque.mean, hlines: [{ y: l.torque.mean, label: `mean ${n(l.torque.mean)}` }] });
   const forces = Object.entries(c.forces || {});
@@ -734,12 +738,8 @@ function plot(svg, xs, series, opts = {}) {
     svg.append(el("line", { class: "grid", x1: sx(x), x2: sx(x), y1: T, y2: H - B, stroke: "#eee" }));
     svg.append(el("text", { class: "tick", x: sx(x), y: H - B + 14, "text-anchor": "middle" }, short(x)));
   }
-  const title = (text, x, y, turn) => svg.append(el("text", { class: "axis-title", x, y, "text-anchor": "middle",
-    ...(turn ? { transform: `rotate(${turn} ${x} ${y})` } : {}) }, text));
-  if (opts.xlabel) title(opts.xlabel, (L + W - R) / 2, H - 3);
-  if (opts.ylabel) title(opts.ylabel, 11, (T + H - B) / 2, -90);
-  if (opts.ylabel2) title(opts.ylabel2, W - 6, (T + H - B) / 2, 90);
-  let legendAt = L;
+  axisTitles(svg, { W, H, L, R, T, B }, opts.xlabel, opts.ylabel, opts.ylabel2);
+  legend(svg, L, series.map((s) => [s.label, s.color]));
   series.forEach((s, i) => {
     const sy = scale(s);
     if (!shared || i === 0) {
@@ -749,9 +749,6 @@ function plot(svg, xs, series, opts = {}) {
           "text-anchor": s.right ? "start" : "end", style: `fill:${shared ? "#666" : s.color}` }, short(y)));
       }
     }
-    // the legend, in the series' colour (inline: the page's text colour would override it)
-    svg.append(el("text", { class: "legend", x: legendAt, y: 13, style: `fill:${s.color}` }, s.label));
-    legendAt += 7 * s.label.length + 12;
     if (opts.fillTo !== undefined) { // the areas between the series and a level, by sign
       for (let k = 0; k + 1 < xs.length; k++) {
         const y = (s.ys[k] + s.ys[k + 1]) / 2;
@@ -808,11 +805,8 @@ function frontPlot(cands, body) {
     svg.append(el("text", { class: "tick", x: L - 3, y: sy(y) + 4, "text-anchor": "end" }, short(y)));
   }
   svg.append(el("line", { x1: L, y1: H - B, x2: W - R, y2: H - B, stroke: "#999" }), el("line", { x1: L, y1: T, x2: L, y2: H - B, stroke: "#999" }));
-  const unit = $("y-unit").value;
-  svg.append(el("text", { class: "axis-title", x: (L + W - R) / 2, y: H - 3, "text-anchor": "middle" }, `size (Σ lengths, ${unit})`));
-  svg.append(el("text", { class: "axis-title", x: 11, y: (T + H - B) / 2, "text-anchor": "middle",
-    transform: `rotate(-90 11 ${(T + H - B) / 2})` }, "min. transmission angle (°)"));
-  let legendAt = L;
+  axisTitles(svg, { W, H, L, R, T, B }, `size (Σ lengths, ${$("y-unit").value})`, "min. transmission angle (°)");
+  legend(svg, L, types.map((t, i) => [t, COLORS[i % COLORS.length]]));
   types.forEach((t, i) => {
     const colour = COLORS[i % COLORS.length];
     const mine = cands.map((c, k) => [c, k]).filter(([c]) => c.type === t);
@@ -823,9 +817,26 @@ function frontPlot(cands, body) {
       dot.addEventListener("click", () => choose_(cands, k, body));
       svg.append(dot);
     }
-    svg.append(el("text", { class: "legend", x: legendAt, y: 13, style: `fill:${colour}` }, t));
-    legendAt += 7 * t.length + 12;
   });
+}
+
+function axisTitles(svg, { W, H, L, R, T, B }, x, y, y2) {
+  // a plot's axis titles (each with its unit): under the x axis, beside the y axes
+  const title = (text, tx, ty, turn) => svg.append(el("text", { class: "axis-title", x: tx, y: ty, "text-anchor": "middle",
+    ...(turn ? { transform: `rotate(${turn} ${tx} ${ty})` } : {}) }, text));
+  if (x) title(x, (L + W - R) / 2, H - 3);
+  if (y) title(y, 11, (T + H - B) / 2, -90);
+  if (y2) title(y2, W - 6, (T + H - B) / 2, 90);
+}
+
+function legend(svg, L, items) {
+  // [label, colour] in a row above the plotting area, each in its colour (inline: the page's
+  // text colour would override it)
+  let at = L;
+  for (const [label, colour] of items) {
+    svg.append(el("text", { class: "legend", x: at, y: 13, style: `fill:${colour}` }, label));
+    at += 7 * label.length + 12;
+  }
 }
 
 // ---- export ------------------------------------------------------------------------------------

@@ -59,12 +59,13 @@ class Layout:
         ``out`` (a unit vector) or its opposite (``sides``: 1, -1): at its middle first,
         then further along, then further out."""
         h = self.h
-        w = CHAR * h * len(text)
-        clear = 0.3 * h + 0.5 * w * abs(out[0]) + 0.65 * h * abs(out[1])  # the box's reach
+        x0, y0, x1, y1 = text_box(text, (0.0, 0.0), h, middle=True)  # about its baseline's middle
+        rise = (y0 + y1) / 2  # the box's centre above the baseline
+        clear = 0.3 * h + (x1 - x0) / 2 * abs(out[0]) + (y1 - y0) / 2 * abs(out[1])  # its reach
         spots = [
             (
                 a[0] + t * (b[0] - a[0]) + side * (clear + 1.2 * h * i) * out[0],
-                a[1] + t * (b[1] - a[1]) + side * (clear + 1.2 * h * i) * out[1] - 0.35 * h,
+                a[1] + t * (b[1] - a[1]) + side * (clear + 1.2 * h * i) * out[1] - rise,
             )
             for i in range(12)
             for side in sides

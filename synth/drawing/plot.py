@@ -11,10 +11,11 @@ from xml.sax.saxutils import escape
 
 import numpy as np
 
+from .layout import CHAR
+
 WIDTH, HEIGHT = 640.0, 250.0
 LEFT, RIGHT, TOP, BOTTOM = 78.0, 16.0, 40.0, 44.0  # the margins: ticks, titles, the legend
 FONT = 12.0
-CHAR = 0.62  # a character's width in ems (sans-serif digits and letters, generous)
 PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#17becf")
 
 

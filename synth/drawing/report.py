@@ -19,7 +19,7 @@ import numpy as np
 from ..analysis.kinematics import analyze
 from ..errors import InvalidParameters
 from ..load import Load
-from ..mechanisms import get
+from ..mechanisms import Mechanism
 from ..results import Analysis, Loads
 from ..version import __version__
 from . import TARGETS
@@ -59,16 +59,8 @@ def report(
     >>> page.startswith("<!doctype html>") and "time ratio" in page
     True
     """
-    check(
-        mechanism,
-        params,
-        load=load,
-        targets=targets,
-        crank_angle_deg=crank_angle_deg,
-        length_unit=length_unit,
-    )
-    q = Load.of(load)
-    unit, goals, m = _unit(q, length_unit), dict(targets or {}), get(mechanism)
+    m, q, unit = _checked(mechanism, params, load, targets, crank_angle_deg, length_unit)
+    goals = dict(targets or {})
     angles = np.linspace(0.0, 360.0, SAMPLES)
     include = ("motion", "sensitivities", "envelope", *(("forces",) if q else ()))
     a = analyze(mechanism, params, crank_angles_deg=angles.tolist(), include=include, load=q)
@@ -122,30 +114,35 @@ def check(
     length_unit: str | None = None,
 ) -> None:
     """What ``report`` checks before it analyses (its arguments' meaning)."""
+    _checked(mechanism, params, load, targets, crank_angle_deg, length_unit)
+
+
+def _checked(
+    mechanism: str,
+    params: Mapping[str, float],
+    load: Load | Mapping[str, Any] | None,
+    targets: Mapping[str, float] | None,
+    crank_angle_deg: float | None,
+    length_unit: str | None,
+) -> tuple[Mechanism, Load | None, str]:
+    """The arguments checked: the type, the load (a ``Load``) and the lengths' unit."""
     m = drawn(mechanism)
     for k in params:
         m.parameter(k)
-    _unit(Load.of(load), length_unit)
-    _targets(targets)
-    check_angle(crank_angle_deg)
-
-
-def _unit(load: Load | None, length_unit: str | None) -> str:
-    unit = length_unit or (load.length_unit if load else "mm")
+    q = Load.of(load)
+    unit = length_unit or (q.length_unit if q else "mm")
     unit_mm(unit)
-    if load is not None and unit != load.length_unit:
-        msg = f"length_unit {unit!r} differs from the load's {load.length_unit!r}"
+    if q is not None and unit != q.length_unit:
+        msg = f"length_unit {unit!r} differs from the load's {q.length_unit!r}"
         raise InvalidParameters(msg, ("length_unit",))
-    return unit
-
-
-def _targets(targets: Mapping[str, float] | None) -> None:
     for k, v in (targets or {}).items():
         if k not in TARGETS:
             msg = f"targets may name {', '.join(TARGETS)}, got {k!r}"
             raise InvalidParameters(msg, ("targets", k))
         if not math.isfinite(v):
             raise InvalidParameters(f"targets.{k} must be finite, got {v!r}", ("targets", k))
+    check_angle(crank_angle_deg)
+    return m, q, unit
 
 
 def _section(key: str, title: str, body: str) -> str:
