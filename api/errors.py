@@ -93,8 +93,13 @@ def capped(items: Collection[Any], item: Callable[[Any], dict[str, Any]]) -> lis
         kept.append(entry)
     if len(kept) < len(items):
         more = len(items) - len(kept)
-        kept.append(error_item([], f"{more} more errors not listed (a reply lists at most "
-                               f"{MAX_ERRORS})", "too_many_errors"))  # fmt: skip
+        kept.append(
+            error_item(
+                [],
+                f"{more} more errors not listed (a reply lists at most {MAX_ERRORS})",
+                "too_many_errors",
+            )
+        )
     return kept
 
 
@@ -103,8 +108,12 @@ def _size(x: Any) -> int:
 
 
 # pydantic's bound errors: the context key holding the bound, and its sign
-BOUNDS = {"greater_than_equal": ("ge", "≥"), "greater_than": ("gt", ">"),
-          "less_than_equal": ("le", "≤"), "less_than": ("lt", "<")}  # fmt: skip
+BOUNDS = {
+    "greater_than_equal": ("ge", "≥"),
+    "greater_than": ("gt", ">"),
+    "less_than_equal": ("le", "≤"),
+    "less_than": ("lt", "<"),
+}
 NUMBERS = {
     "float_type",
     "float_parsing",

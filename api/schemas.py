@@ -73,8 +73,10 @@ class Strict(BaseModel):
             unknown = data.keys() - known.keys()
             if len(unknown) > MAX_ERRORS:
                 shown = ", ".join(repr(str(k)[:40]) for k in itertools.islice(unknown, 5))
-                raise ValueError(f"{len(unknown)} unknown fields ({shown}, …); the known "
-                                 f"ones: {', '.join(known)}")  # fmt: skip
+                raise ValueError(
+                    f"{len(unknown)} unknown fields ({shown}, …); the known "
+                    f"ones: {', '.join(known)}"
+                )
         return data
 
 
@@ -114,10 +116,16 @@ def _bounds(m: Mechanism) -> type[BaseModel]:
         return Annotated[list[end], Field(min_length=2, max_length=2)]
 
     fields: dict[str, Any] = {
-        q.name: (pair(q), Field(None, description=f"[lower, upper] for {q.name}; default "
-                 f"[{q.bounds[0]:g}, {q.bounds[1]:g}] × the stroke"))
+        q.name: (
+            pair(q),
+            Field(
+                None,
+                description=f"[lower, upper] for {q.name}; default "
+                f"[{q.bounds[0]:g}, {q.bounds[1]:g}] × the stroke",
+            ),
+        )
         for q in m.parameters
-    }  # fmt: skip
+    }
     return create_model(f"{_camel(m.type)}Bounds", __base__=Strict, **fields)
 
 
@@ -277,11 +285,13 @@ class LoadSpec(Strict):
         "motor_rpm", None, "the motor's speed: adds its rated torque there"
     )
     gravity_deg: float | None = Field(
-        None, ge=-360.0, le=360.0,
+        None,
+        ge=-360.0,
+        le=360.0,
         description="the direction gravity pulls in, in the drawing's frame (degrees from +x, "
         "counter-clockwise: -90 is down the drawing's y axis); omitted, and no "
         "ram_incline_deg: no weight",
-    )  # fmt: skip
+    )
     ram_incline_deg: float | None = Field(
         None,
         ge=-90.0,
@@ -293,8 +303,12 @@ class LoadSpec(Strict):
     )
     force_profile: (
         Annotated[
-            list[Annotated[list[Annotated[float, Field(ge=0.0, le=1e12)]],
-                           Field(min_length=2, max_length=2)]],
+            list[
+                Annotated[
+                    list[Annotated[float, Field(ge=0.0, le=1e12)]],
+                    Field(min_length=2, max_length=2),
+                ]
+            ],
             Field(min_length=2, max_length=100),
         ]
         | None
@@ -303,14 +317,15 @@ class LoadSpec(Strict):
         description="instead of cutting_force and cutting_zone: [fraction of the working "
         "stroke, N] points, the fractions increasing in [0, 1], the force linear between them "
         "and 0 outside them",
-    )  # fmt: skip
+    )
 
     @field_validator("cutting_zone")
     @classmethod
     def _zone(cls, zone: list[float]) -> list[float]:
         if not zone[1] - zone[0] >= GAP:
-            raise ValueError(f"start {zone[0]:g} must be less than end {zone[1]:g}, by {GAP:g} "
-                             "or more")  # fmt: skip
+            raise ValueError(
+                f"start {zone[0]:g} must be less than end {zone[1]:g}, by {GAP:g} or more"
+            )
         return zone
 
     @field_validator("force_profile")
@@ -321,14 +336,17 @@ class LoadSpec(Strict):
             if u > 1:
                 raise ValueError(f"[{i}]: the fraction {u:g} must be at most 1")
             if i and not u - fractions[i - 1] >= GAP:
-                raise ValueError(f"[{i}]: fractions must increase, each by {GAP:g} or more, got "
-                                 f"{u:g} after {fractions[i - 1]:g}")  # fmt: skip
+                raise ValueError(
+                    f"[{i}]: fractions must increase, each by {GAP:g} or more, got "
+                    f"{u:g} after {fractions[i - 1]:g}"
+                )
         return profile
 
     @model_validator(mode="after")
     def _one_force(self) -> LoadSpec:
-        if self.force_profile is not None and (self.cutting_force or "cutting_zone" in
-                                               self.model_fields_set):  # fmt: skip
+        if self.force_profile is not None and (
+            self.cutting_force or "cutting_zone" in self.model_fields_set
+        ):
             raise ValueError("give cutting_force (and cutting_zone) or force_profile, not both")
         return self
 
@@ -423,9 +441,11 @@ class SynthesizeRequest(Extras):
         "min_peak_torque minimises its peak crank torque",
     )
     max_peak_torque: float | None = Field(
-        None, gt=0.0, le=1e15, description="N·m: a limit on the peak crank torque, with "
-        "the objective min_peak_torque",
-    )  # fmt: skip
+        None,
+        gt=0.0,
+        le=1e15,
+        description="N·m: a limit on the peak crank torque, with the objective min_peak_torque",
+    )
 
 
 class SweepRequest(Strict):
@@ -619,10 +639,14 @@ def _analysis_response() -> type[BaseModel]:
     the nested values are synth's own dataclasses."""
     hints = get_type_hints(results.Analysis) | {"curves": Curves | None}
     fields: dict[str, Any] = {
-        f.name: (hints[f.name], Field(... if f.default is MISSING else f.default,
-                                      description=_ANALYSIS_NOTES.get(f.name)))
+        f.name: (
+            hints[f.name],
+            Field(
+                ... if f.default is MISSING else f.default, description=_ANALYSIS_NOTES.get(f.name)
+            ),
+        )
         for f in dataclass_fields(results.Analysis)
-    }  # fmt: skip
+    }
     return create_model("AnalyzeResponse", __doc__=results.Analysis.__doc__, **fields)
 
 

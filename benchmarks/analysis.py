@@ -36,11 +36,22 @@ DESIGNS = {
     "offset_slider_crank": {"crank": 1.0, "coupler": 3.0, "offset": 0.5},
     "crank_shaper": {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0},
     "whitworth": {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0},
-    "crank_rocker_slider": {"ground": 5.0, "crank": 1.0, "coupler": 4.5, "rocker": 3.0,
-                            "rocker_arm": 4.0},
-    "drag_link_slider": {"ground": 0.1, "crank": 0.225, "coupler": 0.250428, "follower": 0.275,
-                         "follower_arm": 0.15, "connecting_rod": 0.3},
-}  # fmt: skip
+    "crank_rocker_slider": {
+        "ground": 5.0,
+        "crank": 1.0,
+        "coupler": 4.5,
+        "rocker": 3.0,
+        "rocker_arm": 4.0,
+    },
+    "drag_link_slider": {
+        "ground": 0.1,
+        "crank": 0.225,
+        "coupler": 0.250428,
+        "follower": 0.275,
+        "follower_arm": 0.15,
+        "connecting_rod": 0.3,
+    },
+}
 SAMPLES = (10, 100, 1_000, 10_000, 100_000)
 # a shaper's load on each reference design (the lengths read as mm): a 2 kN cut, a 60 kg ram,
 # links of 8 kg/m, 40 strokes a minute
@@ -82,8 +93,12 @@ def analysis_costs(repeats: int, samples: tuple[int, ...]) -> list[dict]:
     return rows
 
 
-SYNTH_REQUEST = {"time_ratio": 1.6, "stroke": 1.0, "min_transmission_angle_deg": 20.0,
-                 "mechanisms": [{"type": "crank_rocker_slider"}]}  # fmt: skip
+SYNTH_REQUEST = {
+    "time_ratio": 1.6,
+    "stroke": 1.0,
+    "min_transmission_angle_deg": 20.0,
+    "mechanisms": [{"type": "crank_rocker_slider"}],
+}
 
 
 def synthesis_costs(repeats: int) -> list[dict]:
@@ -121,12 +136,17 @@ def pareto_costs(repeats: int, quick: bool = False) -> list[dict]:
             ms, ref = median_ms(front, best, repeats)
             per.append((ms, ref, len(r.candidates)))
         if per:
-            rows.append({"type": mtype, "targets": len(per),
-                         "pareto_ms": statistics.median(p[0] for p in per),
-                         "max_transmission_ms": statistics.median(p[1] for p in per),
-                         "ratio": statistics.median(p[0] / p[1] for p in per),
-                         "ratio_max": max(p[0] / p[1] for p in per),
-                         "points": statistics.median(p[2] for p in per)})  # fmt: skip
+            rows.append(
+                {
+                    "type": mtype,
+                    "targets": len(per),
+                    "pareto_ms": statistics.median(p[0] for p in per),
+                    "max_transmission_ms": statistics.median(p[1] for p in per),
+                    "ratio": statistics.median(p[0] / p[1] for p in per),
+                    "ratio_max": max(p[0] / p[1] for p in per),
+                    "points": statistics.median(p[2] for p in per),
+                }
+            )
     return rows
 
 
@@ -136,8 +156,9 @@ def motion_costs(repeats: int) -> list[dict]:
     everything free), per quick-return type, calls alternated; with the measure reached."""
     rows = []
     for mtype in QUICK_RETURN:
-        request = partial(synth.synthesize, 1.6, 1.0, 20.0, [{"type": mtype}],
-                          time_budget_ms=30_000)  # fmt: skip
+        request = partial(
+            synth.synthesize, 1.6, 1.0, 20.0, [{"type": mtype}], time_budget_ms=30_000
+        )
         best = partial(request, objective="max_transmission_angle")
         for objective in ("uniform_cutting_speed", "min_peak_acceleration"):
             fn = partial(request, objective=objective)
@@ -145,10 +166,17 @@ def motion_costs(repeats: int) -> list[dict]:
             if not r.candidates:
                 continue
             ms, ref = median_ms(fn, best, repeats)
-            rows.append({"type": mtype, "objective": objective, "ms": ms,
-                         "max_transmission_ms": ref, "ratio": ms / ref,
-                         "measure": r.candidates[0].objective_value,
-                         "complete": r.complete})  # fmt: skip
+            rows.append(
+                {
+                    "type": mtype,
+                    "objective": objective,
+                    "ms": ms,
+                    "max_transmission_ms": ref,
+                    "ratio": ms / ref,
+                    "measure": r.candidates[0].objective_value,
+                    "complete": r.complete,
+                }
+            )
     return rows
 
 
@@ -166,13 +194,22 @@ def motion_targets(quick: bool) -> list[dict]:
     its functions, ~150 ms). Median, p99 and max ms, and how many have a candidate."""
     ratios, bounds = ((1.6,), (20.0,)) if quick else (DEFAULT_TIME_RATIOS, DEFAULT_BOUNDS)
     per_type = 1 if quick else FIXED_TARGETS
-    fixed_cases = [c for c in targets.cases(n_infeasible=0)
-                   if c["target"]["mechanisms"][0]["fixed"]]  # fmt: skip
+    fixed_cases = [
+        c for c in targets.cases(n_infeasible=0) if c["target"]["mechanisms"][0]["fixed"]
+    ]
     rows = []
     for mtype in QUICK_RETURN:
         mine = [c["target"] for c in fixed_cases if c["type"] == mtype][:per_type]
-        free = [{"time_ratio": tr, "stroke": 300.0, "min_transmission_angle_deg": b,
-                 "mechanisms": [{"type": mtype}]} for tr in ratios for b in bounds]  # fmt: skip
+        free = [
+            {
+                "time_ratio": tr,
+                "stroke": 300.0,
+                "min_transmission_angle_deg": b,
+                "mechanisms": [{"type": mtype}],
+            }
+            for tr in ratios
+            for b in bounds
+        ]
         limited = [{**k, "max_working_speed_fluctuation": LIMIT} for k in free]
         for objective in ("uniform_cutting_speed", "min_peak_acceleration"):
             sets = {"free": free, "limit": limited, "fixed": mine}
@@ -186,11 +223,18 @@ def motion_targets(quick: bool) -> list[dict]:
                     ms.append((time.perf_counter() - t0) * 1e3)
                     answered += bool(r.candidates)
                 if ms:
-                    rows.append({"type": mtype, "objective": objective, "kind": kind,
-                                 "targets": len(ms), "answered": answered,
-                                 "median_ms": statistics.median(ms),
-                                 "p99_ms": float(np.percentile(ms, 99)),
-                                 "max_ms": max(ms)})  # fmt: skip
+                    rows.append(
+                        {
+                            "type": mtype,
+                            "objective": objective,
+                            "kind": kind,
+                            "targets": len(ms),
+                            "answered": answered,
+                            "median_ms": statistics.median(ms),
+                            "p99_ms": float(np.percentile(ms, 99)),
+                            "max_ms": max(ms),
+                        }
+                    )
     return rows
 
 
@@ -222,16 +266,26 @@ def default_cases(quick: bool = False) -> list[dict]:
         grid = [(1.0 if mtype == "scotch_yoke" else tr, b) for tr in ratios for b in bounds]
         grid = list(dict.fromkeys(grid))
         for kind, pairs in (("default", grid), ("refusal", REFUSALS.get(mtype, ()))):
-            out += [{"type": mtype, "kind": kind, "time_ratio": tr, "bound": b, "objective": o}
-                    for tr, b in pairs for o in OBJECTIVES
-                    if b > 0 or o != "min_size"]  # fmt: skip
+            out += [
+                {"type": mtype, "kind": kind, "time_ratio": tr, "bound": b, "objective": o}
+                for tr, b in pairs
+                for o in OBJECTIVES
+                if b > 0 or o != "min_size"
+            ]
     return out
 
 
 def _request(case: dict, solver: synth.Solver | None = None):
     kinds = None if case["type"] == ALL else [{"type": case["type"]}]
-    return partial(synth.synthesize, case["time_ratio"], 1.0, case["bound"], mechanisms=kinds,
-                   objective=case["objective"], solver=solver or synth.Solver())  # fmt: skip
+    return partial(
+        synth.synthesize,
+        case["time_ratio"],
+        1.0,
+        case["bound"],
+        mechanisms=kinds,
+        objective=case["objective"],
+        solver=solver or synth.Solver(),
+    )
 
 
 def _best(r: synth.SynthesisResult, objective: str) -> float | None:
@@ -256,10 +310,15 @@ def default_requests(repeats: int, quick: bool = False) -> list[dict]:
         fn = _request(case)
         r = fn()  # builds what it needs
         ms, ref = median_ms(fn, base, repeats)
-        row = {**case, "ms": ms, "analyses_ms": ref, "answered": bool(r.candidates),
-               "best": _best(r, case["objective"]),
-               "methods": sorted({c.method for c in r.candidates}),
-               "refusals": sorted({i.code for i in r.infeasible})}  # fmt: skip
+        row = {
+            **case,
+            "ms": ms,
+            "analyses_ms": ref,
+            "answered": bool(r.candidates),
+            "best": _best(r, case["objective"]),
+            "methods": sorted({c.method for c in r.candidates}),
+            "refusals": sorted({i.code for i in r.infeasible}),
+        }
         if not quick:
             g = _request(case, synth.Solver(accelerators=False))()
             row["generic_answered"] = bool(g.candidates)
@@ -274,8 +333,9 @@ def default_summary(cases: list[dict]) -> list[dict]:
     answers, a worse best design than generic's, and min_size refused where the same targets
     with max_transmission_angle have a design (the two objectives share their feasible set)."""
     rows = []
-    answered = {(c["type"], c["time_ratio"], c["bound"], c["objective"]): c["answered"]
-                for c in cases}  # fmt: skip
+    answered = {
+        (c["type"], c["time_ratio"], c["bound"], c["objective"]): c["answered"] for c in cases
+    }
     for mtype in dict.fromkeys(c["type"] for c in cases):
         row: dict = {"type": mtype}
         for kind in ("default", "refusal"):
@@ -283,20 +343,25 @@ def default_summary(cases: list[dict]) -> list[dict]:
             if not cs:
                 continue
             ms = [c["ms"] for c in cs]
-            row |= {f"{kind}_n": len(cs), f"{kind}_answered": sum(c["answered"] for c in cs),
-                    f"{kind}_ms": statistics.median(ms),
-                    f"{kind}_ms_p90": float(np.quantile(ms, 0.9, method="inverted_cdf")),
-                    f"{kind}_ms_max": max(ms),
-                    f"{kind}_analyses": statistics.median(c["ms"] / c["analyses_ms"] for c in cs),
-                    f"{kind}_ipopt": sum(any("ipopt" in m for m in c["methods"])
-                                         for c in cs)}  # fmt: skip
+            row |= {
+                f"{kind}_n": len(cs),
+                f"{kind}_answered": sum(c["answered"] for c in cs),
+                f"{kind}_ms": statistics.median(ms),
+                f"{kind}_ms_p90": float(np.quantile(ms, 0.9, method="inverted_cdf")),
+                f"{kind}_ms_max": max(ms),
+                f"{kind}_analyses": statistics.median(c["ms"] / c["analyses_ms"] for c in cs),
+                f"{kind}_ipopt": sum(any("ipopt" in m for m in c["methods"]) for c in cs),
+            }
         checked = [c for c in cases if c["type"] == mtype and "generic_answered" in c]
         row["worse_than_generic"] = [_label(c) for c in checked if _worse(c)]
         row["min_size_refused_but_feasible"] = [
-            _label(c) for c in cases if c["type"] == mtype and c["objective"] == "min_size"
-            and not c["answered"] and answered.get((mtype, c["time_ratio"], c["bound"],
-                                                    "max_transmission_angle"))
-        ]  # fmt: skip
+            _label(c)
+            for c in cases
+            if c["type"] == mtype
+            and c["objective"] == "min_size"
+            and not c["answered"]
+            and answered.get((mtype, c["time_ratio"], c["bound"], "max_transmission_angle"))
+        ]
         rows.append(row)
     return rows
 
@@ -334,16 +399,39 @@ def main(argv: list[str] | None = None) -> dict:
     }
     print(table(results["analysis"], ("type", "case", "ms", "ratio")))
     print(table(results["synthesis"], ("case", "ms", "ratio", "candidates")))
-    columns = ("type", "default_n", "default_answered", "default_ms", "default_ms_p90",
-               "default_ms_max", "default_analyses", "refusal_n", "refusal_answered",
-               "refusal_ms", "refusal_ms_max", "refusal_analyses")  # fmt: skip
+    columns = (
+        "type",
+        "default_n",
+        "default_answered",
+        "default_ms",
+        "default_ms_p90",
+        "default_ms_max",
+        "default_analyses",
+        "refusal_n",
+        "refusal_answered",
+        "refusal_ms",
+        "refusal_ms_max",
+        "refusal_analyses",
+    )
     print(table(results["default_requests"], columns))
-    print(table(results["pareto"], ("type", "targets", "pareto_ms", "max_transmission_ms",
-                                     "ratio", "ratio_max", "points")))  # fmt: skip
-    print(table(results["motion_objectives"], ("type", "objective", "ms", "max_transmission_ms",
-                                                "ratio", "measure", "complete")))  # fmt: skip
-    print(table(results["motion_targets"], ("type", "objective", "kind", "targets", "answered",
-                                             "median_ms", "p99_ms", "max_ms")))  # fmt: skip
+    print(
+        table(
+            results["pareto"],
+            ("type", "targets", "pareto_ms", "max_transmission_ms", "ratio", "ratio_max", "points"),
+        )
+    )
+    print(
+        table(
+            results["motion_objectives"],
+            ("type", "objective", "ms", "max_transmission_ms", "ratio", "measure", "complete"),
+        )
+    )
+    print(
+        table(
+            results["motion_targets"],
+            ("type", "objective", "kind", "targets", "answered", "median_ms", "p99_ms", "max_ms"),
+        )
+    )
     for r in results["default_requests"]:
         for key in ("worse_than_generic", "min_size_refused_but_feasible"):
             if r[key]:
@@ -362,12 +450,18 @@ def plot(rows: list[dict], path: Path) -> None:
 
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     for mtype in DESIGNS:
-        pts = [(int(r["case"].split()[1]), r["ratio"]) for r in rows
-               if r["type"] == mtype and r["case"].endswith("samples")]  # fmt: skip
+        pts = [
+            (int(r["case"].split()[1]), r["ratio"])
+            for r in rows
+            if r["type"] == mtype and r["case"].endswith("samples")
+        ]
         ax.loglog(*zip(*pts, strict=True), marker="o", label=mtype)
     ax.axhline(1.0, color="grey", lw=0.8, ls="--")
-    ax.set(xlabel="curve samples per request", ylabel="time / summary-only time",
-           title="synth.analyze: the cost of curves")  # fmt: skip
+    ax.set(
+        xlabel="curve samples per request",
+        ylabel="time / summary-only time",
+        title="synth.analyze: the cost of curves",
+    )
     ax.legend(fontsize=8)
     fig.tight_layout()
     RESULTS.mkdir(exist_ok=True)

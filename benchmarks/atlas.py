@@ -19,8 +19,13 @@ from synth.atlas import atlas
 
 from .common import report, table
 
-TYPES = ("offset_slider_crank", "crank_shaper", "whitworth", "crank_rocker_slider",
-         "drag_link_slider")  # fmt: skip
+TYPES = (
+    "offset_slider_crank",
+    "crank_shaper",
+    "whitworth",
+    "crank_rocker_slider",
+    "drag_link_slider",
+)
 
 
 def grid(n: int) -> tuple[float, ...]:
@@ -42,8 +47,9 @@ def main(argv: list[str] | None = None) -> dict:
     ratios = grid(20 if a.quick else 2000)
     points = len(TYPES) * len(ratios)
     runs = {"inline": [], "pool, 1 worker": [], "pool, 2 workers": [], "dask, 2 workers": []}
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as cluster:  # fmt: skip
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
         for _ in range(1 if a.quick else 3):
             runs["inline"].append(timed(ratios=ratios, inline=True))
             runs["pool, 1 worker"].append(timed(ratios=ratios, workers=1))
@@ -52,8 +58,9 @@ def main(argv: list[str] | None = None) -> dict:
                 timed(ratios=ratios, scheduler=cluster.scheduler_address)
             )
     s = {k: statistics.median(v) for k, v in runs.items()}
-    rows = [{"run": k, "points": points, "seconds": t, "points_per_s": points / t}
-            for k, t in s.items()]  # fmt: skip
+    rows = [
+        {"run": k, "points": points, "seconds": t, "points_per_s": points / t} for k, t in s.items()
+    ]
     per_core = points / s["inline"]
     speedup = s["pool, 1 worker"] / s["pool, 2 workers"]
     efficiency = speedup / 2

@@ -64,8 +64,13 @@ def code() -> dict:
 
     def git(*args: str) -> str:
         try:
-            return subprocess.run(["git", *args], cwd=RESULTS.parent.parent, capture_output=True,
-                                  text=True, check=True).stdout  # fmt: skip
+            return subprocess.run(
+                ["git", *args],
+                cwd=RESULTS.parent.parent,
+                capture_output=True,
+                text=True,
+                check=True,
+            ).stdout
         except (OSError, subprocess.CalledProcessError):
             return ""
 

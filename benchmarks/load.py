@@ -21,13 +21,30 @@ from dataclasses import dataclass, field
 from typing import Any
 
 BODIES = {
-    "/v1/analyze": {"mechanism": {"type": "drag_link_slider", "params": {
-        "ground": 0.1, "crank": 0.225, "coupler": 0.2504, "follower": 0.275,
-        "follower_arm": 0.15, "connecting_rod": 0.3}}},
-    "/v1/synthesize": {"time_ratio": 1.5, "stroke": 0.3, "mechanisms": [{
-        "type": "drag_link_slider", "fixed": {"ground": 0.1, "crank": 0.225, "follower": 0.275,
-                                              "connecting_rod": 0.3}}]},
-}  # fmt: skip
+    "/v1/analyze": {
+        "mechanism": {
+            "type": "drag_link_slider",
+            "params": {
+                "ground": 0.1,
+                "crank": 0.225,
+                "coupler": 0.2504,
+                "follower": 0.275,
+                "follower_arm": 0.15,
+                "connecting_rod": 0.3,
+            },
+        }
+    },
+    "/v1/synthesize": {
+        "time_ratio": 1.5,
+        "stroke": 0.3,
+        "mechanisms": [
+            {
+                "type": "drag_link_slider",
+                "fixed": {"ground": 0.1, "crank": 0.225, "follower": 0.275, "connecting_rod": 0.3},
+            }
+        ],
+    },
+}
 JSON = {"Content-Type": "application/json"}
 # a request a client sends: the path it is POSTed to, its body (None: a GET), and what its
 # answer counts under
@@ -139,16 +156,24 @@ def run(
     len(bodies)]``, by client i % clients), for at most ``seconds``: throughput, latency
     quantiles, statuses."""
     payloads = [json.dumps(b).encode() for b in bodies or [BODIES[path]]]
-    shares = [[(path, payloads[i % len(payloads)], None) for i in range(k, requests, clients)]
-              for k in range(clients)]  # fmt: skip
+    shares = [
+        [(path, payloads[i % len(payloads)], None) for i in range(k, requests, clients)]
+        for k in range(clients)
+    ]
     d = drive(port, shares, seconds)
     latencies = [s.ms / 1e3 for s in d.sent]
     q = statistics.quantiles(latencies, n=100) if len(latencies) > 1 else [latencies[0]] * 99
     return {
-        "path": path, "clients": clients, "requests": len(latencies), "seconds": d.seconds,
-        "throughput_rps": len(latencies) / d.seconds, "p50_ms": q[49] * 1e3,
-        "p95_ms": q[94] * 1e3, "p99_ms": q[98] * 1e3, "statuses": statuses(d.sent),
-    }  # fmt: skip
+        "path": path,
+        "clients": clients,
+        "requests": len(latencies),
+        "seconds": d.seconds,
+        "throughput_rps": len(latencies) / d.seconds,
+        "p50_ms": q[49] * 1e3,
+        "p95_ms": q[94] * 1e3,
+        "p99_ms": q[98] * 1e3,
+        "statuses": statuses(d.sent),
+    }
 
 
 def alternate(port: int, requests: list[tuple[str, dict[str, Any]]], rounds: int) -> list[dict]:
@@ -162,8 +187,15 @@ def alternate(port: int, requests: list[tuple[str, dict[str, Any]]], rounds: int
         mine = [s for s in sent if s.tag == k]
         ts = [s.ms / 1e3 for s in mine]
         q = statistics.quantiles(ts, n=10) if len(ts) > 1 else [ts[0]] * 9
-        out.append({"path": path, "requests": len(ts), "p50_ms": statistics.median(ts) * 1e3,
-                    "p90_ms": q[8] * 1e3, "statuses": statuses(mine)})  # fmt: skip
+        out.append(
+            {
+                "path": path,
+                "requests": len(ts),
+                "p50_ms": statistics.median(ts) * 1e3,
+                "p90_ms": q[8] * 1e3,
+                "statuses": statuses(mine),
+            }
+        )
     return out
 
 
@@ -177,10 +209,13 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args()
     out = run(a.port, a.path, a.clients, a.requests, a.seconds)
-    print(json.dumps(out) if a.json else
-          f"{out['path']} {out['clients']} clients: {out['throughput_rps']:.0f} req/s, "
-          f"p50 {out['p50_ms']:.1f} ms, p95 {out['p95_ms']:.1f} ms, p99 {out['p99_ms']:.1f} ms, "
-          f"{out['statuses']}")  # fmt: skip
+    print(
+        json.dumps(out)
+        if a.json
+        else f"{out['path']} {out['clients']} clients: {out['throughput_rps']:.0f} req/s, "
+        f"p50 {out['p50_ms']:.1f} ms, p95 {out['p95_ms']:.1f} ms, p99 {out['p99_ms']:.1f} ms, "
+        f"{out['statuses']}"
+    )
 
 
 if __name__ == "__main__":

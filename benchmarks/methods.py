@@ -111,8 +111,9 @@ def ipopt_solves(target: dict[str, Any]) -> Solves:
 
     def counted(b: Built, *args: Any, **kwargs: Any):
         n.calls += 1
-        n.where.append(f"{b.form.mtype} {'+'.join(sorted(b.form.variant)) or '-'} "
-                       f"{b.form.objective}")  # fmt: skip
+        n.where.append(
+            f"{b.form.mtype} {'+'.join(sorted(b.form.variant)) or '-'} {b.form.objective}"
+        )
         start_points = args[5] if len(args) > 5 else kwargs["start_points"]
         n.starts += len(start_points)
         yield from multistart(b, *args, **kwargs)
@@ -172,10 +173,13 @@ def on_nlp(local: LocalSolve) -> Method:
         spec = checked_spec(target["mechanisms"][0], 0)
         m = get(spec.type)
         t = search.Targets(
-            target["time_ratio"], target["stroke"], target["min_transmission_angle_deg"],
-            target.get("objective", "max_transmission_angle"), math.inf,
+            target["time_ratio"],
+            target["stroke"],
+            target["min_transmission_angle_deg"],
+            target.get("objective", "max_transmission_angle"),
+            math.inf,
             synth.Solver(local=_checked(local)),
-        )  # fmt: skip
+        )
         out = []
         for parts in search.variants(m, spec):
             if search.fixed_violation(m, parts, spec.fixed):
@@ -300,9 +304,14 @@ def swarm(b: Built, fixed, tr, cos_bound, lo, hi, start_points, deadline) -> Ite
     rng = np.random.default_rng  # pylinkage 1.3 seeds its swarm from the clock only
     with patched(np.random, default_rng=lambda *a: rng(*(a or (SEED,)))):
         best = particle_swarm_optimization(
-            score, _NoLinkage(), dimensions=len(box.lb), bounds=(box.lb, box.ub),
-            order_relation=min, verbose=False, **PSO,
-        )  # fmt: skip
+            score,
+            _NoLinkage(),
+            dimensions=len(box.lb),
+            bounds=(box.lb, box.ub),
+            order_relation=min,
+            verbose=False,
+            **PSO,
+        )
     yield 0, _solution(b.form, best.dimensions[0])
 
 

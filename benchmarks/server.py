@@ -81,14 +81,18 @@ def serving(
     (``SYNTH_*``, ``WEB_CONCURRENCY``): the configuration's own. Stopped at the end with
     SIGTERM, then SIGKILL to whatever of it is left."""
     cmd, settings = SERVERS[server]
-    base = {k: v for k, v in os.environ.items()
-            if not defaults or (k != "WEB_CONCURRENCY" and "SYNTH_" not in k)}  # fmt: skip
+    base = {
+        k: v
+        for k, v in os.environ.items()
+        if not defaults or (k != "WEB_CONCURRENCY" and "SYNTH_" not in k)
+    }
     port = free_port()
     environment = {**base, "SYNTH_WARM": "1", **settings, **env}
     processes = int(environment.get("WEB_CONCURRENCY") or len(os.sched_getaffinity(0)))
     with tempfile.TemporaryFile() as log:
-        proc = subprocess.Popen([*cmd, str(port)], cwd=ROOT, env=environment,
-                                stdout=subprocess.DEVNULL, stderr=log)  # fmt: skip
+        proc = subprocess.Popen(
+            [*cmd, str(port)], cwd=ROOT, env=environment, stdout=subprocess.DEVNULL, stderr=log
+        )
         started: set[int] = set()
         try:
             wait_for_health(port, proc, timeout=HEALTH_S)

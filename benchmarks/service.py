@@ -51,8 +51,11 @@ from .server import SERVERS, serving
 
 CLIENTS = (1, 4, 16)
 INVALID_SHARE = 0.2  # two requests in ten: a design that cannot be assembled, an unmet target
-WORKLOADS = {"analyze": "/v1/analyze", "synthesize": "/v1/synthesize",
-             "synthesize_default": "/v1/synthesize"}  # fmt: skip
+WORKLOADS = {
+    "analyze": "/v1/analyze",
+    "synthesize": "/v1/synthesize",
+    "synthesize_default": "/v1/synthesize",
+}
 
 _DRAG_FIXED = {"ground": 0.1, "crank": 0.225, "follower": 0.275, "connecting_rod": 0.3}
 SERVICE = [s for s in SERVERS if s != "bare"]  # the service's configurations
@@ -62,13 +65,23 @@ _SHAPER = DESIGNS["crank_shaper"]
 _SHAPER_TARGETS = (1.6, 300.0, 20.0, [{"type": "crank_shaper"}])  # time ratio, stroke, bound
 AGAINST_BARE: dict[str, tuple[str, dict | None, Callable[[], Any] | None]] = {
     "health": ("/health", None, None),
-    "analyze": ("/v1/analyze", {"mechanism": {"type": "crank_shaper", "params": _SHAPER}},
-                partial(synth.analyze, "crank_shaper", _SHAPER)),
-    "synthesize": ("/v1/synthesize",
-                   dict(zip(("time_ratio", "stroke", "min_transmission_angle_deg", "mechanisms"),
-                            _SHAPER_TARGETS, strict=True)),
-                   partial(synth.synthesize, *_SHAPER_TARGETS)),
-}  # fmt: skip
+    "analyze": (
+        "/v1/analyze",
+        {"mechanism": {"type": "crank_shaper", "params": _SHAPER}},
+        partial(synth.analyze, "crank_shaper", _SHAPER),
+    ),
+    "synthesize": (
+        "/v1/synthesize",
+        dict(
+            zip(
+                ("time_ratio", "stroke", "min_transmission_angle_deg", "mechanisms"),
+                _SHAPER_TARGETS,
+                strict=True,
+            )
+        ),
+        partial(synth.synthesize, *_SHAPER_TARGETS),
+    ),
+}
 ALLOWANCE_MS = 0.3  # the goal: a request costs the bare round trip + its computation + this
 
 
@@ -77,18 +90,22 @@ def bodies(workload: str) -> list[dict]:
     if workload == "analyze":
         good = [{"mechanism": {"type": t, "params": p}} for t, p in DESIGNS.items()]
         good += good[-2:]  # the four-bars twice: 8 valid bodies
-        bad = {"type": "crank_shaper", "params": {"crank": 300.0, "pivot_distance": 240.0,
-                                                  "lever": 450.0}}  # fmt: skip
+        bad = {
+            "type": "crank_shaper",
+            "params": {"crank": 300.0, "pivot_distance": 240.0, "lever": 450.0},
+        }
         return good + [{"mechanism": bad}] * 2
     if workload == "synthesize":
-        body = {"stroke": 0.3, "mechanisms": [{"type": "drag_link_slider",
-                                               "fixed": _DRAG_FIXED}]}  # fmt: skip
+        body = {"stroke": 0.3, "mechanisms": [{"type": "drag_link_slider", "fixed": _DRAG_FIXED}]}
         good = [{**body, "time_ratio": 1.4 + 0.02 * k} for k in range(8)]
         return good + [{**body, "time_ratio": 10.0}] * 2
-    alone = [default_body(t, tr) for t, tr in zip(QUICK_RETURN, (1.3, 1.6, 2.0, 2.5, 1.6),
-                                                  strict=True)]  # fmt: skip
-    every = [{"time_ratio": tr, "stroke": 1.0, "min_transmission_angle_deg": 20.0}
-             for tr in (1.3, 1.6, 2.0)]  # fmt: skip
+    alone = [
+        default_body(t, tr) for t, tr in zip(QUICK_RETURN, (1.3, 1.6, 2.0, 2.5, 1.6), strict=True)
+    ]
+    every = [
+        {"time_ratio": tr, "stroke": 1.0, "min_transmission_angle_deg": 20.0}
+        for tr in (1.3, 1.6, 2.0)
+    ]
     bad = [default_body("offset_slider_crank", 3.5), default_body("whitworth", 1.6, 89.9)]
     return alone + every + bad
 
@@ -96,8 +113,12 @@ def bodies(workload: str) -> list[dict]:
 def default_body(mtype: str, time_ratio: float = 1.6, bound: float = 20.0) -> dict:
     """A default request for one type: everything free (the scotch yoke's ratio is 1)."""
     tr = 1.0 if mtype == "scotch_yoke" else time_ratio
-    return {"time_ratio": tr, "stroke": 1.0, "min_transmission_angle_deg": bound,
-            "mechanisms": [{"type": mtype}]}  # fmt: skip
+    return {
+        "time_ratio": tr,
+        "stroke": 1.0,
+        "min_transmission_angle_deg": bound,
+        "mechanisms": [{"type": mtype}],
+    }
 
 
 def paired(port: int, rounds: int) -> list[dict]:
@@ -105,15 +126,25 @@ def paired(port: int, rounds: int) -> list[dict]:
     design of it, alternated on one connection; their median latencies and the ratio."""
     rows = []
     for mtype, params in DESIGNS.items():
-        pair = [("/v1/synthesize", default_body(mtype)),
-                ("/v1/analyze", {"mechanism": {"type": mtype, "params": params}})]  # fmt: skip
+        pair = [
+            ("/v1/synthesize", default_body(mtype)),
+            ("/v1/analyze", {"mechanism": {"type": mtype, "params": params}}),
+        ]
         load.alternate(port, pair, 3)  # warm: this type's models in the serving process
         s, a = load.alternate(port, pair, rounds)
         statuses = {"synthesize": s["statuses"], "analyze": a["statuses"]}
-        rows.append({"type": mtype, "rounds": rounds, "synthesize_p50_ms": s["p50_ms"],
-                     "synthesize_p90_ms": s["p90_ms"], "analyze_p50_ms": a["p50_ms"],
-                     "analyze_p90_ms": a["p90_ms"], "ratio": s["p50_ms"] / a["p50_ms"],
-                     "statuses": statuses})  # fmt: skip
+        rows.append(
+            {
+                "type": mtype,
+                "rounds": rounds,
+                "synthesize_p50_ms": s["p50_ms"],
+                "synthesize_p90_ms": s["p90_ms"],
+                "analyze_p50_ms": a["p50_ms"],
+                "analyze_p90_ms": a["p90_ms"],
+                "ratio": s["p50_ms"] / a["p50_ms"],
+                "statuses": statuses,
+            }
+        )
     return rows
 
 
@@ -133,13 +164,17 @@ def against_bare(rounds: int, repeats: int, requests: int, seconds: float) -> tu
     ``AGAINST_BARE`` at one client, the p50s (``rounds`` in turn, after a warm-up) and what the
     service adds; and the analysis workload at 16 clients, ``repeats`` times alternated, with
     each server's processor time per request."""
-    with serving("shipped", defaults=True) as (port, proc), \
-            serving("bare", defaults=True) as (bare, bare_proc):  # fmt: skip
+    with (
+        serving("shipped", defaults=True) as (port, proc),
+        serving("bare", defaults=True) as (bare, bare_proc),
+    ):
         ports = {"service": port, "bare": bare}
         load.run(port, "/v1/analyze", 2, 200, 60, bodies("analyze"))  # warm-up
         one = _one_client(ports, rounds)
-        pids = {"service": descendants(proc.pid) | {proc.pid},
-                "bare": descendants(bare_proc.pid) | {bare_proc.pid}}  # fmt: skip
+        pids = {
+            "service": descendants(proc.pid) | {proc.pid},
+            "bare": descendants(bare_proc.pid) | {bare_proc.pid},
+        }
         many = []
         for k in range(repeats):
             for server in ("service", "bare") if k % 2 == 0 else ("bare", "service"):
@@ -154,8 +189,10 @@ def _one_client(ports: dict[str, int], rounds: int) -> list[dict]:
     """Each of ``AGAINST_BARE`` in turn on each server, then in process, ``rounds`` times on
     one keep-alive connection per server (a warm-up of a tenth first): their p50s."""
     conns = {s: http.client.HTTPConnection("127.0.0.1", p, timeout=60) for s, p in ports.items()}
-    requests = {name: (path, None if body is None else json.dumps(body).encode(), compute)
-                for name, (path, body, compute) in AGAINST_BARE.items()}  # fmt: skip
+    requests = {
+        name: (path, None if body is None else json.dumps(body).encode(), compute)
+        for name, (path, body, compute) in AGAINST_BARE.items()
+    }
     ms: dict[tuple[str, str], list[float]] = {}
     seen: dict[str, dict[int | str, int]] = {name: {} for name in requests}
     warm = max(rounds // 10, 3)
@@ -164,8 +201,9 @@ def _one_client(ports: dict[str, int], rounds: int) -> list[dict]:
             for server, conn in conns.items():
                 status, t = load.ask(conn, path, body)
                 if isinstance(status, str):  # the connection failed: a new one
-                    conns[server] = http.client.HTTPConnection("127.0.0.1", ports[server],
-                                                               timeout=60)  # fmt: skip
+                    conns[server] = http.client.HTTPConnection(
+                        "127.0.0.1", ports[server], timeout=60
+                    )
                 if k >= warm:
                     ms.setdefault((name, server), []).append(t)
                     if server == "service":
@@ -179,13 +217,24 @@ def _one_client(ports: dict[str, int], rounds: int) -> list[dict]:
         conn.close()
     rows = []
     for name in requests:
-        p50 = {s: statistics.median(ms[(name, s)]) if (name, s) in ms else 0.0
-               for s in ("service", "bare", "in_process")}  # fmt: skip
+        p50 = {
+            s: statistics.median(ms[(name, s)]) if (name, s) in ms else 0.0
+            for s in ("service", "bare", "in_process")
+        }
         ours = p50["service"] - p50["bare"] - p50["in_process"]
-        rows.append({"request": name, "rounds": rounds, "service_p50_ms": p50["service"],
-                     "bare_p50_ms": p50["bare"], "in_process_p50_ms": p50["in_process"],
-                     "ours_ms": ours, "goal_ms": p50["bare"] + p50["in_process"] + ALLOWANCE_MS,
-                     "met": ours <= ALLOWANCE_MS, "statuses": seen[name]})  # fmt: skip
+        rows.append(
+            {
+                "request": name,
+                "rounds": rounds,
+                "service_p50_ms": p50["service"],
+                "bare_p50_ms": p50["bare"],
+                "in_process_p50_ms": p50["in_process"],
+                "ours_ms": ours,
+                "goal_ms": p50["bare"] + p50["in_process"] + ALLOWANCE_MS,
+                "met": ours <= ALLOWANCE_MS,
+                "statuses": seen[name],
+            }
+        )
     return rows
 
 
@@ -218,8 +267,17 @@ def main(argv: list[str] | None = None) -> dict:
         pairs += p
         again += g
     one, many = against_bare(*((10, 1, 40, 60.0) if a.quick else (1000, 6, 6000, 10.0)))
-    cols = ("server", "workload", "clients", "requests", "throughput_rps", "p50_ms", "p95_ms",
-            "p99_ms", "statuses")  # fmt: skip
+    cols = (
+        "server",
+        "workload",
+        "clients",
+        "requests",
+        "throughput_rps",
+        "p50_ms",
+        "p95_ms",
+        "p99_ms",
+        "statuses",
+    )
     print(table(rows, cols))
     print(table(pairs, ("type", "synthesize_p50_ms", "analyze_p50_ms", "ratio", "statuses")))
     summary = [
@@ -228,19 +286,45 @@ def main(argv: list[str] | None = None) -> dict:
         if (rs := [r["throughput_rps"] for r in again if r["workload"] == w])
     ]
     print(table(summary, ("workload", "median_rps", "min_rps", "max_rps")))
-    print(table(one, ("request", "service_p50_ms", "bare_p50_ms", "in_process_p50_ms", "ours_ms",
-                      "goal_ms", "met", "statuses")))  # fmt: skip
+    print(
+        table(
+            one,
+            (
+                "request",
+                "service_p50_ms",
+                "bare_p50_ms",
+                "in_process_p50_ms",
+                "ours_ms",
+                "goal_ms",
+                "met",
+                "statuses",
+            ),
+        )
+    )
     sixteen = [
-        {"server": s, "median_rps": statistics.median(r["throughput_rps"] for r in rs),
-         "median_cpu_us_per_request": statistics.median(r["cpu_us_per_request"] for r in rs),
-         "median_p50_ms": statistics.median(r["p50_ms"] for r in rs)}
-        for s in ("service", "bare") if (rs := [r for r in many if r["server"] == s])
-    ]  # fmt: skip
+        {
+            "server": s,
+            "median_rps": statistics.median(r["throughput_rps"] for r in rs),
+            "median_cpu_us_per_request": statistics.median(r["cpu_us_per_request"] for r in rs),
+            "median_p50_ms": statistics.median(r["p50_ms"] for r in rs),
+        }
+        for s in ("service", "bare")
+        if (rs := [r for r in many if r["server"] == s])
+    ]
     print(table(sixteen, ("server", "median_rps", "median_cpu_us_per_request", "median_p50_ms")))
-    results = {"invalid_share": INVALID_SHARE, "rows": rows, "paired": pairs,
-               "repeated_16_clients": again, "repeated_summary": summary,
-               "against_bare": {"allowance_ms": ALLOWANCE_MS, "one_client": one,
-                                "sixteen_clients": many, "sixteen_summary": sixteen}}  # fmt: skip
+    results = {
+        "invalid_share": INVALID_SHARE,
+        "rows": rows,
+        "paired": pairs,
+        "repeated_16_clients": again,
+        "repeated_summary": summary,
+        "against_bare": {
+            "allowance_ms": ALLOWANCE_MS,
+            "one_client": one,
+            "sixteen_clients": many,
+            "sixteen_summary": sixteen,
+        },
+    }
     return report("service", results, quick=a.quick)
 
 

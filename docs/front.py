@@ -26,8 +26,12 @@ def plot_front(result: synth.SynthesisResult, ax) -> None:
     for c in result.candidates:
         by_type.setdefault(c.type, []).append(c)
     for mtype, points in by_type.items():
-        ax.plot([c.min_transmission_angle_deg for c in points], [c.size for c in points],
-                "-" + MARKERS.get(mtype, "o"), label=mtype)  # fmt: skip
+        ax.plot(
+            [c.min_transmission_angle_deg for c in points],
+            [c.size for c in points],
+            "-" + MARKERS.get(mtype, "o"),
+            label=mtype,
+        )
     ax.set(xlabel="minimum transmission angle (°)", ylabel="sum of link lengths (mm)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
@@ -43,8 +47,10 @@ def draw_ends(result: synth.SynthesisResult, axes, mtype: str = "whitworth") -> 
         for p, q in WHITWORTH_LINKS:
             ax.plot(*zip(j[p][0], j[q][0], strict=True), "-o", ms=3, color="C0")
         ax.axvline(j["R"][0][0], color="grey", lw=0.5)  # the ram's path
-        ax.set_title(f"{', '.join(c.front.ends)}: {c.min_transmission_angle_deg:.1f}°, "
-                     f"size {c.size:.0f} mm", fontsize=9)  # fmt: skip
+        ax.set_title(
+            f"{', '.join(c.front.ends)}: {c.min_transmission_angle_deg:.1f}°, size {c.size:.0f} mm",
+            fontsize=9,
+        )
         ax.set_aspect("equal")
 
 

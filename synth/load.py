@@ -100,8 +100,15 @@ class Load:
                 f"design's lengths: forces and masses are SI), got {self.length_unit!r}",
                 ("load", "length_unit"),
             )
-        for name in ("crank_rpm", "cutting_force", "slider_mass", "link_mass_per_length",
-                     "guide_friction", "speed_fluctuation", *OPTIONAL):  # fmt: skip
+        for name in (
+            "crank_rpm",
+            "cutting_force",
+            "slider_mass",
+            "link_mass_per_length",
+            "guide_friction",
+            "speed_fluctuation",
+            *OPTIONAL,
+        ):
             v, (lo, hi) = getattr(self, name), RANGES.get(name, (0.0, math.inf))
             if v is None and name in OPTIONAL:
                 continue
@@ -124,11 +131,17 @@ class Load:
             msg = f"load.efficiency must be in (0, 1], at least {lo:g}, got {e!r}"
             raise InvalidParameters(msg, ("load", "efficiency"))
         zone = tuple(self.cutting_zone)
-        if not (len(zone) == 2 and all(_number(z) for z in zone)
-                and 0 <= zone[0] < zone[1] <= 1 and zone[1] - zone[0] >= GAP):  # fmt: skip
-            msg = (f"load.cutting_zone must be [start, end] with 0 ≤ start < end ≤ 1, end − "
-                   f"start ≥ {GAP:g} (fractions of the working stroke), got "
-                   f"{list(zone)!r}")  # fmt: skip
+        if not (
+            len(zone) == 2
+            and all(_number(z) for z in zone)
+            and 0 <= zone[0] < zone[1] <= 1
+            and zone[1] - zone[0] >= GAP
+        ):
+            msg = (
+                f"load.cutting_zone must be [start, end] with 0 ≤ start < end ≤ 1, end − "
+                f"start ≥ {GAP:g} (fractions of the working stroke), got "
+                f"{list(zone)!r}"
+            )
             raise InvalidParameters(msg, ("load", "cutting_zone"))
         object.__setattr__(self, "cutting_zone", (float(zone[0]), float(zone[1])))
         if self.force_profile is not None:
@@ -141,17 +154,23 @@ class Load:
             raise InvalidParameters(msg, loc)
         points = [tuple(q) for q in self.force_profile or ()]
         if len(points) < 2 or any(len(q) != 2 or not all(map(_number, q)) for q in points):
-            msg = (f"load.force_profile must be at least two [fraction, force] pairs of finite "
-                   f"numbers, got {self.force_profile!r}")  # fmt: skip
+            msg = (
+                f"load.force_profile must be at least two [fraction, force] pairs of finite "
+                f"numbers, got {self.force_profile!r}"
+            )
             raise InvalidParameters(msg, loc)
         for i, (u, f) in enumerate(points):
             if not 0 <= u <= 1 or f < 0:
-                msg = (f"load.force_profile[{i}]: the fraction must be in [0, 1] and the force "
-                       f"≥ 0, got [{u:g}, {f:g}]")  # fmt: skip
+                msg = (
+                    f"load.force_profile[{i}]: the fraction must be in [0, 1] and the force "
+                    f"≥ 0, got [{u:g}, {f:g}]"
+                )
                 raise InvalidParameters(msg, (*loc, i))
             if i and not u - points[i - 1][0] >= GAP:
-                msg = (f"load.force_profile[{i}]: fractions must increase, each by at least "
-                       f"{GAP:g}, got {u:g} after {points[i - 1][0]:g}")  # fmt: skip
+                msg = (
+                    f"load.force_profile[{i}]: fractions must increase, each by at least "
+                    f"{GAP:g}, got {u:g} after {points[i - 1][0]:g}"
+                )
                 raise InvalidParameters(msg, (*loc, i))
         object.__setattr__(self, "force_profile", tuple((float(u), float(f)) for u, f in points))
 

@@ -62,8 +62,7 @@ def encoded(a: Analysis) -> bytes:
         unasked = {k for k in _ASKED[Curves] if getattr(a.curves, k) is None}
         if unasked:
             exclude["curves"] = unasked
-    return pydantic_core.to_json(a, exclude=exclude or None, fallback=_listed,
-                                 inf_nan_mode="null")  # fmt: skip
+    return pydantic_core.to_json(a, exclude=exclude or None, fallback=_listed, inf_nan_mode="null")
 
 
 def _listed(x: Any) -> Any:

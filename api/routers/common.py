@@ -33,8 +33,11 @@ def budget(engine: Engine, budget_ms: float | None) -> float:
     budget_ms = budget_ms or engine.settings.default_budget_ms
     largest = engine.settings.max_budget_ms
     if budget_ms > largest:
-        e = InvalidParameters(f"time_budget_ms must be ≤ {largest:g} (this server's largest "
-                              f"budget), got {budget_ms:g}", ("time_budget_ms",))  # fmt: skip
+        e = InvalidParameters(
+            f"time_budget_ms must be ≤ {largest:g} (this server's largest "
+            f"budget), got {budget_ms:g}",
+            ("time_budget_ms",),
+        )
         raise Located(e, [e.loc])
     return budget_ms
 
@@ -87,8 +90,9 @@ async def run_design(
             return [("mechanism", "params", *e.loc)]
         return [e.loc]
 
-    return await run(request, engine, locate, op, then, mechanism=design.type, params=params,
-                     **kwargs)  # fmt: skip
+    return await run(
+        request, engine, locate, op, then, mechanism=design.type, params=params, **kwargs
+    )
 
 
 def tolerance(body: Extras) -> Tolerance | None:

@@ -22,9 +22,11 @@ MEDIA = {
 @router.post(
     "/v1/export",
     response_class=Response,
-    responses={**REFUSALS, 200: {"content": {m: {} for m in MEDIA.values()},
-                                 "description": "the drawing, as a file"}},
-)  # fmt: skip
+    responses={
+        **REFUSALS,
+        200: {"content": {m: {} for m in MEDIA.values()}, "description": "the drawing, as a file"},
+    },
+)
 async def export(
     request: Request,
     engine: EngineDep,
@@ -46,5 +48,8 @@ async def export(
         paths=body.paths,
     )
     name = f"{body.mechanism.type}.{body.format}"
-    return Response(doc, media_type=MEDIA[body.format],
-                    headers={"Content-Disposition": f'attachment; filename="{name}"'})  # fmt: skip
+    return Response(
+        doc,
+        media_type=MEDIA[body.format],
+        headers={"Content-Disposition": f'attachment; filename="{name}"'},
+    )

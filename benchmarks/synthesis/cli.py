@@ -47,10 +47,17 @@ QUICK_BUDGETS = {  # the global searches cut to a smoke test's size
 
 def settings(names: list[str], sizes: dict[str, int]) -> dict[str, Any]:
     return {
-        "methods": names, "targets": sizes, "seed": targets.SEED, "tol": TOL,
-        "same_angle": SAME_ANGLE, "starts": search.STARTS,
-        "de": methods.DE, "pso": methods.PSO, "pso_penalty": methods.PENALTY, "goals": GOALS,
-    }  # fmt: skip
+        "methods": names,
+        "targets": sizes,
+        "seed": targets.SEED,
+        "tol": TOL,
+        "same_angle": SAME_ANGLE,
+        "starts": search.STARTS,
+        "de": methods.DE,
+        "pso": methods.PSO,
+        "pso_penalty": methods.PENALTY,
+        "goals": GOALS,
+    }
 
 
 def main(argv: list[str] | None = None) -> dict[str, Any]:

@@ -29,9 +29,13 @@ def figure(rows: list[dict[str, Any]]):
         y = min(max(float(r["worst_error_median"]), FLOOR), CAP)
         ax.scatter(r["ms_median"], y, marker=markers[r["method"]], color=colours[r["type"]])
     ax.axhline(TOL, color="grey", lw=0.8, ls="--")
-    ax.set(xscale="log", yscale="log", xlabel="median wall time per target (ms)",
-           ylabel=f"median worst error after verification (floor {FLOOR:g}, cap {CAP:g})",
-           title="Synthesis: time vs verified error (feasible targets)")  # fmt: skip
+    ax.set(
+        xscale="log",
+        yscale="log",
+        xlabel="median wall time per target (ms)",
+        ylabel=f"median worst error after verification (floor {FLOOR:g}, cap {CAP:g})",
+        title="Synthesis: time vs verified error (feasible targets)",
+    )
     handles = [plt.Line2D([], [], ls="", marker=markers[n], color="k", label=n) for n in names]
     handles += [plt.Line2D([], [], ls="", marker="s", color=c, label=t) for t, c in colours.items()]
     ax.legend(handles=handles, fontsize=7, loc="center left", bbox_to_anchor=(1, 0.5))

@@ -48,15 +48,22 @@ def run_one(case: dict[str, Any], name: str) -> dict[str, Any]:
     worst = [max(e[k] for k in ERRORS) for e in errs]
     good = [e["angle"] for e, w in zip(errs, worst, strict=True) if w <= TOL]
     return {
-        "case": case["id"], "type": case["type"], "feasible": case["feasible"],
-        "fixed": bool(case["target"]["mechanisms"][0]["fixed"]), "kind": case["kind"],
-        "method": name, "ms": seconds * 1e3, "n": len(out.candidates),
+        "case": case["id"],
+        "type": case["type"],
+        "feasible": case["feasible"],
+        "fixed": bool(case["target"]["mechanisms"][0]["fixed"]),
+        "kind": case["kind"],
+        "method": name,
+        "ms": seconds * 1e3,
+        "n": len(out.candidates),
         "valid": sum(w <= TOL for w in worst),
-        "best": min(worst, default=None), "worst": max(worst, default=None),
+        "best": min(worst, default=None),
+        "worst": max(worst, default=None),
         "best_angle": max((a for a in good if a is not None), default=None),
         "errors": {k: [e[k] for e in errs] for k in ERRORS},
-        "how": list(out.how), "refusals": list(out.refusals),
-    }  # fmt: skip
+        "how": list(out.how),
+        "refusals": list(out.refusals),
+    }
 
 
 def interleaved(cases: list[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -33,8 +33,11 @@ def _quantile(xs: list[float], q: float) -> float | None:
 
 def _times(rs: list[dict[str, Any]], prefix: str) -> dict[str, Any]:
     ms = [r["ms"] for r in rs]
-    return {f"n_{prefix}": len(rs), f"ms_median_{prefix}": _quantile(ms, 0.5),
-            f"ms_p99_{prefix}": _quantile(ms, 0.99)}  # fmt: skip
+    return {
+        f"n_{prefix}": len(rs),
+        f"ms_median_{prefix}": _quantile(ms, 0.5),
+        f"ms_p99_{prefix}": _quantile(ms, 0.99),
+    }
 
 
 def summary(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -54,23 +57,28 @@ def summary(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
         worst = [r["worst"] for r in feas if r["worst"] is not None]
         every = [max(es) for r in feas for es in zip(*r["errors"].values(), strict=True)]
         row = {
-            "method": name, "type": mtype,
-            "feasible": len(feas), "success": sum(r["valid"] > 0 for r in feas) / len(feas),
+            "method": name,
+            "type": mtype,
+            "feasible": len(feas),
+            "success": sum(r["valid"] > 0 for r in feas) / len(feas),
             "infeasible": len(infeas),
             "refused": sum(r["valid"] == 0 for r in infeas) / len(infeas) if infeas else None,
-            "ms_median": _quantile(ms, 0.5), "ms_p90": _quantile(ms, 0.9),
+            "ms_median": _quantile(ms, 0.5),
+            "ms_p90": _quantile(ms, 0.9),
             "ms_p99": _quantile(ms, 0.99),
             **_times([r for r in feas if not r["fixed"]], "free"),
             **_times([r for r in feas if r["fixed"]], "fixed"),
             **_times(infeas, "infeasible"),
-            "candidates": len(every), "error_median": _quantile(every, 0.5),
+            "candidates": len(every),
+            "error_median": _quantile(every, 0.5),
             "error_max": max(every, default=None),
-            "worst_error_median": _quantile(worst, 0.5), "worst_error_p90": _quantile(worst, 0.9),
+            "worst_error_median": _quantile(worst, 0.5),
+            "worst_error_p90": _quantile(worst, 0.9),
             "component_max": {
                 k: max((e for r in feas for e in r["errors"][k]), default=None) for k in ERRORS
             },
             "how": dict(collections.Counter(h for r in rs for h in r["how"])),
-        }  # fmt: skip
+        }
         if "ipopt_calls" in rs[0]:
             row["ipopt_share"] = {
                 "feasible": sum(r["ipopt_calls"] > 0 for r in feas) / max(1, len(feas)),
@@ -96,17 +104,21 @@ def optimality(records: list[dict[str, Any]]) -> dict[str, Any]:
             continue
         gap = g - (o if o is not None else -math.inf)
         if gap > SAME_ANGLE * max(1.0, abs(g)):
-            violations.append({"case": c, "ours_deg": o, "generic_deg": g,
-                               "feasible": by[c, "ours"]["feasible"]})  # fmt: skip
+            violations.append(
+                {"case": c, "ours_deg": o, "generic_deg": g, "feasible": by[c, "ours"]["feasible"]}
+            )
         elif o - g > 1e-6:
             better.append({"case": c, "ours_deg": o, "generic_deg": g})
         else:
             equal += 1
     return {
-        "compared": len(cases), "violations": violations, "equal": equal,
-        "ours_better_by_1e-6_deg": better, "only_ours_solved": generic_none,
+        "compared": len(cases),
+        "violations": violations,
+        "equal": equal,
+        "ours_better_by_1e-6_deg": better,
+        "only_ours_solved": generic_none,
         "neither_solved": neither,
-    }  # fmt: skip
+    }
 
 
 def ratios(records: list[dict[str, Any]]) -> dict[str, Any]:
@@ -148,11 +160,18 @@ def goals(rows: list[dict[str, Any]], table: dict[str, Any], opt: dict | None) -
             ("solved", r["success"], r["success"] == 1.0),
             ("refused", r["refused"], r["refused"] == 1.0),
             ("error_max", r["error_max"], r["error_max"] <= GOALS["error_max"]),
-            ("fixed_median_ms", r["ms_median_fixed"],
-             r["ms_median_fixed"] is not None and r["ms_median_fixed"] <= GOALS["fixed_median_ms"]),
-            ("fixed_p99_ms", r["ms_p99_fixed"],
-             r["ms_p99_fixed"] is not None and r["ms_p99_fixed"] <= GOALS["fixed_p99_ms"]),
-        ]  # fmt: skip
+            (
+                "fixed_median_ms",
+                r["ms_median_fixed"],
+                r["ms_median_fixed"] is not None
+                and r["ms_median_fixed"] <= GOALS["fixed_median_ms"],
+            ),
+            (
+                "fixed_p99_ms",
+                r["ms_p99_fixed"],
+                r["ms_p99_fixed"] is not None and r["ms_p99_fixed"] <= GOALS["fixed_p99_ms"],
+            ),
+        ]
         for peer in ("scipy_slsqp", "scipy_de"):
             x = table.get(peer, {}).get(t, {}).get("feasible")
             if x is not None:

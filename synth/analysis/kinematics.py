@@ -81,8 +81,9 @@ def analyze(
     deg = _asked(mechanism, include, crank_angles_deg, samples, load is not None)
     m, p, variant, f, pv, found = prepared(mechanism, params)  # checked there
     crank_speed = loads.speed(m, load, crank_speed, crank_acceleration)
-    return _analysis(m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include,
-                     tolerance, load)  # fmt: skip
+    return _analysis(
+        m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include, tolerance, load
+    )
 
 
 def analyze_many(
@@ -113,8 +114,7 @@ def analyze_many(
         for (i, p), pv, found in zip(members, pvs, stationary_points_many(f, pvs), strict=True):
             try:
                 found = stationary_points(f, pv) if found is None else found
-                out[i] = _analysis(m, p, variant, f, pv, found, 1.0, 0.0, None, include,
-                                   tolerance)  # fmt: skip
+                out[i] = _analysis(m, p, variant, f, pv, found, 1.0, 0.0, None, include, tolerance)
             except SynthError as e:
                 out[i] = e
     return out

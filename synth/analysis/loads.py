@@ -145,8 +145,10 @@ class Pieces:
         ∫ T² dθ over every panel (shape (2, panels), the pieces' in turn): Gauss–Legendre, in
         one evaluation; once."""
         if self._integrals is None:
-            edges = [np.linspace(a, b, math.ceil((b - a) / PANEL) + 1)
-                     for a, b in zip(self.lo, self.hi, strict=True)]  # fmt: skip
+            edges = [
+                np.linspace(a, b, math.ceil((b - a) / PANEL) + 1)
+                for a, b in zip(self.lo, self.hi, strict=True)
+            ]
             owner = np.repeat(np.arange(len(edges)), [e.size - 1 for e in edges])
             lo = np.concatenate([e[:-1] for e in edges])
             hi = np.concatenate([e[1:] for e in edges])
@@ -168,14 +170,17 @@ def _extremes(sys: Forces, pieces: Pieces, fs: list[Quantity], k: int) -> list[F
     value from each side); in one evaluation, where ``sys``'s forces are bounded."""
     n = len(pieces.pieces)
     ends = np.concatenate([pieces.lo, pieces.hi]), np.tile(np.arange(n), 2)
-    found = [(np.concatenate([x, ends[0]]), np.concatenate([o, ends[1]]))
-             for x, o in pieces.roots(fs, 1, k)]  # fmt: skip
+    found = [
+        (np.concatenate([x, ends[0]]), np.concatenate([o, ends[1]]))
+        for x, o in pieces.roots(fs, 1, k)
+    ]
     x, owner = (np.concatenate(c) for c in zip(*found, strict=True))
     z = pieces(x, owner)
     sys.bounded(x, pieces.pv[owner], z[0])
     cut = np.cumsum([f[0].size for f in found])[:-1]
-    return [(xs, f(zs)[0]) for (xs, _), zs, f
-            in zip(found, np.split(z, cut, axis=1), fs, strict=True)]  # fmt: skip
+    return [
+        (xs, f(zs)[0]) for (xs, _), zs, f in zip(found, np.split(z, cut, axis=1), fs, strict=True)
+    ]
 
 
 def speed(
@@ -192,8 +197,10 @@ def speed(
         msg = "with a load the crank turns at constant speed: crank_acceleration must be 0"
         raise InvalidParameters(msg, ("crank_acceleration",))
     if crank_speed is not None and crank_speed != load.omega:
-        msg = (f"crank_speed {crank_speed:g} rad/s differs from the load's crank_rpm "
-               f"{load.crank_rpm:g} ({load.omega:.9g} rad/s): give one of them")  # fmt: skip
+        msg = (
+            f"crank_speed {crank_speed:g} rad/s differs from the load's crank_rpm "
+            f"{load.crank_rpm:g} ({load.omega:.9g} rad/s): give one of them"
+        )
         raise InvalidParameters(msg, ("crank_speed",))
     return load.omega
 
@@ -235,8 +242,8 @@ def loads(
     total, squares = pieces.integrals()[1].sum(axis=1)
     mean = float(total / TWO_PI)
     k_hi, k_lo = int(np.argmax(v)), int(np.argmin(v))
-    t = Torque(float(v[k_hi]), _deg(x[k_hi]), float(v[k_lo]), _deg(x[k_lo]), mean,
-               math.sqrt(squares / TWO_PI))  # fmt: skip
+    rms = math.sqrt(squares / TWO_PI)
+    t = Torque(float(v[k_hi]), _deg(x[k_hi]), float(v[k_lo]), _deg(x[k_lo]), mean, rms)
     energy = _energy(pieces, mean)
     om, rated = load.omega, mean * load.omega / load.efficiency  # ω, Cs, η > 0 (``Load``)
     power = Power(mean * om, t.max * om, rated, load.motor_torque(rated))
@@ -286,24 +293,11 @@ def _spans(f: Model, pv: np.ndarray, st: Strokes, load: Load, metres: float) -> 
     for (u0, f0), (u1, f1), lo, hi in zip(profile[:-1], profile[1:], at[:-1], at[1:], strict=True):
         slope = (f1 - f0) / ((u1 - u0) * travel)  # N per metre of s
         level = (st.s0 * metres) + u0 * travel  # s at the segment's start, m
-        w = numbers(load, metres, -sign * (f0 - slope * level), -sign * slope)
+        w = kinetics.numbers(load, metres, -sign * (f0 - slope * level), -sign * slope)
         out.append(_Span(float(lo), float(hi), np.concatenate([pv, w[:-1]]), (u0, f0, u1, f1)))
-    rest = np.concatenate([pv, numbers(load, metres)[:-1]])
+    rest = np.concatenate([pv, kinetics.numbers(load, metres)[:-1]])
     out.append(_Span(float(at[-1]), float(at[0]) + TWO_PI, rest, None))
     return out
-
-
-def numbers(
-    load: Load, metres: float, force: float = 0.0, slope: float = 0.0, friction: float = 0.0
-) -> np.ndarray:
-    """A load's numbers as a compiled model takes them after the type's parameters
-    (``kinetics.LOAD``): the lengths ``metres`` each, the force on the ram ``force`` +
-    ``slope`` × s, the guide's friction per unit of its force ``friction``."""
-    gx, gy = load.gravity
-    w = {"unit": metres, "omega": load.omega, "slider_mass": load.slider_mass,
-         "mass_per_length": load.link_mass_per_length, "force": force, "force_slope": slope,
-         "gx": gx, "gy": gy, "friction": friction}  # fmt: skip
-    return np.array([w[k] for k in kinetics.LOAD])
 
 
 def peak_terms(
@@ -352,8 +346,11 @@ def peak_terms(
     # d(T, N)/dp at fixed angles, the force's parameters moving too
     dz = sys.dp(x, pieces.pv[owner])[:, [0, guide]]  # (angle, T and N, pv)
     d_load = moving[[pieces.pieces[o].span for o in owner]]
-    both = (dz[..., :k] + dz[..., force_at, None] * d_load[:, None, 0]
-            + dz[..., force_at + 1, None] * d_load[:, None, 1])  # fmt: skip
+    both = (
+        dz[..., :k]
+        + dz[..., force_at, None] * d_load[:, None, 0]
+        + dz[..., force_at + 1, None] * d_load[:, None, 1]
+    )
     grad, d_guide = both[:, 0], both[:, 1]
     for j in range(found, x.size):
         end, span = x[j], spans[pieces.pieces[owner[j]].span]
@@ -407,8 +404,11 @@ def _pieces(sys: Forces | Torques, spans: list[_Span], st: Strokes, mu: float) -
     pushing = Pieces(sys, parts)
     ((changes, at),) = pushing.roots([_guide], 0)
     tiny = 1e-12 * pushing.largest(pushing.z[0])  # a guide force 0 to rounding
-    cut = [(j, c, d) for j, p in enumerate(parts)
-           for c, d in itertools.pairwise([p.lo, *np.sort(changes[at == j]), p.hi])]  # fmt: skip
+    cut = [
+        (j, c, d)
+        for j, p in enumerate(parts)
+        for c, d in itertools.pairwise([p.lo, *np.sort(changes[at == j]), p.hi])
+    ]
     mid = np.array([0.5 * (c + d) for _, c, d in cut])
     owner = np.array([j for j, _, _ in cut])
     pulled = _guide(pushing(mid, owner, 0))[0] < -tiny[owner]
@@ -439,8 +439,8 @@ def _energy(pieces: Pieces, mean: float) -> float:
     at_edges = np.concatenate([[0.0], np.cumsum(sums[0] - mean * widths)])
     first = np.cumsum([0] + [e.size - 1 for e in all_edges])  # each piece's first panel
     edges = np.concatenate([e[:-1] for e in all_edges])
-    k = np.array([first[o] + np.clip(np.searchsorted(all_edges[o], x) - 1, 0, all_edges[o].size - 2)
-                  for x, o in zip(crossings, owner, strict=True)], dtype=int)  # fmt: skip
+    at = [np.searchsorted(all_edges[o], x) - 1 for x, o in zip(crossings, owner, strict=True)]
+    k = first[owner] + np.clip(at, 0, first[owner + 1] - first[owner] - 1).astype(int)
     partial = pieces.gauss(edges[k], crossings, owner, 1)[0] - mean * (crossings - edges[k])
     values = np.concatenate([at_edges, at_edges[k] + partial])
     return float(values.max() - values.min())

@@ -68,8 +68,11 @@ def stationary_points_many(f: Model, pvs: np.ndarray) -> list[Points | None]:
     on the same numbers. None for a design that ``stationary_points`` refuses (it says why).
     At most ``BATCH`` designs go through one batched evaluation."""
     if len(pvs) > BATCH:
-        return [found for i in range(0, len(pvs), BATCH)
-                for found in stationary_points_many(f, pvs[i : i + BATCH])]  # fmt: skip
+        return [
+            found
+            for i in range(0, len(pvs), BATCH)
+            for found in stationary_points_many(f, pvs[i : i + BATCH])
+        ]
     k, n = len(pvs), GRID
     grid, widths = _grid(n)
     out = f.fn.each(np.tile(grid, k), np.repeat(pvs, n, axis=0))  # design by design
@@ -106,8 +109,10 @@ def stationary_points_many(f: Model, pvs: np.ndarray) -> list[Points | None]:
     values = f.fn.each(x, pvs[design])[rows % nr, np.arange(x.size)]
     order = np.argsort(design, kind="stable")  # each design's roots in the order it finds them
     cuts = np.searchsorted(design[order], np.arange(1, k))
-    return [None if bad[d] else (rows[o] % nr, x[o], values[o])
-            for d, o in enumerate(np.split(order, cuts))]  # fmt: skip
+    return [
+        None if bad[d] else (rows[o] % nr, x[o], values[o])
+        for d, o in enumerate(np.split(order, cuts))
+    ]
 
 
 def _brackets(grid: np.ndarray, widths: np.ndarray, g1: np.ndarray) -> Brackets:
@@ -159,8 +164,9 @@ def _polish(
     x, done = _compiled(polisher, rows, lo, hi, f_lo, f_hi, scale, pv)
     if not done.all():
         left = np.nonzero(~done)[0]
-        x[left] = rtsafe(lambda y: fd(y, left), lo[left], hi[left], f_lo[left], f_hi[left],
-                          scale[left])  # fmt: skip
+        x[left] = rtsafe(
+            lambda y: fd(y, left), lo[left], hi[left], f_lo[left], f_hi[left], scale[left]
+        )
     return x
 
 
@@ -260,9 +266,17 @@ def _dead_centres(
     scale = np.maximum(np.abs(h_lo), np.abs(h_hi))[ok]
     pv = pv[ok]
     x = x.copy()
-    x[on_s[ok]] = _polish(polisher, lambda y, i: dead.each(y, pv[i]),
-                          np.zeros(pv.shape[0], dtype=int), lo[ok], hi[ok], h_lo[ok], h_hi[ok],
-                          scale, pv)  # fmt: skip
+    x[on_s[ok]] = _polish(
+        polisher,
+        lambda y, i: dead.each(y, pv[i]),
+        np.zeros(pv.shape[0], dtype=int),
+        lo[ok],
+        hi[ok],
+        h_lo[ok],
+        h_hi[ok],
+        scale,
+        pv,
+    )
     return x
 
 

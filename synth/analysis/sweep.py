@@ -35,9 +35,15 @@ CHUNK = 256  # points analysed between two looks at the clock (~25 ms of a four-
 
 
 def check(
-    mechanism: str, params: Mapping[str, float], vary: str, start: float, stop: float,
-    points: int = 101, time_budget_ms: float | None = None, **_: Any,
-) -> None:  # fmt: skip
+    mechanism: str,
+    params: Mapping[str, float],
+    vary: str,
+    start: float,
+    stop: float,
+    points: int = 101,
+    time_budget_ms: float | None = None,
+    **_: Any,
+) -> None:
     """What ``sweep`` checks before it sweeps (its arguments' meaning)."""
     m = get(mechanism)
     for k in params:
@@ -154,8 +160,11 @@ def _tr_range(
             a = at(edge)
             if a is not None:
                 found.append((a.time_ratio, edge))
-        inside = [(a.time_ratio, float(v)) for v, a in zip(values, runs, strict=True)
-                  if a is not None and lo <= v <= hi]  # fmt: skip
+        inside = [
+            (a.time_ratio, float(v))
+            for v, a in zip(values, runs, strict=True)
+            if a is not None and lo <= v <= hi
+        ]
         step = float(values[1] - values[0]) if len(values) > 1 else 0.0
         for sign in (1, -1) if inside else ():
 

@@ -45,8 +45,15 @@ POOLS = 4  # local pools a run may start (one more each time a worker dies)
 
 def point(mtype: str, time_ratio: float) -> Point:
     """The frontier at one time ratio: a synthesis, verified."""
-    r = synthesize(time_ratio, 1.0, 0.0, [{"type": mtype}], objective=MAX_TRANSMISSION,
-                   max_candidates=1, time_budget_ms=BUDGET_MS)  # fmt: skip
+    r = synthesize(
+        time_ratio,
+        1.0,
+        0.0,
+        [{"type": mtype}],
+        objective=MAX_TRANSMISSION,
+        max_candidates=1,
+        time_budget_ms=BUDGET_MS,
+    )
     if not r.candidates:
         why = r.infeasible[0]
         return Point(mtype, time_ratio, None, "refused", reason=f"{why.code}: {why.reason}")
@@ -144,8 +151,10 @@ def _dask(
     from dask.distributed import Client, as_completed
 
     with Client(scheduler) as client:
-        futures = {client.submit(run_chunk, tasks[k], key=f"atlas-{inputs.key()}-{k}",
-                                 pure=False): k for k in todo}  # fmt: skip
+        futures = {
+            client.submit(run_chunk, tasks[k], key=f"atlas-{inputs.key()}-{k}", pure=False): k
+            for k in todo
+        }
         for f in as_completed(futures):
             yield futures[f], f.result()
 

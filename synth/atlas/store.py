@@ -24,8 +24,10 @@ def folder(out: str | Path | None, inputs: Inputs) -> Path | None:
     if manifest.exists():
         theirs = json.loads(manifest.read_text())
         if theirs.get("key") != mine["key"]:
-            raise ValueError(f"{folder} holds an atlas of other inputs ({theirs.get('inputs')}); "
-                             "choose another folder")  # fmt: skip
+            raise ValueError(
+                f"{folder} holds an atlas of other inputs ({theirs.get('inputs')}); "
+                "choose another folder"
+            )
     else:
         _atomic(manifest, json.dumps(mine, indent=1))
     return folder
@@ -53,10 +55,12 @@ def tables(a: Atlas, folder: Path) -> None:
     it in atlas.json (what the service serves at GET /v1/atlas)."""
     summary = {
         "inputs": asdict(a.inputs),
-        "frontier": {t: [[p.time_ratio, p.best_angle_deg, p.status] for p in a.frontier
-                         if p.type == t] for t in a.inputs.types},
+        "frontier": {
+            t: [[p.time_ratio, p.best_angle_deg, p.status] for p in a.frontier if p.type == t]
+            for t in a.inputs.types
+        },
         "ranges": a.ranges,
-    }  # fmt: skip
+    }
     _atomic(folder / "atlas.json", json.dumps(summary, indent=1))
 
     def text(x: object) -> str:  # every digit kept; empty for none
@@ -67,8 +71,16 @@ def tables(a: Atlas, folder: Path) -> None:
         w.writerow(["type", "time_ratio", "best_angle_deg", "status", "design", "reason"])
         for p in a.frontier:
             design = json.dumps(p.design) if p.design else ""
-            w.writerow([p.type, text(p.time_ratio), text(p.best_angle_deg), p.status, design,
-                        p.reason or ""])  # fmt: skip
+            w.writerow(
+                [
+                    p.type,
+                    text(p.time_ratio),
+                    text(p.best_angle_deg),
+                    p.status,
+                    design,
+                    p.reason or "",
+                ]
+            )
     with open(folder / "ranges.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["type", "bound_deg", "min_time_ratio", "max_time_ratio"])

@@ -59,5 +59,10 @@ class Atlas:
 
     def meets(self, time_ratio: float, bound_deg: float) -> list[str]:
         """The types whose grid point at exactly this time ratio meets the bound."""
-        return [p.type for p in self.frontier if p.time_ratio == time_ratio
-                and p.best_angle_deg is not None and p.best_angle_deg >= bound_deg]  # fmt: skip
+        return [
+            p.type
+            for p in self.frontier
+            if p.time_ratio == time_ratio
+            and p.best_angle_deg is not None
+            and p.best_angle_deg >= bound_deg
+        ]

@@ -71,8 +71,9 @@ def parse_load(text: str | None) -> Load | None:
     except json.JSONDecodeError as e:
         raise click.BadParameter(f"not JSON: {e.msg}", param_hint="--load") from None
     if not isinstance(fields, dict):
-        raise click.BadParameter("a JSON object, e.g. '{\"length_unit\": \"mm\", ...}'",
-                                 param_hint="--load")  # fmt: skip
+        raise click.BadParameter(
+            'a JSON object, e.g. \'{"length_unit": "mm", ...}\'', param_hint="--load"
+        )
     try:
         return Load.of(fields)
     except InvalidParameters as e:
@@ -129,8 +130,14 @@ def formats(f: Callable[..., Any]) -> Callable[..., Any]:
 
 def design_args(f: Callable[..., Any]) -> Callable[..., Any]:
     f = click.argument("mechanism", type=click.Choice(all_types()))(f)
-    return click.option("-p", "--param", "params", multiple=True, metavar="NAME=LENGTH",
-                        help="a parameter of the design (repeat for each)")(f)  # fmt: skip
+    return click.option(
+        "-p",
+        "--param",
+        "params",
+        multiple=True,
+        metavar="NAME=LENGTH",
+        help="a parameter of the design (repeat for each)",
+    )(f)
 
 
 @click.group(

@@ -63,11 +63,21 @@ from .base import (
     metavar="NAME=LOW:HIGH",
     help="a free part's range, in each type given",
 )
-@click.option("--objective", type=click.Choice([o.name for o in all_objectives()]), default=PARETO,
-              show_default=True, help="what the candidates are best at")  # fmt: skip
+@click.option(
+    "--objective",
+    type=click.Choice([o.name for o in all_objectives()]),
+    default=PARETO,
+    show_default=True,
+    help="what the candidates are best at",
+)
 @click.option("--max-candidates", type=int, help="at most this many in all")
-@click.option("--time-budget-ms", type=float, default=2000.0, show_default=True,
-              help="the search's time; past it, what was done (reported incomplete)")  # fmt: skip
+@click.option(
+    "--time-budget-ms",
+    type=float,
+    default=2000.0,
+    show_default=True,
+    help="the search's time; past it, what was done (reported incomplete)",
+)
 @click.option(
     "--include",
     multiple=True,
@@ -78,21 +88,41 @@ from .base import (
 @click.option("--max-peak-torque", type=float, help="N·m, with min_peak_torque")
 @click.option("--max-working-speed-fluctuation", type=float, help="with the motion objectives")
 @formats
-def synthesize(time_ratio: float, stroke: float, bound: float, types: tuple[str, ...],
-               fix: tuple[str, ...], bounds: tuple[str, ...], objective: str,
-               max_candidates: int | None, time_budget_ms: float, include: tuple[str, ...],
-               load_json: str | None, max_peak_torque: float | None,
-               max_working_speed_fluctuation: float | None, fmt: str) -> None:  # fmt: skip
+def synthesize(
+    time_ratio: float,
+    stroke: float,
+    bound: float,
+    types: tuple[str, ...],
+    fix: tuple[str, ...],
+    bounds: tuple[str, ...],
+    objective: str,
+    max_candidates: int | None,
+    time_budget_ms: float,
+    include: tuple[str, ...],
+    load_json: str | None,
+    max_peak_torque: float | None,
+    max_working_speed_fluctuation: float | None,
+    fmt: str,
+) -> None:
     fixed, boxes = numbers(fix, "--fix"), ranges(bounds)
     names = types or [t for t in all_types() if get(t).quick_return]
     specs = [{"type": t, "fixed": fixed, "bounds": boxes} for t in names]
     try:
         from ..synthesis import synthesize as _synthesize  # on use: --help stays quick
 
-        r = _synthesize(time_ratio, stroke, bound, specs, objective, max_candidates,
-                        time_budget_ms, include=include, load=parse_load(load_json),
-                        max_peak_torque=max_peak_torque,
-                        max_working_speed_fluctuation=max_working_speed_fluctuation)  # fmt: skip
+        r = _synthesize(
+            time_ratio,
+            stroke,
+            bound,
+            specs,
+            objective,
+            max_candidates,
+            time_budget_ms,
+            include=include,
+            load=parse_load(load_json),
+            max_peak_torque=max_peak_torque,
+            max_working_speed_fluctuation=max_working_speed_fluctuation,
+        )
     except SynthError as e:
         fail(e)
     emit(fmt, r.to_dict(), _candidate_rows(r), _candidate_text(r, objective))
@@ -102,12 +132,23 @@ def synthesize(time_ratio: float, stroke: float, bound: float, types: tuple[str,
 
 def _candidate_rows(r: SynthesisResult) -> list[dict[str, Any]]:
     names = list(dict.fromkeys(k for c in r.candidates for k in c.params))
-    return [{"rank": i + 1, "type": c.type, **{k: c.params.get(k) for k in names},
-             "min_transmission_angle_deg": c.min_transmission_angle_deg,
-             "objective_value": c.objective_value, "size": c.size, "method": c.method,
-             "active": " ".join(c.active), "ranked_by": c.ranked_by, "certified": c.certified,
-             "gap": c.gap, **_drive(c.loads)}
-            for i, c in enumerate(r.candidates)]  # fmt: skip
+    return [
+        {
+            "rank": i + 1,
+            "type": c.type,
+            **{k: c.params.get(k) for k in names},
+            "min_transmission_angle_deg": c.min_transmission_angle_deg,
+            "objective_value": c.objective_value,
+            "size": c.size,
+            "method": c.method,
+            "active": " ".join(c.active),
+            "ranked_by": c.ranked_by,
+            "certified": c.certified,
+            "gap": c.gap,
+            **_drive(c.loads),
+        }
+        for i, c in enumerate(r.candidates)
+    ]
 
 
 def _drive(q: Loads | None) -> dict[str, float]:
@@ -124,16 +165,23 @@ def _drive(q: Loads | None) -> dict[str, float]:
 def _candidate_text(r: SynthesisResult, objective: str) -> str:
     out = []
     if r.candidates:
-        rows = [(i + 1, c.type, ", ".join(f"{k} {v:.6g}" for k, v in c.params.items()),
-                 c.min_transmission_angle_deg, c.objective_value, " ".join(c.active) or "-",
-                 *_drive(c.loads).values())
-                for i, c in enumerate(r.candidates)]  # fmt: skip
+        rows = [
+            (
+                i + 1,
+                c.type,
+                ", ".join(f"{k} {v:.6g}" for k, v in c.params.items()),
+                c.min_transmission_angle_deg,
+                c.objective_value,
+                " ".join(c.active) or "-",
+                *_drive(c.loads).values(),
+            )
+            for i, c in enumerate(r.candidates)
+        ]
         # a front's candidates: their size
         measure = "size" if objective_of(objective).found == "front" else objective
         loaded = ("peak torque N·m", "motor W", "flywheel kg·m²") if r.candidates[0].loads else ()
         out.append(table(("#", "type", "lengths", "μ min °", measure, "at limit", *loaded), rows))
-        out += dict.fromkeys(f"{c.type}: {c.family.relation}"
-                             for c in r.candidates if c.family)  # fmt: skip
+        out += dict.fromkeys(f"{c.type}: {c.family.relation}" for c in r.candidates if c.family)
         for i, c in enumerate(r.candidates):
             if c.certified and c.gap is not None:
                 out.append(f"#{i + 1} is certified the best {c.type} (gap {c.gap:.1e})")
@@ -158,16 +206,29 @@ def _candidate_text(r: SynthesisResult, objective: str) -> str:
 @click.option("--crank-speed", type=float, help="rad/s for the curves (default 1)")
 @click.option("--load", "load_json", metavar="JSON", help="the API's load object")
 @formats
-def analyze(mechanism: str, params: tuple[str, ...], samples: int | None,
-            angles: tuple[float, ...], include: tuple[str, ...], crank_speed: float | None,
-            load_json: str | None, fmt: str) -> None:  # fmt: skip
+def analyze(
+    mechanism: str,
+    params: tuple[str, ...],
+    samples: int | None,
+    angles: tuple[float, ...],
+    include: tuple[str, ...],
+    crank_speed: float | None,
+    load_json: str | None,
+    fmt: str,
+) -> None:
     try:
         load = parse_load(load_json)
         from ..analysis.kinematics import analyze as _analyze
 
-        a = _analyze(mechanism, numbers(params, "--param"), crank_speed=crank_speed,
-                     crank_angles_deg=list(angles) or None, samples=samples, include=include,
-                     load=load)  # fmt: skip
+        a = _analyze(
+            mechanism,
+            numbers(params, "--param"),
+            crank_speed=crank_speed,
+            crank_angles_deg=list(angles) or None,
+            samples=samples,
+            include=include,
+            load=load,
+        )
     except SynthError as e:
         fail(e)
     emit(fmt, a.to_dict(), _analysis_rows(a), _analysis_text(a, load))
@@ -176,8 +237,15 @@ def analyze(mechanism: str, params: tuple[str, ...], samples: int | None,
 def _analysis_rows(a: Analysis) -> list[dict[str, Any]]:
     """The curves, a row per angle; without curves, the summary in one row."""
     if a.curves is None:
-        return [{"type": a.type, **a.params, "time_ratio": a.time_ratio, "stroke": a.stroke,
-                 "min_transmission_angle_deg": a.transmission.min_deg}]  # fmt: skip
+        return [
+            {
+                "type": a.type,
+                **a.params,
+                "time_ratio": a.time_ratio,
+                "stroke": a.stroke,
+                "min_transmission_angle_deg": a.transmission.min_deg,
+            }
+        ]
     c = a.curves
     cols = {k: getattr(c, k) for k in CURVES if getattr(c, k) is not None}
     for name, pin in (c.pins or {}).items():
@@ -201,9 +269,11 @@ def _analysis_text(a: Analysis, load: Load | None) -> str:
     ]
     if a.motion is not None:
         m = a.motion
-        lines.append(f"cutting-speed fluctuation {m.working_speed_fluctuation.middle:.6g}, "
-                     f"peak acceleration {m.peak_acceleration.working_stroke:.6g} (working) "
-                     f"{m.peak_acceleration.return_stroke:.6g} (return), in ω²·stroke")  # fmt: skip
+        lines.append(
+            f"cutting-speed fluctuation {m.working_speed_fluctuation.middle:.6g}, "
+            f"peak acceleration {m.peak_acceleration.working_stroke:.6g} (working) "
+            f"{m.peak_acceleration.return_stroke:.6g} (return), in ω²·stroke"
+        )
     if a.envelope is not None:
         e = a.envelope
         box = f"x {e.x[0]:.6g} to {e.x[1]:.6g}, y {e.y[0]:.6g} to {e.y[1]:.6g}"
@@ -248,11 +318,23 @@ def _sensitivities(s: Sensitivities) -> list[str]:
 @click.option("--vary", required=True, help="the parameter to vary")
 @click.option("--start", type=float, required=True, help="its first value")
 @click.option("--stop", type=float, required=True, help="its last value")
-@click.option("--points", type=int, default=101, show_default=True,
-              help="values from start to stop, evenly spaced")  # fmt: skip
+@click.option(
+    "--points",
+    type=int,
+    default=101,
+    show_default=True,
+    help="values from start to stop, evenly spaced",
+)
 @formats
-def sweep(mechanism: str, params: tuple[str, ...], vary: str, start: float, stop: float,
-          points: int, fmt: str) -> None:  # fmt: skip
+def sweep(
+    mechanism: str,
+    params: tuple[str, ...],
+    vary: str,
+    start: float,
+    stop: float,
+    points: int,
+    fmt: str,
+) -> None:
     try:
         from ..analysis.sweep import sweep as _sweep
 
@@ -260,8 +342,10 @@ def sweep(mechanism: str, params: tuple[str, ...], vary: str, start: float, stop
     except SynthError as e:
         fail(e)
     cols = ("values", "time_ratio", "stroke", "min_transmission_angle_deg", "valid")
-    rows = [dict(zip((vary, *cols[1:]), r, strict=True))
-            for r in zip(*(getattr(s, k) for k in cols), strict=True)]  # fmt: skip
+    rows = [
+        dict(zip((vary, *cols[1:]), r, strict=True))
+        for r in zip(*(getattr(s, k) for k in cols), strict=True)
+    ]
     emit(fmt, s.to_dict(), rows, _sweep_text(s, rows))
 
 

@@ -60,8 +60,13 @@ def dxf(d: Drawing, length_unit: str = "mm") -> bytes:
         "dimdec": 6,
         "dimzin": 8,
     }
-    dim = msp.add_aligned_dim(p1=d.stroke[0], p2=d.stroke[1], distance=offset,
-                              dxfattribs={"layer": "STROKE"}, override=size)  # fmt: skip
+    dim = msp.add_aligned_dim(
+        p1=d.stroke[0],
+        p2=d.stroke[1],
+        distance=offset,
+        dxfattribs={"layer": "STROKE"},
+        override=size,
+    )
     dim.render()
     on = {"layer": "DIMENSIONS"}
     for link in d.links:  # beside each link, its length

@@ -51,8 +51,15 @@ def _render(d: Drawing, ax: Any) -> None:
     for i, link in enumerate(d.links):
         (ax_, ay), (bx, by) = d.pins[link.a], d.pins[link.b]
         label = f"{link.name} {link.length:.6g}"
-        ax.plot([ax_, bx], [ay, by], color=COLOURS[i % len(COLOURS)], lw=3 * lw,
-                solid_capstyle="round", zorder=4, label=label)  # fmt: skip
+        ax.plot(
+            [ax_, bx],
+            [ay, by],
+            color=COLOURS[i % len(COLOURS)],
+            lw=3 * lw,
+            solid_capstyle="round",
+            zorder=4,
+            label=label,
+        )
     for name, (x, y) in d.pins.items():
         ax.add_patch(Circle((x, y), sk.pin_radius, fc="white", ec="#222", lw=lw, zorder=5))
         ax.annotate(name, (x, y), xytext=(5, 5), textcoords="offset points", fontsize=8)

@@ -112,15 +112,22 @@ def drawing(
     at = joints(mechanism, a.params, angles)
     pins = {k: (float(v[0, 0]), float(v[0, 1])) for k, v in at.items()}
     ram = list(at)[-1]  # each type names its ram's pin last
-    (x0, y0), (x1, y1) = ends = ((float(at[ram][1, 0]), float(at[ram][1, 1])),
-                                 (float(at[ram][2, 0]), float(at[ram][2, 1])))  # fmt: skip
+    (x0, y0), (x1, y1) = ends = (
+        (float(at[ram][1, 0]), float(at[ram][1, 1])),
+        (float(at[ram][2, 0]), float(at[ram][2, 1])),
+    )
     tx, ty = (float(c) for c in frame.path(p))
     run = np.hypot(x1 - x0, y1 - y0) * GUIDE_OVERRUN
     sign = 1.0 if (x1 - x0) * tx + (y1 - y0) * ty > 0 else -1.0
-    guide = ((x0 - sign * run * tx, y0 - sign * run * ty),
-             (x1 + sign * run * tx, y1 + sign * run * ty))  # fmt: skip
-    links = tuple(Link(name, u, v, float(a.params[name])) for name, u, v in m.drawing
-                  if a.params.get(name, 0.0) > 0)  # fmt: skip
+    guide = (
+        (x0 - sign * run * tx, y0 - sign * run * ty),
+        (x1 + sign * run * tx, y1 + sign * run * ty),
+    )
+    links = tuple(
+        Link(name, u, v, float(a.params[name]))
+        for name, u, v in m.drawing
+        if a.params.get(name, 0.0) > 0
+    )
     ground = tuple(pin for pin, b1, b2 in frame.pins if GROUND in (b1, b2))
     slots = tuple((line[0], block, line[1]) for block, _, _, line in frame.slots if line)
     across = [block for block, _, slotted, line in frame.slots if slotted == RAM and line is None]
@@ -136,8 +143,22 @@ def drawing(
         yokes.append(((rx - lo * ty, ry + lo * tx), (rx - hi * ty, ry + hi * tx)))
     traced = {k: v for k, v in turn.items() if np.ptp(v, axis=0).max() > 0} if paths else None
     facts = (a.time_ratio, a.stroke, a.transmission.min_deg)
-    return Drawing(mechanism, dict(a.params), float(crank_angle_deg), pins, links, ground, slots,
-                   ram, (tx, ty), ends, guide, facts, tuple(yokes), traced)  # fmt: skip
+    return Drawing(
+        mechanism,
+        dict(a.params),
+        float(crank_angle_deg),
+        pins,
+        links,
+        ground,
+        slots,
+        ram,
+        (tx, ty),
+        ends,
+        guide,
+        facts,
+        tuple(yokes),
+        traced,
+    )
 
 
 @dataclass(frozen=True)
@@ -191,8 +212,10 @@ def sketch(d: Drawing) -> Sketch:
     tx, ty = d.path
     nx, ny = -ty, tx  # the path's normal
     (ax, ay), (bx, by) = d.guide
-    rails = tuple(((ax + k * h * nx, ay + k * h * ny), (bx + k * h * nx, by + k * h * ny))
-                  for k in (-1.0, 1.0))  # fmt: skip
+    rails = tuple(
+        ((ax + k * h * nx, ay + k * h * ny), (bx + k * h * nx, by + k * h * ny))
+        for k in (-1.0, 1.0)
+    )
     rx, ry = d.pins[d.ram]
     corners = ((-1.6, -0.8), (1.6, -0.8), (1.6, 0.8), (-1.6, 0.8))  # along, across, × h
     block = tuple((rx + h * (u * tx + v * nx), ry + h * (u * ty + v * ny)) for u, v in corners)
@@ -204,8 +227,10 @@ def sketch(d: Drawing) -> Sketch:
         tri.append(((px, py), (px - w, base), (px + w, base)))
         symbols.append((px - 1.6 * w, base - 0.6 * w, px + 1.4 * w, py))  # with its hatch
         hatch.append(((px - 1.4 * w, base), (px + 1.4 * w, base)))
-        hatch += [((px + k * w * 0.7, base), (px + k * w * 0.7 - 0.5 * w, base - 0.6 * w))
-                  for k in (-1.5, -0.5, 0.5, 1.5)]  # fmt: skip
+        hatch += [
+            ((px + k * w * 0.7, base), (px + k * w * 0.7 - 0.5 * w, base - 0.6 * w))
+            for k in (-1.5, -0.5, 0.5, 1.5)
+        ]
     (sx, sy), (ex, ey) = d.stroke
     off = 3.0 * h
     dim = ((sx - off * nx, sy - off * ny), (ex - off * nx, ey - off * ny))

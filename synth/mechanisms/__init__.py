@@ -20,8 +20,14 @@ from .registry import Condition, Mechanism, Parameter, Scale, all_types, get, re
 
 # the listing's order (and a default request's): these as the contract has them, then any
 # other type by its module's name
-FIRST = ("scotch_yoke", "offset_slider_crank", "crank_shaper", "whitworth",
-         "crank_rocker_slider", "drag_link_slider")  # fmt: skip
+FIRST = (
+    "scotch_yoke",
+    "offset_slider_crank",
+    "crank_shaper",
+    "whitworth",
+    "crank_rocker_slider",
+    "drag_link_slider",
+)
 _modules = [m.name for m in pkgutil.iter_modules(types.__path__) if not m.name.startswith("_")]
 for _name in sorted(_modules, key=lambda n: (FIRST.index(n) if n in FIRST else len(FIRST), n)):
     importlib.import_module(f"{types.__name__}.{_name}")

@@ -28,15 +28,26 @@ from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
+import numpy as np
 
+from ..load import Load
 from .registry import GROUND, RAM, Mechanism, Params
 
 # the load's numbers a compiled model takes after the type's parameters: metres per length
 # unit, crank speed (rad/s), ram mass (kg), link mass per metre (kg/m), the force on the ram
 # (N) at s = 0 and its change per metre of s (N/m), gravity's x and y in the drawing's frame
 # (m/s²), the guide's friction per unit of N
-LOAD = ("unit", "omega", "slider_mass", "mass_per_length", "force", "force_slope", "gx", "gy",
-        "friction")  # fmt: skip
+LOAD = (
+    "unit",
+    "omega",
+    "slider_mass",
+    "mass_per_length",
+    "force",
+    "force_slope",
+    "gx",
+    "gy",
+    "friction",
+)
 
 
 def system(
@@ -185,3 +196,24 @@ class Layout:
 
     def slot(self, j: int) -> int:
         return 1 + 2 * len(self.pins) + j
+
+
+def numbers(
+    load: Load, metres: float, force: float = 0.0, slope: float = 0.0, friction: float = 0.0
+) -> np.ndarray:
+    """A load's numbers as a compiled model takes them after the type's parameters
+    (``LOAD``): the lengths ``metres`` each, the force on the ram ``force`` +
+    ``slope`` × s, the guide's friction per unit of its force ``friction``."""
+    gx, gy = load.gravity
+    w = {
+        "unit": metres,
+        "omega": load.omega,
+        "slider_mass": load.slider_mass,
+        "mass_per_length": load.link_mass_per_length,
+        "force": force,
+        "force_slope": slope,
+        "gx": gx,
+        "gy": gy,
+        "friction": friction,
+    }
+    return np.array([w[k] for k in LOAD])

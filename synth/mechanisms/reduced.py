@@ -128,8 +128,10 @@ def judge(
     free) miss the targets: by the type's closed forms, to the verification's tolerance."""
     f = facts(design)
     beta = abs(float(f["beta"]))
-    got = {"time ratio": (time_ratio(beta), p.ratio),
-           "stroke": (float(f["stroke"]) * p.stroke, p.stroke)}  # fmt: skip
+    got = {
+        "time ratio": (time_ratio(beta), p.ratio),
+        "stroke": (float(f["stroke"]) * p.stroke, p.stroke),
+    }
     missed = [
         "{} {}, not {}".format(what, *differ(value, want))
         for what, (value, want) in got.items()

@@ -21,8 +21,17 @@ from .reduced import ONE_WAY, STRICT, Problem
 _local = threading.local()
 
 # the rule's parameters: the objective, the rod's box and its path's placement
-PARAMS = ("min_size", "cos_bound", "rod_lo", "rod_hi", "on_line", "height_fixed", "height",
-          "height_lo", "height_hi")  # fmt: skip
+PARAMS = (
+    "min_size",
+    "cos_bound",
+    "rod_lo",
+    "rod_hi",
+    "on_line",
+    "height_fixed",
+    "height",
+    "height_lo",
+    "height_hi",
+)
 
 
 def rule(
@@ -88,8 +97,12 @@ def rule(
             limited_ok = ops.fabs(mid - arm * xc) <= lean * (1 + ROUNDING)
             use_short = ops.logic_and(ops.logic_not(short_nan), short <= rhi)
             neither = ops.logic_and(ops.logic_not(use_short), ops.logic_not(limited_ok))
-            return (ops.if_else(use_short, short, rhi), neither, ops.if_else(use_short, h, mid),
-                    ops.logic_and(h_nan, use_short))  # fmt: skip
+            return (
+                ops.if_else(use_short, short, rhi),
+                neither,
+                ops.if_else(use_short, h, mid),
+                ops.logic_and(h_nan, use_short),
+            )
 
         length, no_length, h, no_h = ops.choose(q["min_size"], shortest, limited)
         w = ops.fmax(ops.fabs(h - arm), ops.fabs(h - arm * xc))
@@ -116,8 +129,11 @@ def switches(arm: np.ndarray, half: np.ndarray, q: Mapping[str, float]) -> list[
     if not q["min_size"]:
         lean = (xc - ONE_WAY) * q["rod_hi"]
         mid = np.clip(arm * (1 + xc) / 2, arm * xc - lean, arm * xc + lean)
-        mid = np.full_like(arm, q["height"]) if q["height_fixed"] else np.clip(
-            mid, q["height_lo"], q["height_hi"])  # fmt: skip
+        mid = (
+            np.full_like(arm, q["height"])
+            if q["height_fixed"]
+            else np.clip(mid, q["height_lo"], q["height_hi"])
+        )
         return [lean * (1 + ROUNDING) - np.abs(mid - arm * xc)]
     c = q["cos_bound"]
     m = np.minimum(c, xc - ONE_WAY)
@@ -142,9 +158,16 @@ def params(p: Problem, name: str, height: str | None) -> list[float]:
     lo, hi = p.box(name)
     fixed = height is not None and height in p.fixed
     h_box = p.bounds.get(height, (0.0, 0.0)) if height is not None else (0.0, 0.0)
-    return [float(p.objective == MIN_SIZE), p.cos_bound, lo, hi, float(height is None),
-            float(fixed), p.fixed[height] if height is not None and fixed else 0.0,
-            *h_box]  # fmt: skip
+    return [
+        float(p.objective == MIN_SIZE),
+        p.cos_bound,
+        lo,
+        hi,
+        float(height is None),
+        float(fixed),
+        p.fixed[height] if height is not None and fixed else 0.0,
+        *h_box,
+    ]
 
 
 def rod(

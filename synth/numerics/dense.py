@@ -275,8 +275,10 @@ def _step_2_1(
     n = nu[0]
     (s00, s01), (_, s11) = hess[0]
     (r00, r01), (_, r11) = hess[1]
-    sol = __solve3([[s00 + n * r00, s01 + n * r01, a0], [s01 + n * r01, s11 + n * r11, a1],
-                   [a0, a1, 0.0]], [-g0 - a0 * n, -g1 - a1 * n, -vals[1]])  # fmt: skip
+    sol = __solve3(
+        [[s00 + n * r00, s01 + n * r01, a0], [s01 + n * r01, s11 + n * r11, a1], [a0, a1, 0.0]],
+        [-g0 - a0 * n, -g1 - a1 * n, -vals[1]],
+    )
     if sol is None:
         return None, None
     return sol[:2], [n + sol[2]]

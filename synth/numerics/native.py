@@ -81,8 +81,9 @@ class Slot:
     def __init__(self, mapped: ca.Function, fn: ca.Function, width: int, shared: Sequence[bool]):
         self.fn = mapped
         # a shared argument (n,), another (points, n)
-        self.args = [np.zeros(fn.nnz_in(i) if one else (width, fn.nnz_in(i)))
-                     for i, one in enumerate(shared)]  # fmt: skip
+        self.args = [
+            np.zeros(fn.nnz_in(i) if one else (width, fn.nnz_in(i))) for i, one in enumerate(shared)
+        ]
         self.out = np.zeros((width, fn.nnz_out(0)))
         self.run, self._bindings = bind(mapped, self.args, self.out)
         self.last: Any = None
@@ -215,8 +216,12 @@ def build_library(source: str, path: Path) -> bool:
             with tempfile.TemporaryDirectory(dir=path.parent) as tmp:
                 c, so = Path(tmp) / "f.c", Path(tmp) / "f.so"
                 c.write_text(source)
-                subprocess.run([cast(str, _compiler()), *FLAGS, "-o", str(so), str(c)], check=True,
-                               capture_output=True, timeout=BUILD_SECONDS)  # fmt: skip
+                subprocess.run(
+                    [cast(str, _compiler()), *FLAGS, "-o", str(so), str(c)],
+                    check=True,
+                    capture_output=True,
+                    timeout=BUILD_SECONDS,
+                )
                 os.replace(so, path)  # whole or not at all, for other processes too
             return True
         except (OSError, subprocess.SubprocessError):

@@ -39,8 +39,20 @@ def _casadi_choose(condition: Any, then: Callable[[], Any], otherwise: Callable[
     return ca.if_else(condition, a, b)
 
 
-CASADI = Ops(ca.cos, ca.sin, ca.sqrt, ca.log, ca.fabs, ca.fmin, ca.fmax, ca.if_else,
-             ca.logic_and, ca.logic_or, ca.logic_not, _casadi_choose)  # fmt: skip
+CASADI = Ops(
+    ca.cos,
+    ca.sin,
+    ca.sqrt,
+    ca.log,
+    ca.fabs,
+    ca.fmin,
+    ca.fmax,
+    ca.if_else,
+    ca.logic_and,
+    ca.logic_or,
+    ca.logic_not,
+    _casadi_choose,
+)
 
 
 def _where(condition: Any, a: Any, b: Any) -> Any:
@@ -59,5 +71,17 @@ def _numpy_choose(condition: Any, then: Callable[[], Any], otherwise: Callable[[
     return np.where(condition, a, b)
 
 
-NUMPY = Ops(np.cos, np.sin, np.sqrt, np.log, np.abs, np.fmin, np.fmax, _where,
-            np.logical_and, np.logical_or, np.logical_not, _numpy_choose)  # fmt: skip
+NUMPY = Ops(
+    np.cos,
+    np.sin,
+    np.sqrt,
+    np.log,
+    np.abs,
+    np.fmin,
+    np.fmax,
+    _where,
+    np.logical_and,
+    np.logical_or,
+    np.logical_not,
+    _numpy_choose,
+)

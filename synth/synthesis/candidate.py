@@ -16,6 +16,7 @@ from ..results import Analysis, Candidate, Family
 from .search import Proposal, Searched, Targets, Variant, same
 
 ONE = 1e-12  # two designs this close (stroke units, each parameter) are one
+ONE_OPTIMUM = 1e-3  # two runs' ends this close (stroke units), their values tied: one optimum
 
 
 def candidate(
@@ -136,8 +137,9 @@ def firsts(
     are verified one by one."""
     ranked = [sorted(s.proposals, key=predicted_rank(t.objective)) for s, t in found]
     heads = [r[0].params for r in ranked if r]
-    checked = iter(verify_many(m.type, heads, asked.time_ratio, asked.stroke, asked.bound_deg,
-                               **extras))  # fmt: skip
+    checked = iter(
+        verify_many(m.type, heads, asked.time_ratio, asked.stroke, asked.bound_deg, **extras)
+    )
     out: list[Candidate | None] = []
     for (s, _), r in zip(found, ranked, strict=True):
         c = None
@@ -157,3 +159,19 @@ def predicted_rank(objective: str) -> Callable[[Proposal], tuple[float, float, s
     if objectives.get(objective).proposals == "size":
         return lambda p: (p.size, -p.angle_deg, p.type)
     return lambda p: (-round(p.angle_deg, 9), p.size, p.type)
+
+
+def distinct(cands: list[Candidate], stroke: float, tie: float) -> list[Candidate]:
+    """One candidate per design, the better of two that are one: within ``SAME`` × stroke, or
+    within ``ONE_OPTIMUM`` × stroke with values within ``tie`` (one optimum two runs ended
+    short of, not two designs the objective cannot tell apart)."""
+    out: list[Candidate] = []
+    for c in sorted(cands, key=lambda c: c.objective_value):
+        if not any(same(c.params, o.params, stroke) or _one(c, o, stroke, tie) for o in out):
+            out.append(c)
+    return out
+
+
+def _one(a: Candidate, b: Candidate, stroke: float, tie: float) -> bool:
+    x, y = a.objective_value, b.objective_value
+    return abs(x - y) <= tie * max(x, y) and same(a.params, b.params, stroke, ONE_OPTIMUM)

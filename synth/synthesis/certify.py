@@ -34,9 +34,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..analysis.loads import numbers
 from ..load import Load
 from ..mechanisms import Mechanism
+from ..mechanisms.kinetics import numbers
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred
 from ..numerics.native import Mapped

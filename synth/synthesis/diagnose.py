@@ -15,7 +15,8 @@ from collections.abc import Hashable, Iterator
 from dataclasses import dataclass, field, replace
 
 from ..analysis.kinematics import analyze
-from ..errors import SynthError, Unreachable
+from ..errors import InvalidDesign, SynthError, Unreachable
+from ..load import Load
 from ..mechanisms import Mechanism
 from ..mechanisms.reduced import differ
 from ..results import TOL, Infeasible
@@ -168,8 +169,16 @@ class _Scan:
     @classmethod
     def of(cls, m: Mechanism, v: Variant, t: Targets) -> _Scan:
         p = v.problem
-        key = (m.type, v.parts, p.variant, tuple(sorted(p.fixed.items())),
-               tuple(sorted(p.bounds.items())), p.explicit, t.stroke, t.bound_deg)  # fmt: skip
+        key = (
+            m.type,
+            v.parts,
+            p.variant,
+            tuple(sorted(p.fixed.items())),
+            tuple(sorted(p.bounds.items())),
+            p.explicit,
+            t.stroke,
+            t.bound_deg,
+        )
         return cls(key, m, v, t)
 
     def ok(self, beta: float) -> bool:
@@ -326,3 +335,14 @@ def cut_short(mtype: str, objective: str) -> Infeasible:
         "are the exact solvers' designs, not searched; ask again with a larger time_budget_ms"
     )
     return Infeasible(mtype, "BUDGET_EXHAUSTED", why)
+
+
+def locked(m: Mechanism, best: dict[str, float] | None, load: Load | None) -> Infeasible | None:
+    """Why the ``load`` cannot be carried by the best-transmitting design the solvers found
+    (``best``: friction locks its ram, or a dead point meets the load), or None."""
+    try:
+        if best is not None and load is not None:
+            analyze(m.type, best, load=load)
+    except InvalidDesign as e:
+        return unloaded(m.type, e.msg) if e.condition in ("friction", "dead_point") else None
+    return None

@@ -91,10 +91,19 @@ def synthesize(
     """
     t0 = time.monotonic()
     load = Load.of(load)  # a Load, or the API's load object
-    specs = check(time_ratio, stroke, min_transmission_angle_deg, mechanisms, objective,
-                  max_candidates, time_budget_ms, include=include,
-                  max_working_speed_fluctuation=max_working_speed_fluctuation,
-                  load=load, max_peak_torque=max_peak_torque)  # fmt: skip
+    specs = check(
+        time_ratio,
+        stroke,
+        min_transmission_angle_deg,
+        mechanisms,
+        objective,
+        max_candidates,
+        time_budget_ms,
+        include=include,
+        max_working_speed_fluctuation=max_working_speed_fluctuation,
+        load=load,
+        max_peak_torque=max_peak_torque,
+    )
     o = objectives.get(objective)
     per_type = max_candidates or PER_TYPE  # the most one type's front takes
     if max_candidates is None:
@@ -193,8 +202,11 @@ def _loaded(
 
 def _catalogue() -> str:
     """The types (their parameters) and the objectives, for ``synthesize``'s help."""
-    types = [f"    {t} ({get(t).title}): {', '.join(q.name for q in get(t).parameters)}"
-             for t in all_types() if get(t).quick_return]  # fmt: skip
+    types = [
+        f"    {t} ({get(t).title}): {', '.join(q.name for q in get(t).parameters)}"
+        for t in all_types()
+        if get(t).quick_return
+    ]
     named = [f"    {o.name}: {o.words}" for o in objectives.all_objectives()]
     return "\n".join(["", "    Types (parameters):", *types, "", "    Objectives:", *named])
 
@@ -367,8 +379,10 @@ def checked_spec(s: Spec | Mapping[str, Any] | str, i: int) -> Spec:
         s = Spec(s)
     elif not isinstance(s, Spec):
         if not isinstance(s, Mapping):
-            msg = (f"mechanisms[{i}] must be a type's name, a Spec or a mapping with keys "
-                   f"{', '.join(SPEC_KEYS)}; got {type(s).__name__}")  # fmt: skip
+            msg = (
+                f"mechanisms[{i}] must be a type's name, a Spec or a mapping with keys "
+                f"{', '.join(SPEC_KEYS)}; got {type(s).__name__}"
+            )
             raise InvalidParameters(msg, ("mechanisms", i))
         unknown = sorted(set(s) - set(SPEC_KEYS), key=str)
         if unknown or "type" not in s:
@@ -391,12 +405,16 @@ def checked_spec(s: Spec | Mapping[str, Any] | str, i: int) -> Spec:
     for k, (lo, hi) in s.bounds.items():
         q = m.parameter(k)
         why = (
-            "need finite bounds" if not (math.isfinite(lo) and math.isfinite(hi))
-            else f"lower bound {lo:g} > upper bound {hi:g}" if lo > hi
-            else None if q.signed or lo > 0 or (lo == 0 and q.zero_means)
-            else f"a length's bounds must be ≥ 0 (0 means {q.zero_means})" if q.zero_means
+            "need finite bounds"
+            if not (math.isfinite(lo) and math.isfinite(hi))
+            else f"lower bound {lo:g} > upper bound {hi:g}"
+            if lo > hi
+            else None
+            if q.signed or lo > 0 or (lo == 0 and q.zero_means)
+            else f"a length's bounds must be ≥ 0 (0 means {q.zero_means})"
+            if q.zero_means
             else "a length's bounds must be > 0"
-        )  # fmt: skip
+        )
         if why:
             raise InvalidParameters(
                 f"{s.type}.{k} bounds [{lo!r}, {hi!r}]: {why}", ("mechanisms", i, "bounds", k)

@@ -38,14 +38,13 @@ from typing import Any
 import numpy as np
 
 from .. import objectives
-from ..analysis.kinematics import analyze
-from ..errors import InvalidDesign, SynthError
+from ..errors import SynthError
 from ..mechanisms import Mechanism, get
 from ..results import Candidate, Infeasible
 from ..targets import MAX_TRANSMISSION, MIN_SIZE
 from . import aims, certify, screen
-from .candidate import candidate
-from .diagnose import cut_short, diagnose, unloaded
+from .candidate import candidate, distinct
+from .diagnose import cut_short, diagnose, locked
 from .formulation import TIE, formulation, kept_by
 from .search import (
     Searched,
@@ -53,7 +52,6 @@ from .search import (
     Targets,
     Variant,
     proposal,
-    same,
     scaled,
     search,
     whole,
@@ -67,7 +65,6 @@ MAX_ITER = 300
 AROUND = 3.0  # the box about the starts (each part within this factor of theirs) drawn again
 STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
 NEAR = 1e-4  # how close (stroke units, each parameter) to an earlier run's end a run ends
-ONE_OPTIMUM = 1e-3  # two runs' ends this close (stroke units), their values tied: one optimum
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
 SAMPLES = 256  # Halton points of the box projected onto the equalities (``screen``): starts
 # the least 1 − cos μ a search for motion keeps at every joint, whatever the bound: as a rod
@@ -192,8 +189,10 @@ def local_optima(
         return kept
 
     def box_of(s: dict[str, float]) -> list[tuple[float, float]]:
-        return [bounds[k] if k in explicit else (min(bounds[k][0], s[k]), max(bounds[k][1], s[k]))
-                for k in free]  # fmt: skip
+        return [
+            bounds[k] if k in explicit else (min(bounds[k][0], s[k]), max(bounds[k][1], s[k]))
+            for k in free
+        ]
 
     # the starts: the exact solvers' designs and projected Halton points, the best ranked first
     wide = box_of(starts[0]) if starts else [bounds[k] for k in free]
@@ -239,8 +238,14 @@ def local_optima(
         if kept.size == n:  # the equalities leave no freedom: the start is the optimum
             yield design(x0)
             continue
-        constraints = [{"type": "eq", "fun": lambda y, k=kept: rows(y)[0][k] - lbg[k],
-                        "jac": lambda y, k=kept: rows(y)[1][k]}, *measures]  # fmt: skip
+        constraints = [
+            {
+                "type": "eq",
+                "fun": lambda y, k=kept: rows(y)[0][k] - lbg[k],
+                "jac": lambda y, k=kept: rows(y)[1][k],
+            },
+            *measures,
+        ]
         seen: list[np.ndarray] = []  # this run's iterates
 
         def cap(y: np.ndarray, seen: list[np.ndarray] = seen) -> None:
@@ -257,11 +262,16 @@ def local_optima(
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # SLSQP's notes on clipping to the bounds
-                last = minimize(lambda y: y[n] + TIE * (links @ y), np.append(x0, first),
-                                jac=lambda y: np.eye(n + 1)[n] + TIE * links, method="SLSQP",
-                                bounds=[*zip(lo, hi, strict=True), (0.0, None)],
-                                constraints=constraints, callback=cap,
-                                options={"maxiter": MAX_ITER, "ftol": 1e-12}).x  # fmt: skip
+                last = minimize(
+                    lambda y: y[n] + TIE * (links @ y),
+                    np.append(x0, first),
+                    jac=lambda y: np.eye(n + 1)[n] + TIE * links,
+                    method="SLSQP",
+                    bounds=[*zip(lo, hi, strict=True), (0.0, None)],
+                    constraints=constraints,
+                    callback=cap,
+                    options={"maxiter": MAX_ITER, "ftol": 1e-12},
+                ).x
         except _Late:  # within an iteration: the run ends where its last one did
             if not seen:
                 break
@@ -293,11 +303,14 @@ def motion(
     for i, spec in enumerate(specs):
         m = get(spec.type)
         if m.facts is None:  # its constraints are the closed forms' (``formulation``)
-            infeasible.append(Infeasible(
-                m.type, "OBJECTIVE_UNSUPPORTED",
-                f"{m.type} has no closed forms, on which the motion objectives' search stands;"
-                " ask for pareto, max_transmission_angle or min_size",
-            ))  # fmt: skip
+            infeasible.append(
+                Infeasible(
+                    m.type,
+                    "OBJECTIVE_UNSUPPORTED",
+                    f"{m.type} has no closed forms, on which the motion objectives' search stands;"
+                    " ask for pareto, max_transmission_angle or min_size",
+                )
+            )
             continue
         best_t = replace(t, objective=MAX_TRANSMISSION)
         if time.monotonic() >= t.deadline:  # not begun: its reason says the budget ran out
@@ -346,9 +359,20 @@ def motion(
                 if c is not None and o.allows(c, limit):
                     continue
             aim, capped = aims.aim(m, v.parts, o, t, extras, limit, mine)
-            optima = local_optima(m, v.parts, v.free, dict(v.problem.fixed), v.problem.bounds,
-                                  v.problem.explicit, targets, aim, starts, capped,
-                                  t.deadline, bool(spec.fixed))  # fmt: skip
+            optima = local_optima(
+                m,
+                v.parts,
+                v.free,
+                dict(v.problem.fixed),
+                v.problem.bounds,
+                v.problem.explicit,
+                targets,
+                aim,
+                starts,
+                capped,
+                t.deadline,
+                bool(spec.fixed),
+            )
             for d in optima:
                 q = proposal(m, i, whole(spec, scaled(d, t.stroke), v.parts), "slsqp", t)
                 c = None if q is None else candidate(m, q, t, s.variants, extras)
@@ -364,23 +388,12 @@ def motion(
         kept = [c for c in mine if o.allows(c, limit)]
         if not kept and not mine and not cut:
             best = pool[0].params if pool else None
-            infeasible.append(_locked(m, best, extras.get("load")) or diagnose(m, spec, best_t, s))
+            infeasible.append(locked(m, best, extras.get("load")) or diagnose(m, spec, best_t, s))
         elif not kept and not cut:  # the limit left none
             assert o.limit is not None and limit is not None
             infeasible.append(_unreachable(m, spec, t, extras, o.limit, limit, mine))
-        found += _distinct(kept, t.stroke, o.tie)
+        found += distinct(kept, t.stroke, o.tie)
     return o.rank(found)[:max_candidates], infeasible
-
-
-def _locked(m: Mechanism, best: dict[str, float] | None, load: Any) -> Infeasible | None:
-    """Why the ``load`` cannot be carried by the best-transmitting design the solvers found
-    (``best``: friction locks its ram, or a dead point meets the load), or None."""
-    try:
-        if best is not None and load is not None:
-            analyze(m.type, best, load=load)
-    except InvalidDesign as e:
-        return unloaded(m.type, e.msg) if e.condition in ("friction", "dead_point") else None
-    return None
 
 
 def _unreachable(
@@ -427,19 +440,3 @@ def _smallest_member(
     p = proposal(m, i, params, c.method, t)
     smaller = None if p is None else candidate(m, p, t, variants, extras)
     return smaller or c
-
-
-def _distinct(cands: list[Candidate], stroke: float, tie: float) -> list[Candidate]:
-    """One candidate per design, the better of two that are one: within ``SAME`` × stroke, or
-    within ``ONE_OPTIMUM`` × stroke with values within ``tie`` (one optimum two runs ended
-    short of, not two designs the objective cannot tell apart)."""
-    out: list[Candidate] = []
-    for c in sorted(cands, key=lambda c: c.objective_value):
-        if not any(same(c.params, o.params, stroke) or _one(c, o, stroke, tie) for o in out):
-            out.append(c)
-    return out
-
-
-def _one(a: Candidate, b: Candidate, stroke: float, tie: float) -> bool:
-    x, y = a.objective_value, b.objective_value
-    return abs(x - y) <= tie * max(x, y) and same(a.params, b.params, stroke, ONE_OPTIMUM)

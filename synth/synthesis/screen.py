@@ -20,11 +20,11 @@ import casadi as ca
 import numpy as np
 
 from ..analysis.forces import forces
-from ..analysis.loads import numbers
 from ..analysis.model import model
 from ..analysis.quality import CUT
 from ..load import Load
 from ..mechanisms import Mechanism, kinetics
+from ..mechanisms.kinetics import numbers
 from ..numerics.native import Mapped
 from .formulation import Formulation
 
@@ -156,8 +156,9 @@ def rank_torque(
         force = np.where(inside, np.interp(travel, profile[:, 0], profile[:, 1]), 0.0)
     push = -force * np.where(g.up, 1.0, -1.0)[:, None]  # against the working stroke's travel
     k = len(pvs)
-    rows = np.column_stack([np.repeat(pvs, ANGLES, axis=0),
-                            np.tile(numbers(load, metres), (k * ANGLES, 1))])  # fmt: skip
+    rows = np.column_stack(
+        [np.repeat(pvs, ANGLES, axis=0), np.tile(numbers(load, metres), (k * ANGLES, 1))]
+    )
     rows[:, pvs.shape[1] + kinetics.LOAD.index("force")] = push.ravel()
     with np.errstate(all="ignore"):
         torque = forces(m, variant).each(g.angles.ravel(), rows)[:, 0].reshape(k, ANGLES)

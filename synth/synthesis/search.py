@@ -124,8 +124,9 @@ class Searched:
     reasons: list[Infeasible] = field(default_factory=list)
 
 
-def search(m: Mechanism, spec: Spec, index: int, t: Targets,
-           near: Searched | None = None) -> Searched:  # fmt: skip
+def search(
+    m: Mechanism, spec: Spec, index: int, t: Targets, near: Searched | None = None
+) -> Searched:
     """Every variant's local optima (unverified, predicted), and what closed the others;
     ``near``: the search of the same request at a nearby bound (a front's previous point),
     whose optima a reduced solver may continue from (``Problem.near``)."""

@@ -89,8 +89,14 @@ class _Deadline(ca.Callback):
         return "stop"
 
     def get_sparsity_in(self, i: int) -> ca.Sparsity:
-        size = {"x": self.nx, "lam_x": self.nx, "g": self.ng, "lam_g": self.ng, "f": 1,
-                "lam_p": self.np}[ca.nlpsol_out(i)]  # fmt: skip
+        size = {
+            "x": self.nx,
+            "lam_x": self.nx,
+            "g": self.ng,
+            "lam_g": self.ng,
+            "f": 1,
+            "lam_p": self.np,
+        }[ca.nlpsol_out(i)]
         return ca.Sparsity.dense(size, 1)
 
     def eval(self, arg: Sequence[ca.DM]) -> list[int]:
@@ -145,8 +151,11 @@ def multistart(
 
 
 def _design(form: Formulation, fixed: np.ndarray, free: np.ndarray) -> dict[str, float]:
-    return {**dict(zip(form.fixed, fixed, strict=True)), **dict(zip(form.free, free, strict=True)),
-            **dict.fromkeys(form.variant, 0.0)}  # fmt: skip
+    return {
+        **dict(zip(form.fixed, fixed, strict=True)),
+        **dict(zip(form.free, free, strict=True)),
+        **dict.fromkeys(form.variant, 0.0),
+    }
 
 
 def _extra_start(form: Formulation, fixed: np.ndarray, x0: np.ndarray) -> np.ndarray:

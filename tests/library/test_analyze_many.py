@@ -20,14 +20,25 @@ from ..support.designs import random_designs
 # change point whose circuit switches (tests/referees/test_regressions.py)
 REFUSED = {
     "offset_slider_crank": {"crank": 1.0, "coupler": 1.0, "offset": 0.0},
-    "drag_link_slider": {"ground": 1.0, "crank": 1.0001, "coupler": 1.9999, "follower": 2.0,
-                         "follower_arm": 1.0, "connecting_rod": 2.0},
-}  # fmt: skip
+    "drag_link_slider": {
+        "ground": 1.0,
+        "crank": 1.0001,
+        "coupler": 1.9999,
+        "follower": 2.0,
+        "follower_arm": 1.0,
+        "connecting_rod": 2.0,
+    },
+}
 # a design whose grid is refined: both dead centres between two grid points
 REFINED = {
-    "crank_shaper": {"crank": 0.999, "pivot_distance": 1.0, "lever": 1.999,
-                     "ram_link": 1.9096243545533795, "ram_height": 0.08937564544662047},
-}  # fmt: skip
+    "crank_shaper": {
+        "crank": 0.999,
+        "pivot_distance": 1.0,
+        "lever": 1.999,
+        "ram_link": 1.9096243545533795,
+        "ram_height": 0.08937564544662047,
+    },
+}
 
 
 def alone(mtype, params, **extras):
@@ -76,8 +87,10 @@ def test_each_design_as_alone(mtype, monkeypatch):
 
 @pytest.mark.parametrize("mtype", ["whitworth", "crank_rocker_slider"])
 def test_what_a_candidate_adds_as_alone(mtype):
-    extras = {"include": ["motion", "sensitivities", "envelope"],
-              "tolerance": synth.Tolerance(absolute=0.01)}  # fmt: skip
+    extras = {
+        "include": ["motion", "sensitivities", "envelope"],
+        "tolerance": synth.Tolerance(absolute=0.01),
+    }
     designs = random_designs(mtype, 12, seed=9)
     for p, got in zip(designs, analyze_many(mtype, designs, **extras), strict=True):
         assert same(got, alone(mtype, p, **extras))

@@ -22,8 +22,12 @@ from synth.atlas import Point, atlas
 from ..support import globalsearch as gs
 from ..support.server import ROOT
 
-SMALL = {"types": ("offset_slider_crank", "whitworth", "drag_link_slider"),
-         "ratios": (1.2, 1.6, 2.4), "bounds": (20.0,), "chunk": 2}  # fmt: skip
+SMALL = {
+    "types": ("offset_slider_crank", "whitworth", "drag_link_slider"),
+    "ratios": (1.2, 1.6, 2.4),
+    "bounds": (20.0,),
+    "chunk": 2,
+}
 
 
 SEEDS = gs.Effort(seeds=(0, 1, 2), popsize=15, maxiter=100)  # differential evolution, 3 seeds
@@ -38,8 +42,9 @@ def cluster():
     """A Dask cluster of two worker processes on this machine."""
     from dask.distributed import LocalCluster
 
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                      dashboard_address=None) as c:  # fmt: skip
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as c:
         yield c
 
 
@@ -69,9 +74,24 @@ def test_a_killed_run_resumes_to_the_same_atlas(tmp_path):
     """The command line, killed once its first chunks are written, then run again (n chunks,
     ~1 ms each: the kill comes with work left)."""
     n = 240
-    args = [sys.executable, "-m", "synth.atlas", "--types", "offset_slider_crank", "whitworth",
-            "--ratios", f"1.1:3.0:{n}", "--bounds", "20", "--chunk", "2", "--workers", "2",
-            "--out", str(tmp_path)]  # fmt: skip
+    args = [
+        sys.executable,
+        "-m",
+        "synth.atlas",
+        "--types",
+        "offset_slider_crank",
+        "whitworth",
+        "--ratios",
+        f"1.1:3.0:{n}",
+        "--bounds",
+        "20",
+        "--chunk",
+        "2",
+        "--workers",
+        "2",
+        "--out",
+        str(tmp_path),
+    ]
     proc = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     chunks = tmp_path / "chunks"
     deadline = time.monotonic() + 120
@@ -91,13 +111,18 @@ def test_a_killed_run_resumes_to_the_same_atlas(tmp_path):
 def test_a_worker_killed_mid_run_changes_nothing(tmp_path, cluster):
     from dask.distributed import Client
 
-    kw = {"types": ("offset_slider_crank", "whitworth"), "bounds": (), "chunk": 1,
-          "ratios": tuple(round(1.05 + 0.01 * k, 4) for k in range(150))}  # fmt: skip
+    kw = {
+        "types": ("offset_slider_crank", "whitworth"),
+        "bounds": (),
+        "chunk": 1,
+        "ratios": tuple(round(1.05 + 0.01 * k, 4) for k in range(150)),
+    }
     with Client(cluster) as client:
         victim = next(iter(client.run(os.getpid).values()))
     done = {}
-    run = threading.Thread(target=lambda: done.update(
-        a=atlas(**kw, scheduler=cluster.scheduler_address, out=tmp_path)))  # fmt: skip
+    run = threading.Thread(
+        target=lambda: done.update(a=atlas(**kw, scheduler=cluster.scheduler_address, out=tmp_path))
+    )
     run.start()
     chunks = tmp_path / "chunks"
     deadline = time.monotonic() + 120
@@ -111,8 +136,9 @@ def test_a_worker_killed_mid_run_changes_nothing(tmp_path, cluster):
     same(done["a"], atlas(**kw, inline=True))
 
 
-@pytest.mark.parametrize("mtype", [t for t in synth.mechanisms.all_types()
-                                   if synth.mechanisms.get(t).quick_return])  # fmt: skip
+@pytest.mark.parametrize(
+    "mtype", [t for t in synth.mechanisms.all_types() if synth.mechanisms.get(t).quick_return]
+)
 def test_the_frontier_agrees_with_a_global_search(mtype):
     ratios = tuple(np.round(np.linspace(1.1, 3.0, 10), 6))
     a = atlas([mtype], ratios, (), inline=True)
@@ -127,8 +153,12 @@ def test_the_frontier_agrees_with_a_global_search(mtype):
 
 
 def test_the_ranges_ends_are_the_synthesis_ends():
-    a = atlas(("offset_slider_crank", "crank_rocker_slider"), (1.1, 1.5, 2.0, 3.0), (20.0, 40.0),
-              inline=True)  # fmt: skip
+    a = atlas(
+        ("offset_slider_crank", "crank_rocker_slider"),
+        (1.1, 1.5, 2.0, 3.0),
+        (20.0, 40.0),
+        inline=True,
+    )
     checked = 0
     for r in a.ranges:
         end = r["max"]
@@ -182,8 +212,12 @@ def test_a_pool_worker_killed_mid_run_changes_nothing(tmp_path):
                 out.append(pid)
         return out
 
-    kw = {"types": ("offset_slider_crank", "whitworth"), "bounds": (), "chunk": 1,
-          "ratios": tuple(round(1.05 + 0.01 * k, 4) for k in range(150))}  # fmt: skip
+    kw = {
+        "types": ("offset_slider_crank", "whitworth"),
+        "bounds": (),
+        "chunk": 1,
+        "ratios": tuple(round(1.05 + 0.01 * k, 4) for k in range(150)),
+    }
     before = descendants(os.getpid())
     done = {}
     run = threading.Thread(target=lambda: done.update(a=atlas(**kw, workers=2, out=tmp_path)))

@@ -27,8 +27,16 @@ from ..support.motion_bruteforce import brute_motion
 from .test_report import Page
 
 CLI = shutil.which("quickreturn", path=str(Path(sys.executable).parent)) or "quickreturn"
-WHITWORTH = ["-p", "crank=75", "-p", "pivot_distance=50", "-p", "lever=150",
-             "-p", "connecting_rod=200"]  # fmt: skip
+WHITWORTH = [
+    "-p",
+    "crank=75",
+    "-p",
+    "pivot_distance=50",
+    "-p",
+    "lever=150",
+    "-p",
+    "connecting_rod=200",
+]
 
 
 def run(*args, module=False, timeout=120):
@@ -37,8 +45,22 @@ def run(*args, module=False, timeout=120):
 
 
 def test_synthesize_json_meets_the_targets_by_brute_force():
-    r = run("synthesize", "--time-ratio", "1.8", "--stroke", "250", "--bound", "40", "--json",
-            "--type", "crank_shaper", "--type", "whitworth", "--fix", "crank=60")  # fmt: skip
+    r = run(
+        "synthesize",
+        "--time-ratio",
+        "1.8",
+        "--stroke",
+        "250",
+        "--bound",
+        "40",
+        "--json",
+        "--type",
+        "crank_shaper",
+        "--type",
+        "whitworth",
+        "--fix",
+        "crank=60",
+    )
     assert r.returncode == 0, r.stderr
     reply = json.loads(r.stdout)
     assert reply["candidates"]
@@ -48,24 +70,46 @@ def test_synthesize_json_meets_the_targets_by_brute_force():
 
 
 def test_synthesize_table_and_csv():
-    args = ("synthesize", "--time-ratio", "2", "--stroke", "450", "--type", "crank_shaper",
-            "--objective", "max_transmission_angle")  # fmt: skip
+    args = (
+        "synthesize",
+        "--time-ratio",
+        "2",
+        "--stroke",
+        "450",
+        "--type",
+        "crank_shaper",
+        "--objective",
+        "max_transmission_angle",
+    )
     table = run(*args)
     assert table.returncode == 0 and "crank_shaper" in table.stdout and "lever 450" in table.stdout
     rows = list(csv.DictReader(io.StringIO(run(*args, "--csv").stdout)))
     assert rows and all(row["type"] == "crank_shaper" for row in rows)
     for row in rows:
-        params = {k: float(row[k]) for k in ("crank", "pivot_distance", "lever", "ram_link",
-                                              "ram_height")}  # fmt: skip
+        params = {
+            k: float(row[k]) for k in ("crank", "pivot_distance", "lever", "ram_link", "ram_height")
+        }
         b = bruteforce.simulate("crank_shaper", params)
         assert b["time_ratio"] == pytest.approx(2.0, rel=1e-9)
         assert b["stroke"] == pytest.approx(450.0, rel=1e-9)
 
 
 def test_a_certified_optimum_says_so_in_the_table_and_the_csv():
-    args = ("synthesize", "--time-ratio", "1.6", "--stroke", "300", "--bound", "20", "--type",
-            "whitworth", "--objective", "min_peak_acceleration",
-            "--time-budget-ms", "60000")  # fmt: skip
+    args = (
+        "synthesize",
+        "--time-ratio",
+        "1.6",
+        "--stroke",
+        "300",
+        "--bound",
+        "20",
+        "--type",
+        "whitworth",
+        "--objective",
+        "min_peak_acceleration",
+        "--time-budget-ms",
+        "60000",
+    )
     table = run(*args)
     assert table.returncode == 0, table.stderr
     line = next(x for x in table.stdout.splitlines() if "certified" in x)
@@ -77,8 +121,19 @@ def test_a_certified_optimum_says_so_in_the_table_and_the_csv():
 
 
 def test_every_type_refusing_exits_1_with_the_reasons():
-    r = run("synthesize", "--time-ratio", "1.8", "--stroke", "250", "--bound", "89",
-            "--type", "whitworth", "--type", "offset_slider_crank")  # fmt: skip
+    r = run(
+        "synthesize",
+        "--time-ratio",
+        "1.8",
+        "--stroke",
+        "250",
+        "--bound",
+        "89",
+        "--type",
+        "whitworth",
+        "--type",
+        "offset_slider_crank",
+    )
     assert r.returncode == 1
     assert "whitworth: no design (TRANSMISSION_UNREACHABLE)" in r.stdout
     assert "offset_slider_crank: no design" in r.stdout
@@ -87,18 +142,45 @@ def test_every_type_refusing_exits_1_with_the_reasons():
 @pytest.mark.parametrize(
     ("args", "library"),
     [
-        (("synthesize", "--time-ratio", "1.8", "--stroke", "-250"),
-         lambda: synth.synthesize(1.8, -250.0)),
-        (("synthesize", "--time-ratio", "1.8", "--stroke", "250", "--type", "crank_shaper",
-          "--fix", "rocker=3"),
-         lambda: synth.synthesize(1.8, 250.0, mechanisms=[{"type": "crank_shaper",
-                                                           "fixed": {"rocker": 3.0}}])),
-        (("analyze", "whitworth", "-p", "crank=75", "-p", "pivot_distance=50",
-          "-p", "lever=150", "-p", "connecting_rod=20"),
-         lambda: synth.analyze("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
-                                             "connecting_rod": 20})),
+        (
+            ("synthesize", "--time-ratio", "1.8", "--stroke", "-250"),
+            lambda: synth.synthesize(1.8, -250.0),
+        ),
+        (
+            (
+                "synthesize",
+                "--time-ratio",
+                "1.8",
+                "--stroke",
+                "250",
+                "--type",
+                "crank_shaper",
+                "--fix",
+                "rocker=3",
+            ),
+            lambda: synth.synthesize(
+                1.8, 250.0, mechanisms=[{"type": "crank_shaper", "fixed": {"rocker": 3.0}}]
+            ),
+        ),
+        (
+            (
+                "analyze",
+                "whitworth",
+                "-p",
+                "crank=75",
+                "-p",
+                "pivot_distance=50",
+                "-p",
+                "lever=150",
+                "-p",
+                "connecting_rod=20",
+            ),
+            lambda: synth.analyze(
+                "whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 20}
+            ),
+        ),
     ],
-)  # fmt: skip
+)
 def test_bad_input_exits_2_with_the_librarys_message(args, library):
     with pytest.raises(synth.SynthError) as e:
         library()
@@ -145,8 +227,9 @@ def test_analyze_json_csv_and_table_agree_with_the_simulation():
 
 def test_analyze_with_a_load_gives_the_loads():
     load = {"length_unit": "mm", "crank_rpm": 40, "cutting_force": 2000, "slider_mass": 60}
-    reply = json.loads(run("analyze", "whitworth", *WHITWORTH, "--load", json.dumps(load),
-                           "--json").stdout)  # fmt: skip
+    reply = json.loads(
+        run("analyze", "whitworth", *WHITWORTH, "--load", json.dumps(load), "--json").stdout
+    )
     direct = synth.analyze("whitworth", reply["params"], load=synth.Load(**load))
     assert reply["loads"]["torque"]["max"] == direct.loads.torque.max
 
@@ -204,8 +287,9 @@ def test_analyze_prints_the_flywheel_and_the_motor_on_their_shafts():
 def test_analyze_prints_what_include_asks_for():
     """The envelope and the sensitivities in the text; the stroke's derivative in the lever,
     by central differences of the analysed stroke."""
-    text = run("analyze", "whitworth", *WHITWORTH, "--include", "envelope",
-               "--include", "sensitivities").stdout  # fmt: skip
+    text = run(
+        "analyze", "whitworth", *WHITWORTH, "--include", "envelope", "--include", "sensitivities"
+    ).stdout
     p = {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0}
     e = synth.analyze("whitworth", p, include=["envelope"]).envelope
     assert f"({e.width:.6g} × {e.height:.6g})" in text
@@ -219,9 +303,24 @@ def test_analyze_prints_what_include_asks_for():
 
 
 def test_sweep_csv_and_json():
-    args = ("sweep", "crank_shaper", "-p", "crank=120", "-p", "pivot_distance=240",
-            "-p", "lever=450", "--vary", "crank", "--start", "100", "--stop", "300",
-            "--points", "5")  # fmt: skip
+    args = (
+        "sweep",
+        "crank_shaper",
+        "-p",
+        "crank=120",
+        "-p",
+        "pivot_distance=240",
+        "-p",
+        "lever=450",
+        "--vary",
+        "crank",
+        "--start",
+        "100",
+        "--stop",
+        "300",
+        "--points",
+        "5",
+    )
     rows = list(csv.DictReader(io.StringIO(run(*args, "--csv").stdout)))
     assert [row["valid"] for row in rows] == ["True"] * 3 + ["False"] * 2
     for row in rows[:3]:
@@ -236,13 +335,28 @@ def test_sweep_csv_and_json():
 
 def test_export_writes_a_drawing_cad_reads(tmp_path):
     out = tmp_path / "shaper.dxf"
-    r = run("export", "crank_shaper", "-p", "crank=120", "-p", "pivot_distance=240", "-p",
-            "lever=450", "--format", "dxf", "--crank-angle", "30", "-o", str(out))  # fmt: skip
+    r = run(
+        "export",
+        "crank_shaper",
+        "-p",
+        "crank=120",
+        "-p",
+        "pivot_distance=240",
+        "-p",
+        "lever=450",
+        "--format",
+        "dxf",
+        "--crank-angle",
+        "30",
+        "-o",
+        str(out),
+    )
     assert r.returncode == 0, r.stderr
     lines = {e.dxf.layer: e for e in ezdxf.readfile(out).modelspace().query("LINE")}
     assert (lines["lever"].dxf.end - lines["lever"].dxf.start).magnitude == pytest.approx(450.0)
-    svg = run("export", "crank_shaper", "-p", "crank=120", "-p", "pivot_distance=240",
-              "-p", "lever=450").stdout  # fmt: skip
+    svg = run(
+        "export", "crank_shaper", "-p", "crank=120", "-p", "pivot_distance=240", "-p", "lever=450"
+    ).stdout
     assert svg.startswith("<?xml") and 'width="' in svg
 
 
@@ -317,8 +431,18 @@ def test_analyze_prints_each_section_asked_for():
 
 
 def test_atlas_writes_its_tables(tmp_path):
-    r = run("atlas", "--types", "crank_shaper", "--ratios", "1.5:2:2", "--bounds", "20",
-            "--out", str(tmp_path), "--inline")  # fmt: skip
+    r = run(
+        "atlas",
+        "--types",
+        "crank_shaper",
+        "--ratios",
+        "1.5:2:2",
+        "--bounds",
+        "20",
+        "--out",
+        str(tmp_path),
+        "--inline",
+    )
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "frontier.csv").exists() and "2 points" in r.stdout
 
@@ -333,8 +457,9 @@ def test_serve_answers_on_its_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    server = subprocess.Popen([CLI, "serve", "--port", str(port)], stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL)  # fmt: skip
+    server = subprocess.Popen(
+        [CLI, "serve", "--port", str(port)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
     try:
         for _ in range(300):
             try:

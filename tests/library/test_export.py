@@ -62,8 +62,11 @@ def test_a_dxf_reads_back_with_the_designs_lengths_and_stroke(mtype):
         (shown,) = [e.plain_text() for e in dim.get_geometry_block() if e.dxftype() == "MTEXT"]
         assert shown == f"{stroke:.6f}".rstrip("0").rstrip(".")
         assert len(msp.query('*[layer=="PIVOTS"]')) > 0 and len(msp.query('*[layer=="GUIDE"]')) == 2
-        fixed = [k for k, xy in synth.joints(mtype, p, [0.0, 90.0, 200.0]).items()
-                 if np.ptp(xy, axis=0).max() == 0]  # fmt: skip
+        fixed = [
+            k
+            for k, xy in synth.joints(mtype, p, [0.0, 90.0, 200.0]).items()
+            if np.ptp(xy, axis=0).max() == 0
+        ]
         paths = msp.query('LWPOLYLINE[layer=="PATHS"]')
         assert len(paths) == (len(pins) - len(fixed) if i == 0 else 0)
 
@@ -226,8 +229,10 @@ def test_draw_gives_a_figure_with_each_link():
     ],
 )
 def test_bad_export_arguments_name_the_field(kw, field):
-    args = {"mechanism": "crank_shaper",
-            "params": {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0}} | kw  # fmt: skip
+    args = {
+        "mechanism": "crank_shaper",
+        "params": {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0},
+    } | kw
     with pytest.raises(synth.InvalidParameters) as e:
         synth.export(**args)
     assert field in e.value.loc
@@ -235,15 +240,19 @@ def test_bad_export_arguments_name_the_field(kw, field):
 
 def test_a_design_that_cannot_run_is_not_drawn():
     with pytest.raises(synth.InvalidDesign):
-        synth.export("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
-                                   "connecting_rod": 20})  # fmt: skip
+        synth.export(
+            "whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 20}
+        )
 
 
 def test_paths_close_over_a_turn():
     from synth.drawing.model import drawing
 
-    d = drawing("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
-                              "connecting_rod": 200}, paths=True)  # fmt: skip
+    d = drawing(
+        "whitworth",
+        {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200},
+        paths=True,
+    )
     assert d.paths is not None and "O2" not in d.paths and "O4" not in d.paths
     for xy in d.paths.values():
         assert np.allclose(xy[0], xy[-1], atol=1e-9)
@@ -253,8 +262,12 @@ def test_animate_gives_a_gif_of_a_turn(tmp_path):
     from PIL import Image
 
     out = tmp_path / "shaper.gif"
-    gif = synth.animate("crank_shaper", {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0},
-                        frames=6, path=str(out))  # fmt: skip
+    gif = synth.animate(
+        "crank_shaper",
+        {"crank": 120.0, "pivot_distance": 240.0, "lever": 450.0},
+        frames=6,
+        path=str(out),
+    )
     assert out.read_bytes() == gif
     img = Image.open(out)
     assert img.format == "GIF" and img.n_frames == 6

@@ -27,20 +27,43 @@ def cross(u, v):
 LINKS = {
     "scotch_yoke": [("O2", "B", "crank")],
     "offset_slider_crank": [("O2", "B", "crank"), ("B", "C", "coupler")],
-    "crank_shaper": [("O2", "B", "crank"), ("O4", "P", "lever"), ("O2", "O4", "pivot_distance"),
-                     ("P", "R", "ram_link")],
-    "whitworth": [("O2", "B", "crank"), ("O4", "P", "lever"), ("O2", "O4", "pivot_distance"),
-                  ("P", "R", "connecting_rod")],
-    "crank_rocker_slider": [("O2", "A", "crank"), ("A", "D", "coupler"), ("O4", "D", "rocker"),
-                            ("O4", "C", "rocker_arm"), ("O2", "O4", "ground"),
-                            ("C", "R", "connecting_rod")],
-    "drag_link_slider": [("O2", "A", "crank"), ("A", "B", "coupler"), ("O4", "B", "follower"),
-                         ("O4", "C", "follower_arm"), ("O2", "O4", "ground"),
-                         ("C", "D", "connecting_rod")],
-}  # fmt: skip
+    "crank_shaper": [
+        ("O2", "B", "crank"),
+        ("O4", "P", "lever"),
+        ("O2", "O4", "pivot_distance"),
+        ("P", "R", "ram_link"),
+    ],
+    "whitworth": [
+        ("O2", "B", "crank"),
+        ("O4", "P", "lever"),
+        ("O2", "O4", "pivot_distance"),
+        ("P", "R", "connecting_rod"),
+    ],
+    "crank_rocker_slider": [
+        ("O2", "A", "crank"),
+        ("A", "D", "coupler"),
+        ("O4", "D", "rocker"),
+        ("O4", "C", "rocker_arm"),
+        ("O2", "O4", "ground"),
+        ("C", "R", "connecting_rod"),
+    ],
+    "drag_link_slider": [
+        ("O2", "A", "crank"),
+        ("A", "B", "coupler"),
+        ("O4", "B", "follower"),
+        ("O4", "C", "follower_arm"),
+        ("O2", "O4", "ground"),
+        ("C", "D", "connecting_rod"),
+    ],
+}
 # the slider's pin, and how its position s is read from it
-SLIDER = {"scotch_yoke": ("yoke", 0), "offset_slider_crank": ("C", 0), "crank_shaper": ("R", 1),
-          "whitworth": ("R", 1), "drag_link_slider": ("D", 0)}  # fmt: skip
+SLIDER = {
+    "scotch_yoke": ("yoke", 0),
+    "offset_slider_crank": ("C", 0),
+    "crank_shaper": ("R", 1),
+    "whitworth": ("R", 1),
+    "drag_link_slider": ("D", 0),
+}
 
 
 @pytest.mark.parametrize("mtype", list(LINKS))
@@ -99,8 +122,14 @@ def test_drag_link_pins_are_on_its_circuit(params):
 
 
 def test_drag_link_project_drawing_at_90_degrees():
-    p = {"ground": 0.1, "crank": 0.225, "coupler": 0.2504, "follower": 0.275,
-         "follower_arm": 0.15, "connecting_rod": 0.3}  # fmt: skip
+    p = {
+        "ground": 0.1,
+        "crank": 0.225,
+        "coupler": 0.2504,
+        "follower": 0.275,
+        "follower_arm": 0.15,
+        "connecting_rod": 0.3,
+    }
     j = synth.joints("drag_link_slider", p, [90.0])
     assert j["A"][0] == pytest.approx([0.0, 0.225], abs=1e-15)
     # B by hand: circle(A, r3) ∩ circle(O4, r4), left of A→O4
@@ -114,8 +143,11 @@ def test_drag_link_project_drawing_at_90_degrees():
 
 def test_an_invalid_design_has_no_drawing():
     with pytest.raises(synth.InvalidDesign):
-        synth.joints("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
-                                   "connecting_rod": 135}, [0.0])  # fmt: skip
+        synth.joints(
+            "whitworth",
+            {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 135},
+            [0.0],
+        )
 
 
 # --- the analysis's pins (include "pins"): the same pins, at exactly the curves' angles -----
@@ -148,9 +180,11 @@ def test_an_analysis_pins_follow_the_drag_link_geometry(params):
     np.testing.assert_allclose(pins["O2"], 0.0, rtol=0, atol=0)
     np.testing.assert_allclose(pins["O4"], [[p["ground"], 0.0]] * deg.size, rtol=0, atol=0)
     np.testing.assert_allclose(
-        pins["A"], p["crank"] * np.column_stack([np.cos(th), np.sin(th)]), rtol=0,
+        pins["A"],
+        p["crank"] * np.column_stack([np.cos(th), np.sin(th)]),
+        rtol=0,
         atol=1e-15 * size,
-    )  # fmt: skip
+    )
     for u, v, length in LINKS["drag_link_slider"]:
         d = np.hypot(*(pins[u] - pins[v]).T)
         np.testing.assert_allclose(d, p[length], rtol=1e-12, atol=0, err_msg=length)

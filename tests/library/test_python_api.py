@@ -55,8 +55,14 @@ def test_results_read_as_attributes_and_as_before():
     with pytest.raises(KeyError):
         a.extremes["mid"]
     assert set(a.to_dict()["extremes"]) == {"min", "max"}  # the JSON as the contract has it
-    s = synth.sweep("crank_shaper", {"crank": 120, "pivot_distance": 240, "lever": 450},
-                    "crank", 100.0, 200.0, 11)  # fmt: skip
+    s = synth.sweep(
+        "crank_shaper",
+        {"crank": 120, "pivot_distance": 240, "lever": 450},
+        "crank",
+        100.0,
+        200.0,
+        11,
+    )
     r = s.time_ratio_range
     assert r is not None and r.min.time_ratio <= r.max.time_ratio and r["max"] is r.max
     assert set(s.to_dict()["time_ratio_range"]) == {"min", "max"}

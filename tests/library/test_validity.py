@@ -12,6 +12,8 @@ from synth.mechanisms import all_types, get
 from ..support.designs import random_designs
 
 # (type, design that breaks exactly the named condition, condition, message pattern)
+# a table: one broken design a line
+# fmt: off
 BROKEN = [
     ("offset_slider_crank", {"crank": 1.0, "coupler": 2.0, "offset": 1.5}, "full_rotation",
      r"coupler 2 < crank 1 \+ \|offset\| 1\.5 = 2\.5: the crank cannot turn a full revolution"),
@@ -57,7 +59,8 @@ BROKEN = [
     ("drag_link_slider", {"ground": 0.1, "crank": 0.225, "coupler": 0.25, "follower": 0.275,
                           "follower_arm": 0.15, "connecting_rod": 0.15}, "rod_reach",
      r"connecting_rod 0\.15 ≤ follower_arm 0\.15: the rod cannot reach the piston path"),
-]  # fmt: skip
+]
+# fmt: on
 
 
 @pytest.mark.parametrize(("mtype", "params", "condition", "pattern"), BROKEN)
@@ -95,16 +98,22 @@ def test_boundary_designs_are_valid():
 
 
 BAD_PARAMS = [
-    ({"crank": 1.0, "coupler": 3.0, "offset": 0.0, "rod": 1.0}, "rod",
-     r"offset_slider_crank has no parameter 'rod'; its parameters: crank, coupler, offset"),
+    (
+        {"crank": 1.0, "coupler": 3.0, "offset": 0.0, "rod": 1.0},
+        "rod",
+        r"offset_slider_crank has no parameter 'rod'; its parameters: crank, coupler, offset",
+    ),
     ({"crank": 1.0, "offset": 0.0}, "coupler", r"offset_slider_crank needs 'coupler'"),
-    ({"crank": -1.0, "coupler": 3.0, "offset": 0.0}, "crank",
-     r"offset_slider_crank.crank is a length and must be > 0, got -1"),
+    (
+        {"crank": -1.0, "coupler": 3.0, "offset": 0.0},
+        "crank",
+        r"offset_slider_crank.crank is a length and must be > 0, got -1",
+    ),
     ({"crank": 0.0, "coupler": 3.0, "offset": 0.0}, "crank", r"must be > 0, got 0"),
     ({"crank": math.nan, "coupler": 3.0, "offset": 0.0}, "crank", r"must be finite, got nan"),
     ({"crank": 1.0, "coupler": math.inf, "offset": 0.0}, "coupler", r"must be finite, got inf"),
     ({"crank": 1.0, "coupler": 3.0, "offset": "x"}, "offset", r"must be a number, got 'x'"),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize(("params", "field", "pattern"), BAD_PARAMS)
@@ -129,8 +138,14 @@ def test_unknown_type_lists_the_known_ones():
 def test_conditioning_flags_a_change_point_and_a_dead_point():
     """The drag-link project's coupler 0.40 is on the Grashof limit: the linkage folds flat
     (μ = 0°)."""
-    p = {"ground": 0.1, "crank": 0.225, "coupler": 0.40, "follower": 0.275,
-         "follower_arm": 0.15, "connecting_rod": 0.3}  # fmt: skip
+    p = {
+        "ground": 0.1,
+        "crank": 0.225,
+        "coupler": 0.40,
+        "follower": 0.275,
+        "follower_arm": 0.15,
+        "connecting_rod": 0.3,
+    }
     c = synth.analyze("drag_link_slider", p).conditioning
     assert c.validity_margin == 0.0 and c.limiting_condition == "grashof_coupler"
     assert c.dead_point_margin_deg == 0.0

@@ -51,6 +51,11 @@ def test_reversals_match_brute_force(mtype):
 
 def test_dithering_slider_is_reported():
     """A ram link barely longer than its reach: the ram dips between two equal maxima."""
-    p = {"crank": 0.1048, "pivot_distance": 1.0, "lever": 2.134, "ram_link": 0.1531,
-         "ram_height": 2.2753}  # fmt: skip
+    p = {
+        "crank": 0.1048,
+        "pivot_distance": 1.0,
+        "lever": 2.134,
+        "ram_link": 0.1531,
+        "ram_height": 2.2753,
+    }
     assert synth.analyze("crank_shaper", p).reversals == grid_reversals("crank_shaper", p) == 4

@@ -23,10 +23,10 @@ import numpy as np
 import pytest
 
 import synth
-from synth.analysis.loads import numbers
 from synth.errors import SynthError
 from synth.load import Load
 from synth.mechanisms import get, kinetics
+from synth.mechanisms.kinetics import numbers
 from synth.synthesis import certify
 
 from ..support.constructions import BOX, least_drawn, slider_crank_designs

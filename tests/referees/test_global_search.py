@@ -58,8 +58,11 @@ OBJECTIVES = ("max_transmission_angle", "min_size")
 MAX, SIZE = OBJECTIVES
 
 # parameters the targets set on their own: the default bounds limit a search, not these
-SET_BY_TARGETS = {"crank_shaper": {"lever"}, "whitworth": {"lever"},
-                  "drag_link_slider": {"follower_arm"}}  # fmt: skip
+SET_BY_TARGETS = {
+    "crank_shaper": {"lever"},
+    "whitworth": {"lever"},
+    "drag_link_slider": {"follower_arm"},
+}
 
 
 # quick form: per type a target with candidates (both objectives) and a refusal; the findings
@@ -286,8 +289,11 @@ def fixed_targets(mtype: str) -> list[tuple[float, float, dict[str, float]]]:
     for n, (tr, mu, q) in enumerate(_drawn(mtype)):
         names = sorted(q)
         one = names[n % len(names)]
-        chosen = [one] if n < len(names) or rng.random() < 0.5 else [
-            one, rng.choice([k for k in names if k != one])]  # fmt: skip
+        chosen = (
+            [one]
+            if n < len(names) or rng.random() < 0.5
+            else [one, rng.choice([k for k in names if k != one])]
+        )
         # the design's own numbers: two fixed parts of a slider-crank leave it alone,
         # so they must agree with the time ratio to rounding
         fixed = {str(k): float(q[k]) for k in chosen}
@@ -306,8 +312,12 @@ def fixed_cases():
     type ``fixed_targets`` with every objective."""
     out = list(FIXED_QUICK)
     if FULL:
-        out = [(mtype, o, tr, bound, fixed) for mtype in gs.TYPES
-               for tr, bound, fixed in fixed_targets(mtype) for o in FIXED_OBJECTIVES]  # fmt: skip
+        out = [
+            (mtype, o, tr, bound, fixed)
+            for mtype in gs.TYPES
+            for tr, bound, fixed in fixed_targets(mtype)
+            for o in FIXED_OBJECTIVES
+        ]
     for c in out:
         yield pytest.param(*c, id=case_id(c))
 

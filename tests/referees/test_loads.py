@@ -53,8 +53,13 @@ def _strokes(mtype, p, zone):
         if x in (0.0, 1.0):
             return start + x * work
         level = s0 + x * (s1 - s0)
-        return brentq(lambda t: bruteforce.position(mtype, p, np.array([t]))[0] - level,
-                      start, start + work, xtol=1e-15, rtol=1e-15)  # fmt: skip
+        return brentq(
+            lambda t: bruteforce.position(mtype, p, np.array([t]))[0] - level,
+            start,
+            start + work,
+            xtol=1e-15,
+            rtol=1e-15,
+        )
 
     def run(theta):
         return (bruteforce.position(mtype, p, theta) - s0) / (s1 - s0)
@@ -84,8 +89,13 @@ def test_the_torque_does_the_rams_work(mtype):
             load = Load(unit, RPM, slider_mass=mass, force_profile=profile)
         else:
             a = float(rng.uniform(0.0, 0.45))
-            load = Load(unit, RPM, cutting_force=float(rng.uniform(0, 5000)), slider_mass=mass,
-                        cutting_zone=(a, float(rng.uniform(a + 0.05, 1.0))))  # fmt: skip
+            load = Load(
+                unit,
+                RPM,
+                cutting_force=float(rng.uniform(0, 5000)),
+                slider_mass=mass,
+                cutting_zone=(a, float(rng.uniform(a + 0.05, 1.0))),
+            )
         profile = np.array(load.profile)
         theta = rng.uniform(0, 2 * math.pi, 48)
         got = synth.analyze(mtype, p, crank_angles_deg=np.degrees(theta), load=load)
@@ -159,12 +169,20 @@ def test_newton_euler_keeps_the_energy_balance(mtype):
     for i, p in enumerate(random_designs(mtype, 40, seed=22)):
         mu = float(rng.uniform(0, 0.3)) if i % 2 else 0.0
         down = float(rng.uniform(-180, 180)) if i % 4 > 1 else None
-        load = Load("mm", RPM, cutting_force=float(rng.uniform(0, 5000)), cutting_zone=(0.0, 1.0),
-                    slider_mass=float(rng.uniform(0, 200)), guide_friction=mu, gravity_deg=down,
-                    link_mass_per_length=float(rng.uniform(0.1, 50)))  # fmt: skip
+        load = Load(
+            "mm",
+            RPM,
+            cutting_force=float(rng.uniform(0, 5000)),
+            cutting_zone=(0.0, 1.0),
+            slider_mass=float(rng.uniform(0, 200)),
+            guide_friction=mu,
+            gravity_deg=down,
+            link_mass_per_length=float(rng.uniform(0.1, 50)),
+        )
         theta = rng.uniform(0, 2 * math.pi, 16)
-        got = synth.analyze(mtype, p, crank_angles_deg=np.degrees(theta), load=load,
-                            include=["forces"])  # fmt: skip
+        got = synth.analyze(
+            mtype, p, crank_angles_deg=np.degrees(theta), load=load, include=["forces"]
+        )
         _, _, lo, hi, _ = _strokes(mtype, p, (0.0, 1.0))
         inside, clear = _cutting(theta, lo, hi, margin=1e-9)
         s1 = np.abs(velocity(mtype, p, theta) * load.metres)
@@ -198,8 +216,13 @@ def test_the_guides_friction_on_a_slider_crank_by_hand():
             locked += 1
             continue
         theta = rng.uniform(0, 2 * math.pi, 32)
-        got = synth.analyze("offset_slider_crank", p, crank_angles_deg=np.degrees(theta),
-                            load=load, include=["forces"])  # fmt: skip
+        got = synth.analyze(
+            "offset_slider_crank",
+            p,
+            crank_angles_deg=np.degrees(theta),
+            load=load,
+            include=["forces"],
+        )
         bx, by, ex, ey = coupler(theta)
         v = velocity("offset_slider_crank", p, theta)
         ram = mass * OMEGA**2 * acceleration("offset_slider_crank", p, theta)
@@ -224,9 +247,14 @@ def _dense_swing(mtype, p, load, n=200_000):
     for a, b in ((lo, hi), (hi, lo + 2 * math.pi)):
         t = np.linspace(a, b, 2 * max(1, round(n * (b - a) / (4 * math.pi))) + 1)
         inner = np.degrees(np.clip(t, a + 1e-12, b - 1e-12))  # each end as its piece has it
-        y = np.concatenate([synth.analyze(mtype, p, crank_angles_deg=inner[i : i + 50_000],
-                                          load=load).curves.torque
-                            for i in range(0, inner.size, 50_000)])  # fmt: skip
+        y = np.concatenate(
+            [
+                synth.analyze(
+                    mtype, p, crank_angles_deg=inner[i : i + 50_000], load=load
+                ).curves.torque
+                for i in range(0, inner.size, 50_000)
+            ]
+        )
         pieces.append((t, y))
     mean = sum(simpson(y, x=t) for t, y in pieces) / (2 * math.pi)
     e = [np.zeros(1)]
@@ -241,9 +269,14 @@ def test_the_flywheel_matches_a_dense_integration(mtype):
     rng = np.random.default_rng(200 + TYPES.index(mtype))
     for p in random_designs(mtype, 3, seed=23):
         for zone in ((0.1, 0.9), (0.0, 1.0)):
-            load = Load("mm", RPM, cutting_force=float(rng.uniform(100, 5000)), cutting_zone=zone,
-                        slider_mass=float(rng.uniform(0, 200)),
-                        link_mass_per_length=float(rng.uniform(0, 20)))  # fmt: skip
+            load = Load(
+                "mm",
+                RPM,
+                cutting_force=float(rng.uniform(100, 5000)),
+                cutting_zone=zone,
+                slider_mass=float(rng.uniform(0, 200)),
+                link_mass_per_length=float(rng.uniform(0, 20)),
+            )
             got = synth.analyze(mtype, p, load=load).loads
             swing, mean = _dense_swing(mtype, p, load)
             assert got.flywheel.energy == pytest.approx(swing, rel=1e-7), (p, zone)
@@ -323,11 +356,22 @@ PROFILE = ((0.0, 500.0), (0.1, 3000.0), (0.6, 2000.0), (0.95, 2000.0))
 def test_the_mean_torque_is_the_cuts_work(mtype):
     for p in random_designs(mtype, 20, seed=24):
         for load, per_stroke in (
-            (Load("mm", RPM, cutting_force=1500.0, cutting_zone=(0.2, 0.7), slider_mass=80.0,
-                  link_mass_per_length=5.0), 1500.0 * 0.5),
-            (Load("mm", RPM, force_profile=PROFILE, slider_mass=80.0),
-             np.trapezoid([f for _, f in PROFILE], [u for u, _ in PROFILE])),
-        ):  # fmt: skip
+            (
+                Load(
+                    "mm",
+                    RPM,
+                    cutting_force=1500.0,
+                    cutting_zone=(0.2, 0.7),
+                    slider_mass=80.0,
+                    link_mass_per_length=5.0,
+                ),
+                1500.0 * 0.5,
+            ),
+            (
+                Load("mm", RPM, force_profile=PROFILE, slider_mass=80.0),
+                np.trapezoid([f for _, f in PROFILE], [u for u, _ in PROFILE]),
+            ),
+        ):
             a = synth.analyze(mtype, p, load=load)
             work = per_stroke * a.stroke * 1e-3  # J a turn: the inertia's is 0 over a turn
             assert a.loads.torque.mean == pytest.approx(work / (2 * math.pi), rel=1e-10)
@@ -358,8 +402,9 @@ def test_units_give_the_same_si_numbers(mtype):
     for p in random_designs(mtype, 5, seed=26):
         out = []
         for unit, per_metre in (("m", 1.0), ("mm", 1000.0), ("in", 1 / 0.0254)):
-            load = Load(unit, RPM, cutting_force=2000.0, slider_mass=50.0,
-                        link_mass_per_length=10.0)  # fmt: skip
+            load = Load(
+                unit, RPM, cutting_force=2000.0, slider_mass=50.0, link_mass_per_length=10.0
+            )
             q = {k: v * per_metre for k, v in p.items()}
             out.append(synth.analyze(mtype, q, load=load).loads)
         first = out[0]

@@ -37,8 +37,9 @@ REACH = 1e-4  # relative: the referee must come this close to ours, or it is too
 
 
 def best(mtype, objective, tr=1.6, bound=20.0, **kw):
-    r = synth.synthesize(tr, 1.0, bound, [{"type": mtype}], objective=objective,
-                         time_budget_ms=60_000, **kw)  # fmt: skip
+    r = synth.synthesize(
+        tr, 1.0, bound, [{"type": mtype}], objective=objective, time_budget_ms=60_000, **kw
+    )
     assert r.complete
     return r
 
@@ -77,10 +78,12 @@ ACROSS_DEG = math.degrees(math.acos(1 - 1e-3))
 @pytest.mark.parametrize("objective", [UNIFORM, PEAK])
 @pytest.mark.parametrize("mtype", REFEREED)
 def test_motion_optima_over_the_benchmark_targets(mtype, objective, tr, bound):
-    r = synth.synthesize(tr, 1.0, bound, [{"type": mtype}], objective=objective,
-                         time_budget_ms=120_000)  # fmt: skip
-    ref = motion_referee.search(mtype, objective, tr, max(bound, ACROSS_DEG),
-                                **EFFORT.get(mtype, {}))  # fmt: skip
+    r = synth.synthesize(
+        tr, 1.0, bound, [{"type": mtype}], objective=objective, time_budget_ms=120_000
+    )
+    ref = motion_referee.search(
+        mtype, objective, tr, max(bound, ACROSS_DEG), **EFFORT.get(mtype, {})
+    )
     if not r.candidates:
         assert ref.params is None, f"the referee finds {ref.params} where we find none"
         return
@@ -113,19 +116,30 @@ FIXED_QUICK = [
 def fixed_motion_cases():
     out = list(FIXED_QUICK)
     if STRESS:
-        out = [(mtype, o, tr, bound, fixed) for mtype in REFEREED
-               for tr, bound, fixed in fixed_targets(mtype) for o in (UNIFORM, PEAK)]  # fmt: skip
+        out = [
+            (mtype, o, tr, bound, fixed)
+            for mtype in REFEREED
+            for tr, bound, fixed in fixed_targets(mtype)
+            for o in (UNIFORM, PEAK)
+        ]
     for c in out:
         yield pytest.param(*c, id=case_id(c))
 
 
 @pytest.mark.parametrize(("mtype", "objective", "tr", "bound", "fixed"), list(fixed_motion_cases()))
 def test_motion_optima_with_fixed_parts(mtype, objective, tr, bound, fixed):
-    r = synth.synthesize(tr, 1.0, bound, [{"type": mtype, "fixed": fixed}], objective=objective,
-                         time_budget_ms=120_000)  # fmt: skip
+    r = synth.synthesize(
+        tr,
+        1.0,
+        bound,
+        [{"type": mtype, "fixed": fixed}],
+        objective=objective,
+        time_budget_ms=120_000,
+    )
     assert r.complete
-    ref = motion_referee.search(mtype, objective, tr, max(bound, ACROSS_DEG), fixed=fixed,
-                                **EFFORT_FIXED.get(mtype, {}))  # fmt: skip
+    ref = motion_referee.search(
+        mtype, objective, tr, max(bound, ACROSS_DEG), fixed=fixed, **EFFORT_FIXED.get(mtype, {})
+    )
     if not r.candidates:
         assert ref.params is None, f"the referee finds {ref.params} where we find none"
         return
@@ -146,8 +160,9 @@ def test_a_drag_link_optimum_that_starts_by_their_exact_measure_missed():
     angle at least acos(1 − 1e-3) (``motion.ACROSS``), so the referee searches with that
     bound."""
     mtype, objective = "drag_link_slider", PEAK
-    r = synth.synthesize(2.0, 300.0, 0.0, [{"type": mtype}], objective=objective,
-                         time_budget_ms=60_000)  # fmt: skip
+    r = synth.synthesize(
+        2.0, 300.0, 0.0, [{"type": mtype}], objective=objective, time_budget_ms=60_000
+    )
     c = r.candidates[0]
     assert_meets(c, 2.0, 300.0, 0.0)
     assert c.objective_value == pytest.approx(brute(c, objective), rel=1e-9)

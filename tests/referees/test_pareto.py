@@ -51,8 +51,7 @@ def assert_front(points, tr, stroke, bound):
     sizes = [c.size for c in points]
     assert angles == sorted(angles, reverse=True) and sizes == sorted(sizes, reverse=True)
     for a, b in itertools.permutations(points, 2):
-        better = (a.min_transmission_angle_deg >= b.min_transmission_angle_deg
-                  and a.size <= b.size)  # fmt: skip
+        better = a.min_transmission_angle_deg >= b.min_transmission_angle_deg and a.size <= b.size
         assert not better, f"{a.params} dominates {b.params}"
     mtype, n = points[0].type, len(points)
     assert [c.front.index for c in points] == list(range(n))[::-1]

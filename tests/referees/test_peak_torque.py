@@ -21,8 +21,13 @@ from ..support.assertions import assert_meets
 from .test_motion_search import ACROSS_DEG
 
 OBJECTIVE = "min_peak_torque"
-TYPES = ["offset_slider_crank", "whitworth", "crank_shaper", "crank_rocker_slider",
-         "drag_link_slider"]  # fmt: skip
+TYPES = [
+    "offset_slider_crank",
+    "whitworth",
+    "crank_shaper",
+    "crank_rocker_slider",
+    "drag_link_slider",
+]
 STRESS = os.environ.get("HYPOTHESIS_PROFILE") == "stress"
 # the referee's quick ones (5 s, 30 s; the drag-link's four-bar scale too, 4 s at this target)
 QUICK = [
@@ -34,8 +39,18 @@ QUICK = [
 LOAD = Load("m", 40.0, cutting_force=2.0, slider_mass=0.05, link_mass_per_length=0.01)
 BEATEN = 1e-6  # relative: the referee may beat ours by this much, no more
 REACH = 1e-4  # relative: the referee must come this close to ours, or it is too weak to judge
-SPREAD = [(1.3, 0.0), (1.3, 30.0), (1.6, 10.0), (1.6, 20.0), (1.6, 40.0), (2.0, 0.0),
-          (2.0, 20.0), (2.5, 10.0), (2.5, 30.0), (2.5, 40.0)]  # fmt: skip
+SPREAD = [
+    (1.3, 0.0),
+    (1.3, 30.0),
+    (1.6, 10.0),
+    (1.6, 20.0),
+    (1.6, 40.0),
+    (2.0, 0.0),
+    (2.0, 20.0),
+    (2.5, 10.0),
+    (2.5, 30.0),
+    (2.5, 40.0),
+]
 
 
 # the crank-rocker's many local optima need a referee of more effort (as for the motion
@@ -44,8 +59,16 @@ EFFORT = {"crank_rocker_slider": {"seeds": (0, 1, 2), "popsize": 20, "maxiter": 
 
 
 def least(mtype, tr=1.6, bound=20.0, load=LOAD, **kw):
-    r = synth.synthesize(tr, 1.0, bound, [{"type": mtype}], objective=OBJECTIVE, load=load,
-                         time_budget_ms=120_000, **kw)  # fmt: skip
+    r = synth.synthesize(
+        tr,
+        1.0,
+        bound,
+        [{"type": mtype}],
+        objective=OBJECTIVE,
+        load=load,
+        time_budget_ms=120_000,
+        **kw,
+    )
     assert r.complete
     return r
 
@@ -80,9 +103,11 @@ SLOTTER = Load(
 )
 
 
-@pytest.mark.parametrize(("mtype", "tr", "bound", "load"), [(*q, LOAD) for q in QUICK]
-                         + [("offset_slider_crank", 1.6, 20.0, RUBBING),
-                            ("offset_slider_crank", 1.6, 20.0, SLOTTER)])  # fmt: skip
+@pytest.mark.parametrize(
+    ("mtype", "tr", "bound", "load"),
+    [(*q, LOAD) for q in QUICK]
+    + [("offset_slider_crank", 1.6, 20.0, RUBBING), ("offset_slider_crank", 1.6, 20.0, SLOTTER)],
+)
 def test_the_least_peak_torque_is_not_beaten_by_a_global_search(mtype, tr, bound, load):
     against_the_referee(mtype, tr, bound, load)
 
@@ -132,6 +157,7 @@ def test_requests_it_cannot_take_name_the_field(kw, field):
 
 def test_the_limit_goes_with_the_objective():
     with pytest.raises(InvalidParameters) as e:
-        synth.synthesize(1.6, 1.0, 20.0, objective="max_transmission_angle", load=LOAD,
-                         max_peak_torque=5.0)  # fmt: skip
+        synth.synthesize(
+            1.6, 1.0, 20.0, objective="max_transmission_angle", load=LOAD, max_peak_torque=5.0
+        )
     assert e.value.loc == ("max_peak_torque",)

@@ -115,7 +115,10 @@ def test_sensitivities_match_central_differences(mtype):
             size = max(max(abs(v) for v in ours.values()), abs(value) / scale)
             for name, v in ours.items():
                 assert v == pytest.approx(fd[name][q], rel=1e-6, abs=1e-6 * size), (
-                    quantity, name, p)  # fmt: skip
+                    quantity,
+                    name,
+                    p,
+                )
     assert checked >= 0.9 * N
 
 
@@ -164,13 +167,15 @@ def test_the_envelope_holds_every_pin_path_sampled_densely(mtype):
 
 
 def test_candidates_carry_what_the_request_includes():
-    asked = synth.synthesize(1.6, 300.0, 20.0, include=["motion", "envelope"],
-                             tolerance=Tolerance(relative=1e-3))  # fmt: skip
+    asked = synth.synthesize(
+        1.6, 300.0, 20.0, include=["motion", "envelope"], tolerance=Tolerance(relative=1e-3)
+    )
     plain = synth.synthesize(1.6, 300.0, 20.0)
     assert [c.params for c in asked.candidates] == [c.params for c in plain.candidates]
     for c, bare in zip(asked.candidates, plain.candidates, strict=True):
-        a = synth.analyze(c.type, c.params, include=["motion", "envelope"],
-                          tolerance=Tolerance(relative=1e-3))  # fmt: skip
+        a = synth.analyze(
+            c.type, c.params, include=["motion", "envelope"], tolerance=Tolerance(relative=1e-3)
+        )
         assert (c.motion, c.envelope, c.sensitivities) == (a.motion, a.envelope, a.sensitivities)
         assert c.sensitivities.deviation is not None
         assert (bare.motion, bare.envelope, bare.sensitivities) == (None, None, None)

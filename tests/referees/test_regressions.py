@@ -56,8 +56,14 @@ def test_a_slider_that_stands_still_is_refused():
 def test_a_change_point_whose_circuit_switches_is_refused():
     """ground + follower = crank + coupler: at the flat position the left-hand circuit jumps,
     so both extremes fell at one crank angle (a division by zero, a 500 through the API)."""
-    p = {"ground": 1.0, "crank": 1.0001, "coupler": 1.9999, "follower": 2.0,
-         "follower_arm": 1.0, "connecting_rod": 2.0}  # fmt: skip
+    p = {
+        "ground": 1.0,
+        "crank": 1.0001,
+        "coupler": 1.9999,
+        "follower": 2.0,
+        "follower_arm": 1.0,
+        "connecting_rod": 2.0,
+    }
     with pytest.raises(synth.InvalidDesign, match="change point") as e:
         synth.analyze("drag_link_slider", p)
     assert e.value.condition == "change_point"
@@ -71,8 +77,13 @@ def test_a_design_exactly_on_a_limit_is_valid_despite_rounding():
 
 def test_hidden_pair_of_dead_centres_is_found():
     """TR 69 with a ram link: both dead centres sat between two grid points."""
-    p = {"crank": 0.999, "pivot_distance": 1.0, "lever": 1.999, "ram_link": 1.9096243545533795,
-         "ram_height": 0.08937564544662047}  # fmt: skip
+    p = {
+        "crank": 0.999,
+        "pivot_distance": 1.0,
+        "lever": 1.999,
+        "ram_link": 1.9096243545533795,
+        "ram_height": 0.08937564544662047,
+    }
     a = synth.analyze("crank_shaper", p)
     top = 90 + math.degrees(math.asin(0.999))  # the lever's extreme: sin ψmax = crank/pivot
     assert a.extremes["max"].crank_angle_deg == pytest.approx(top, abs=1e-10)
@@ -82,16 +93,31 @@ def test_hidden_pair_of_dead_centres_is_found():
 @pytest.mark.parametrize("rod", [1.00001, 1.0000001])
 def test_whitworth_rod_barely_longer_than_the_lever(rod):
     """sqrt(l² − L² cos² ψ) and −L sin ψ + root both cancelled near the rod's dead point."""
-    assert_exact("whitworth", {"crank": 1.0, "pivot_distance": 0.999, "lever": 1.0,
-                               "connecting_rod": rod})  # fmt: skip
+    assert_exact(
+        "whitworth", {"crank": 1.0, "pivot_distance": 0.999, "lever": 1.0, "connecting_rod": rod}
+    )
 
 
 def test_no_math_domain_error_escapes_the_api():
     """A cos μ of 1 + 1e-16 reached math.acos: a 500."""
-    body = {"mechanism": {"type": "crank_rocker_slider", "params": {
-        "ground": 0.1, "crank": 0.225, "coupler": 0.2504, "rocker": 1e-9, "rocker_arm": 1e-9,
-        "connecting_rod": 999999999999.0, "slider_height": 1e-9}},
-        "vary": "coupler", "start": 0.1, "stop": 0.5, "points": 101}  # fmt: skip
+    body = {
+        "mechanism": {
+            "type": "crank_rocker_slider",
+            "params": {
+                "ground": 0.1,
+                "crank": 0.225,
+                "coupler": 0.2504,
+                "rocker": 1e-9,
+                "rocker_arm": 1e-9,
+                "connecting_rod": 999999999999.0,
+                "slider_height": 1e-9,
+            },
+        },
+        "vary": "coupler",
+        "start": 0.1,
+        "stop": 0.5,
+        "points": 101,
+    }
     with TestClient(app) as client:
         assert client.post("/v1/sweep", json=body).status_code in (200, 422)
 
@@ -103,8 +129,14 @@ def test_drag_link_coupler_at_the_double_root():
     from mpmath import acos, mpf
 
     fixed = {"ground": 0.1, "crank": 0.225, "follower": 0.275, "connecting_rod": 0.3}
-    s = synth.sweep("drag_link_slider", {**fixed, "coupler": 0.2, "follower_arm": 0.15},
-                    "coupler", 0.15, 0.40, 51)  # fmt: skip
+    s = synth.sweep(
+        "drag_link_slider",
+        {**fixed, "coupler": 0.2, "follower_arm": 0.15},
+        "coupler",
+        0.15,
+        0.40,
+        51,
+    )
     tr_min = s.time_ratio_range["min"].time_ratio
     r = synth.synthesize(tr_min, 0.3, mechanisms=[{"type": "drag_link_slider", "fixed": fixed}])
     assert r.candidates, r.infeasible
@@ -152,15 +184,27 @@ def test_offset_slider_crank_past_its_limit_by_rounding():
 
 FOUR_BAR_CANCELLATIONS = {
     # the follower pin built as A + (D − A): a few ulp of |A| = 958 of a 2-long follower
-    "crank-500x-follower": {"ground": 1.0, "crank": 958.3021617097721,
-                            "coupler": 958.4740367097721, "follower": 2.0},
+    "crank-500x-follower": {
+        "ground": 1.0,
+        "crank": 958.3021617097721,
+        "coupler": 958.4740367097721,
+        "follower": 2.0,
+    },
     # Heron factors summed left to right, (r2 − r1 − r3 + r4) rounded at the crank's size
-    "kite-crank-1000x-ground": {"ground": 31.622776601683793, "crank": 31654.399378285478,
-                                "coupler": 31654.399378285478, "follower": 31.93900436770063},
+    "kite-crank-1000x-ground": {
+        "ground": 31.622776601683793,
+        "crank": 31654.399378285478,
+        "coupler": 31654.399378285478,
+        "follower": 31.93900436770063,
+    },
     # back = (d² − r3² + r4²)/2d² with −r3² + r4² summed as −4.0003 + 4 (crank ≈ ground)
-    "crank-near-ground": {"ground": 1.0, "crank": 1.000316227766017,
-                          "coupler": 2.0000790569415043, "follower": 2.0},
-}  # fmt: skip
+    "crank-near-ground": {
+        "ground": 1.0,
+        "crank": 1.000316227766017,
+        "coupler": 2.0000790569415043,
+        "follower": 2.0,
+    },
+}
 
 
 @pytest.mark.parametrize("links", FOUR_BAR_CANCELLATIONS.values(), ids=FOUR_BAR_CANCELLATIONS)
@@ -195,9 +239,14 @@ def test_drag_link_with_its_crank_fixed_takes_the_better_end_of_its_segment():
     bound's two crossings, a local minimum at each end, and it took the worse. The other end
     (the issue's design, to its ten digits: the 50-digit forms give its time ratio and
     stroke) is 323.876125: the reduced solver finds it and certifies it."""
-    design = {"ground": 10.0, "crank": 100.0, "coupler": 98.2414934787,
-              "follower": 12.4257432278, "follower_arm": 50.0,
-              "connecting_rod": 53.2088886576}  # fmt: skip
+    design = {
+        "ground": 10.0,
+        "crank": 100.0,
+        "coupler": 98.2414934787,
+        "follower": 12.4257432278,
+        "follower_arm": 50.0,
+        "connecting_rod": 53.2088886576,
+    }
     tr, stroke = exact.time_ratio_and_stroke("drag_link_slider", design)
     assert tr == pytest.approx(1.5, rel=1e-9) and stroke == pytest.approx(100.0, rel=1e-12)
     spec = {"type": "drag_link_slider", "fixed": {"crank": 100.0}}

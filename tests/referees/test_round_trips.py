@@ -26,11 +26,14 @@ def test_round_trip(mtype):
         full = bruteforce.complete(mtype, p)
         b = bruteforce.simulate(mtype, full)
         names = sorted(p)
-        fixed = {k: full[k] for k in rng.choice(names, size=min(len(names), rng.integers(1, 3)),
-                                                 replace=False)}  # fmt: skip
+        fixed = {
+            k: full[k]
+            for k in rng.choice(names, size=min(len(names), rng.integers(1, 3)), replace=False)
+        }
         bound = max(0.0, b["min_transmission_deg"] - rng.uniform(1.0, 2.0))
-        r = synth.synthesize(b["time_ratio"], b["stroke"], bound,
-                             mechanisms=[{"type": mtype, "fixed": fixed}])  # fmt: skip
+        r = synth.synthesize(
+            b["time_ratio"], b["stroke"], bound, mechanisms=[{"type": mtype, "fixed": fixed}]
+        )
         if not r.candidates:
             failures.append((p, fixed, bound, r.infeasible))
             continue

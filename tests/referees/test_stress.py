@@ -133,8 +133,14 @@ def test_analysis_agrees_with_brute_force_at_the_edges(mtype, data):
             return
         assert b["min_transmission_deg"] < 0.01 or b["stroke"] == 0, (p, b)
         return
-    values = [a.time_ratio, a.stroke, a.transmission.min_deg, a.transmission.max_deg,
-              a.extremes["min"].position, a.extremes["max"].position]  # fmt: skip
+    values = [
+        a.time_ratio,
+        a.stroke,
+        a.transmission.min_deg,
+        a.transmission.max_deg,
+        a.extremes["min"].position,
+        a.extremes["max"].position,
+    ]
     assert finite(*values)
     assert a.time_ratio >= 1 and a.stroke > 0
     if at_change_point(a):
@@ -217,8 +223,7 @@ def test_offset_mirror_invariance(data):
 
 
 @pytest.mark.parametrize("mtype", all_types())
-@given(p=st.lists(log_uniform(1e-6, 1e6), min_size=7, max_size=7),
-       zero=st.booleans())  # fmt: skip
+@given(p=st.lists(log_uniform(1e-6, 1e6), min_size=7, max_size=7), zero=st.booleans())
 def test_any_numbers_give_an_answer_or_a_domain_error(mtype, p, zero):
     names = synth.mechanisms.get(mtype).names
     params = dict(zip(names, p, strict=False))
@@ -240,11 +245,17 @@ def test_synthesis_round_trip_at_the_edges(mtype, data):
     a = analyzed(mtype, p)
     assume(a is not None and a.reversals == 2)
     names = sorted(p)
-    fixed = {k: a.params[k] for k in data.draw(st.lists(st.sampled_from(names), max_size=2,
-                                                        unique=True))}  # fmt: skip
+    fixed = {
+        k: a.params[k] for k in data.draw(st.lists(st.sampled_from(names), max_size=2, unique=True))
+    }
     bound = max(0.0, a.transmission.min_deg - 1.0)
-    request = dict(time_ratio=a.time_ratio, stroke=a.stroke, min_transmission_angle_deg=bound,
-                   mechanisms=[{"type": mtype, "fixed": fixed}], time_budget_ms=20_000)  # fmt: skip
+    request = dict(
+        time_ratio=a.time_ratio,
+        stroke=a.stroke,
+        min_transmission_angle_deg=bound,
+        mechanisms=[{"type": mtype, "fixed": fixed}],
+        time_budget_ms=20_000,
+    )
     r = synth.synthesize(**request)
     for c in r.candidates:
         assert c.verified and max(c.residuals.values()) <= 1e-9

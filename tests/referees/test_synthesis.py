@@ -72,9 +72,12 @@ def test_every_type_by_default_and_ranked_by_angle():
     mus = [round(c.min_transmission_angle_deg, 9) for c in r.candidates]
     assert mus == sorted(mus, reverse=True)
     assert {c.type for c in r.candidates} == {
-        "offset_slider_crank", "crank_shaper", "whitworth", "crank_rocker_slider",
+        "offset_slider_crank",
+        "crank_shaper",
+        "whitworth",
+        "crank_rocker_slider",
         "drag_link_slider",
-    }  # fmt: skip
+    }
     for c in r.candidates:
         assert_meets(c, 1.5, 0.3, 20.0)
 
@@ -146,8 +149,9 @@ def test_the_smallest_four_bar_with_a_fixed_link_is_searched_on_both_families(gr
     smallest design (6.1086 against 6.9075, 10.8649 against 13.1654, both also found by the
     generic multistart); only one family was searched."""
     fixed = {"ground": ground, "connecting_rod": 0.0}
-    r = synth.synthesize(1.3, 1.0, 20.0, [{"type": "crank_rocker_slider", "fixed": fixed}],
-                         objective="min_size")  # fmt: skip
+    r = synth.synthesize(
+        1.3, 1.0, 20.0, [{"type": "crank_rocker_slider", "fixed": fixed}], objective="min_size"
+    )
     (c,) = r.candidates
     assert c.size == pytest.approx(smallest, abs=1e-4)
     assert_meets(c, 1.3, 1.0, 20.0)
@@ -155,9 +159,11 @@ def test_the_smallest_four_bar_with_a_fixed_link_is_searched_on_both_families(gr
 
 @pytest.mark.parametrize(
     "tr, stroke, follower",
-    [(1.0255889517581471, 0.6098632148922783, 0.40052145596204525),
-     (1.0461947415855506, 24.278736481423202, 34.765720600521206)],
-)  # fmt: skip
+    [
+        (1.0255889517581471, 0.6098632148922783, 0.40052145596204525),
+        (1.0461947415855506, 24.278736481423202, 34.765720600521206),
+    ],
+)
 def test_a_fixed_follower_with_two_links_at_their_bounds_is_answered_exactly(tr, stroke, follower):
     """The best drag-link with its follower fixed lies where a link's bound cuts the curve
     off at a second bound (a corner the pairs' ranking missed), or beside a grid minimum
@@ -324,8 +330,9 @@ def test_a_contradiction_beyond_the_tolerance_shows_the_difference():
     digits to tell them apart."""
     fixed = {"lever": 0.0258864340902721, "pivot_distance": 0.013148507569858659}
     spec = {"type": "crank_shaper", "fixed": fixed}
-    (why,) = synth.synthesize(1.2239479903544184, 0.008155153404085756 * (1 + 2e-9),
-                              mechanisms=[spec]).infeasible  # fmt: skip
+    (why,) = synth.synthesize(
+        1.2239479903544184, 0.008155153404085756 * (1 + 2e-9), mechanisms=[spec]
+    ).infeasible
     assert why.code == "FIXED_PARTS_CONTRADICT_TARGETS"
     got, want = why.reason.split(" gives stroke ")[1].split(" (")[0].split(", not ")
     assert got != want and float(got) != float(want)

@@ -1,6 +1,7 @@
 """House rules the code keeps, read from the source: synth's packages import only downwards,
 no module uses another package's private names, no module of synth is longer than a reader
-can hold, and every Markdown file the tree names is in it."""
+can hold, the formatter decides the layout but for a few tables, and every Markdown file the
+tree names is in it."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ("synth", "api", "benchmarks", "tests")
 MAX_LINES = 450  # per module of synth
+MAX_UNFORMATTED = 10  # places the formatter is told to leave alone (fmt: skip, fmt: off)
 
 
 def private(name: str) -> bool:
@@ -21,8 +23,9 @@ def private(name: str) -> bool:
 
 
 def python_files(*tops: str) -> list[Path]:
-    return sorted(p for top in tops for p in (ROOT / top).rglob("*.py")
-                  if "__pycache__" not in p.parts)  # fmt: skip
+    return sorted(
+        p for top in tops for p in (ROOT / top).rglob("*.py") if "__pycache__" not in p.parts
+    )
 
 
 def module_of(path: Path) -> tuple[str, str]:
@@ -87,8 +90,9 @@ def private_uses(path: Path) -> list[str]:
     def report(node: ast.AST, dotted: str, how: str) -> None:
         owner = crossing(dotted, package)
         if owner is not None:
-            found.append(f"{rel}:{node.lineno}: {how} {dotted} (private to {owner}, "
-                         f"used from {package})")  # fmt: skip
+            found.append(
+                f"{rel}:{node.lineno}: {how} {dotted} (private to {owner}, used from {package})"
+            )
 
     for node in ast.walk(tree):
         if isinstance(node, ast.Import):
@@ -185,9 +189,27 @@ def test_synth_imports_only_downwards():
 
 
 def test_no_module_of_synth_is_over_450_lines():
-    long = {str(p.relative_to(ROOT)): n for p in python_files("synth")
-            if (n := len(p.read_text().splitlines())) > MAX_LINES}  # fmt: skip
+    long = {
+        str(p.relative_to(ROOT)): n
+        for p in python_files("synth")
+        if (n := len(p.read_text().splitlines())) > MAX_LINES
+    }
     assert not long, f"over {MAX_LINES} lines: {long}"
+
+
+def test_the_formatter_decides_the_layout_but_in_a_few_places_each_with_its_reason():
+    """At most ``MAX_UNFORMATTED`` places in the tree keep their own layout, each with a
+    comment on the line before that says why."""
+    places, bare = [], []
+    for p in python_files(*PACKAGES):
+        lines = p.read_text().splitlines()
+        for i, line in enumerate(lines):
+            if re.search(r"#\s*fmt:\s*(skip|off)", line):
+                places.append(f"{p.relative_to(ROOT)}:{i + 1}")
+                if i == 0 or not lines[i - 1].lstrip().startswith("#"):
+                    bare.append(places[-1])
+    assert len(places) <= MAX_UNFORMATTED, places
+    assert not bare, f"no reason given: {bare}"
 
 
 # a Markdown file's name: path characters ending in .md, not inside a longer path or a URL
@@ -204,7 +226,7 @@ def tree() -> list[str]:
         text=True,
         check=True,
     ).stdout
-    return sorted({f for f in out.splitlines() if (ROOT / f).is_file()})  # fmt: skip
+    return sorted({f for f in out.splitlines() if (ROOT / f).is_file()})
 
 
 def test_every_markdown_file_named_is_in_the_repository():

@@ -11,8 +11,16 @@ import pytest
 
 from ..support.notebooks import NOTEBOOKS, execute
 
-NAMES = ("crank_slotted_lever_lab", "scotch_yoke_shm", "drag_link_project", "textbook_examples",
-         "synthesis_tour", "shaper_loads", "benchmark", "atlas")  # fmt: skip
+NAMES = (
+    "crank_slotted_lever_lab",
+    "scotch_yoke_shm",
+    "drag_link_project",
+    "textbook_examples",
+    "synthesis_tour",
+    "shaper_loads",
+    "benchmark",
+    "atlas",
+)
 
 
 def test_the_notebooks_are_the_ones_named():
@@ -20,8 +28,12 @@ def test_the_notebooks_are_the_ones_named():
 
 
 def images(nb) -> int:
-    return sum("image/png" in o.get("data", {}) for c in nb.cells if c.cell_type == "code"
-               for o in c.outputs)  # fmt: skip
+    return sum(
+        "image/png" in o.get("data", {})
+        for c in nb.cells
+        if c.cell_type == "code"
+        for o in c.outputs
+    )
 
 
 @pytest.mark.parametrize("name", NAMES)

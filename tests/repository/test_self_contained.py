@@ -27,10 +27,14 @@ def shipped() -> list[Path]:
         text=True,
         check=True,
     ).stdout.split()
-    return [ROOT / f for f in sorted(set(files))
-            if not f.startswith("benchmarks/results/") and (ROOT / f).is_file()
-            and f != "tests/repository/test_self_contained.py"
-            and Path(f).suffix in {".py", ".md", ".ipynb", ".toml", ".cfg", ""}]  # fmt: skip
+    return [
+        ROOT / f
+        for f in sorted(set(files))
+        if not f.startswith("benchmarks/results/")
+        and (ROOT / f).is_file()
+        and f != "tests/repository/test_self_contained.py"
+        and Path(f).suffix in {".py", ".md", ".ipynb", ".toml", ".cfg", ""}
+    ]
 
 
 @pytest.mark.parametrize("path", shipped(), ids=lambda p: str(p.relative_to(ROOT)))

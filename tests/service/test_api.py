@@ -108,8 +108,11 @@ def test_analyze_slotted_link_lab_scotch_yoke(client):
 
 def test_analyze_drag_link_project_at_60deg(client):
     p = {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504}
-    body = {"mechanism": design("drag_link_slider", **p), "crank_speed": 10.0,
-            "crank_angles_deg": [60.0]}  # fmt: skip
+    body = {
+        "mechanism": design("drag_link_slider", **p),
+        "crank_speed": 10.0,
+        "crank_angles_deg": [60.0],
+    }
     out = client.post("/v1/analyze", json=body).json()
     h = 1e-4
     s = bruteforce.position("drag_link_slider", p, math.radians(60) + np.array([-h, 0.0, h]))
@@ -121,8 +124,9 @@ def test_analyze_drag_link_project_at_60deg(client):
 
 
 def test_analyze_without_curves_has_no_curves(client):
-    body = {"mechanism": design("whitworth", crank=75, pivot_distance=50, lever=150,
-                                connecting_rod=200)}  # fmt: skip
+    body = {
+        "mechanism": design("whitworth", crank=75, pivot_distance=50, lever=150, connecting_rod=200)
+    }
     out = client.post("/v1/analyze", json=body).json()
     assert "curves" not in out and "motion" not in out and "sensitivities" not in out
     assert out["time_ratio"] == pytest.approx(2.73524, abs=5e-6)
@@ -130,8 +134,11 @@ def test_analyze_without_curves_has_no_curves(client):
 
 
 def test_analyze_includes_motion_and_tolerances_when_asked(client):
-    body = {"mechanism": design("scotch_yoke", crank=35.0), "include": ["motion", "envelope"],
-            "tolerance": {"relative": 1e-3}}  # fmt: skip
+    body = {
+        "mechanism": design("scotch_yoke", crank=35.0),
+        "include": ["motion", "envelope"],
+        "tolerance": {"relative": 1e-3},
+    }
     out = client.post("/v1/analyze", json=body).json()
     assert out["motion"]["working_speed_fluctuation"]["whole"] == pytest.approx(math.pi / 2)
     peak = out["motion"]["peak_acceleration"]
@@ -145,14 +152,22 @@ def test_analyze_includes_motion_and_tolerances_when_asked(client):
     assert sens["deviation"]["stroke"] == pytest.approx(0.07)
     assert sens["tolerance"] == {"absolute": None, "relative": 1e-3}
     # the crank pin's circle holds everything: the yoke's pin travels along its diameter
-    assert out["envelope"] == {"x": [-35.0, 35.0], "y": [-35.0, 35.0], "width": 70.0,
-                               "height": 70.0, "link_length_sum": 35.0}  # fmt: skip
+    assert out["envelope"] == {
+        "x": [-35.0, 35.0],
+        "y": [-35.0, 35.0],
+        "width": 70.0,
+        "height": 70.0,
+        "link_length_sum": 35.0,
+    }
 
 
 def test_analyze_gives_the_pins_at_the_curves_angles_when_asked(client):
     p = {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504}
-    body = {"mechanism": design("drag_link_slider", **p), "crank_angles_deg": [0, 90, 180],
-            "include": ["pins"]}  # fmt: skip
+    body = {
+        "mechanism": design("drag_link_slider", **p),
+        "crank_angles_deg": [0, 90, 180],
+        "include": ["pins"],
+    }
     r = client.post("/v1/analyze", json=body)
     assert r.status_code == 200, r.text
     pins = r.json()["curves"]["pins"]
@@ -175,8 +190,11 @@ def test_analyze_pins_without_angles_is_422_at_include(client):
 
 
 def test_analyze_has_no_pins_unless_asked(client):
-    body = {"mechanism": design("scotch_yoke", crank=35.0), "samples": 4,
-            "include": ["motion", "envelope"]}  # fmt: skip
+    body = {
+        "mechanism": design("scotch_yoke", crank=35.0),
+        "samples": 4,
+        "include": ["motion", "envelope"],
+    }
     r = client.post("/v1/analyze", json=body)
     assert r.status_code == 200, r.text
     assert "pins" not in r.json()["curves"] and '"pins"' not in r.text
@@ -225,8 +243,9 @@ def test_the_openapi_shows_the_pins_and_forces_for_an_analysis_only(client):
 
 
 def test_invalid_design_names_each_parameter(client):
-    body = {"mechanism": design("whitworth", crank=75, pivot_distance=50, lever=150,
-                                connecting_rod=135)}  # fmt: skip
+    body = {
+        "mechanism": design("whitworth", crank=75, pivot_distance=50, lever=150, connecting_rod=135)
+    }
     r = client.post("/v1/analyze", json=body)
     assert r.status_code == 422
     detail = r.json()["detail"]
@@ -280,9 +299,13 @@ def test_the_default_answer_is_the_front_with_families(client):
 
 
 def test_a_motion_objective_answers_with_each_candidates_motion(client):
-    body = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0,
-            "objective": "uniform_cutting_speed",
-            "mechanisms": [{"type": "whitworth"}]}  # fmt: skip
+    body = {
+        "time_ratio": 1.6,
+        "stroke": 300.0,
+        "min_transmission_angle_deg": 20.0,
+        "objective": "uniform_cutting_speed",
+        "mechanisms": [{"type": "whitworth"}],
+    }
     out = client.post("/v1/synthesize", json=body).json()
     c = out["candidates"][0]
     assert c["objective_value"] == c["motion"]["working_speed_fluctuation"]["middle"]
@@ -290,8 +313,13 @@ def test_a_motion_objective_answers_with_each_candidates_motion(client):
 
 
 def test_a_synthesis_with_a_load_gives_each_candidate_its_loads(client):
-    body = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 35.0,
-            "mechanisms": [{"type": "whitworth"}], "load": LOAD}  # fmt: skip
+    body = {
+        "time_ratio": 1.6,
+        "stroke": 300.0,
+        "min_transmission_angle_deg": 35.0,
+        "mechanisms": [{"type": "whitworth"}],
+        "load": LOAD,
+    }
     r = client.post("/v1/synthesize", json=body)
     assert r.status_code == 200, r.text
     cands = r.json()["candidates"]
@@ -391,8 +419,12 @@ def test_the_least_peak_torque_answers_with_each_candidates_loads(client):
 
 
 def test_synthesize_infeasible_is_200_with_reasons(client):
-    body = {"time_ratio": 3.0, "stroke": 100.0, "min_transmission_angle_deg": 30.0,
-            "mechanisms": [{"type": "offset_slider_crank"}]}  # fmt: skip
+    body = {
+        "time_ratio": 3.0,
+        "stroke": 100.0,
+        "min_transmission_angle_deg": 30.0,
+        "mechanisms": [{"type": "offset_slider_crank"}],
+    }
     r = client.post("/v1/synthesize", json=body)
     assert r.status_code == 200
     out = r.json()
@@ -401,8 +433,13 @@ def test_synthesize_infeasible_is_200_with_reasons(client):
 
 
 def test_sweep_drag_link_project_fig5(client):
-    body = {"mechanism": design("drag_link_slider", **ref.DRAG_LINK_PROJECT, coupler=0.3),
-            "vary": "coupler", "start": 0.1, "stop": 0.5, "points": 41}  # fmt: skip
+    body = {
+        "mechanism": design("drag_link_slider", **ref.DRAG_LINK_PROJECT, coupler=0.3),
+        "vary": "coupler",
+        "start": 0.1,
+        "stop": 0.5,
+        "points": 41,
+    }
     out = client.post("/v1/sweep", json=body).json()
     assert out["valid_interval"] == [[pytest.approx(0.15), pytest.approx(0.40)]]
     assert out["time_ratio_range"]["min"]["time_ratio"] == pytest.approx(1.4298, abs=5e-5)
@@ -414,8 +451,12 @@ SHAPER = {"crank": 40.0, "pivot_distance": 160.0, "lever": 240.0}
 ANALYZE = {"mechanism": design("crank_shaper", **SHAPER)}
 SYNTH = {"time_ratio": 1.5, "stroke": 1.0}
 SPEC = {"type": "whitworth"}
-SWEEP = {"mechanism": design("crank_shaper", **SHAPER), "vary": "crank", "start": 10.0,
-         "stop": 50.0}  # fmt: skip
+SWEEP = {
+    "mechanism": design("crank_shaper", **SHAPER),
+    "vary": "crank",
+    "start": 10.0,
+    "stop": 50.0,
+}
 LOAD = {"length_unit": "mm", "crank_rpm": 40.0, "cutting_force": 2000.0, "slider_mass": 50.0}
 
 
@@ -449,8 +490,7 @@ BAD = [
     ("/v1/analyze", {**ANALYZE, "samples": 4, "crank_angles_deg": [1.0]}, "not both"),
     ("/v1/analyze", with_(ANALYZE, ["crank_speed"], "inf"), "crank_speed"),
     ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"absolute": -0.1}), "tolerance"),
-    ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"absolute": 1.0, "relative": 0.1}),
-     "tolerance"),
+    ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"absolute": 1.0, "relative": 0.1}), "tolerance"),
     ("/v1/analyze", with_(ANALYZE, ["tolerance"], {"relative": "nan"}), "relative"),
     ("/v1/analyze", with_(ANALYZE, ["include"], ["curvature"]), "include"),
     ("/v1/analyze", with_(ANALYZE, ["include"], ["pins"]), "include"),
@@ -463,27 +503,43 @@ BAD = [
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "crank_rpm": 0.0}), "crank_rpm"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "cutting_force": -1.0}), "cutting_force"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "slider_mass": "NaN"}), "slider_mass"),
-    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "cutting_zone": [0.9, 0.1]}),
-     "cutting_zone"),
-    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "cutting_zone": [0.1, 1.5]}),
-     "cutting_zone"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "cutting_zone": [0.9, 0.1]}), "cutting_zone"),
+    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "cutting_zone": [0.1, 1.5]}), "cutting_zone"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "efficiency": 0.0}), "efficiency"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "flywheel_rpm": 0.0}), "flywheel_rpm"),
-    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "ram_incline_deg": -95.0}),
-     "ram_incline_deg"),
-    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "ram_incline_deg": 0.0, "gravity_deg": 0.0}),
-     "not both"),
+    (
+        "/v1/analyze",
+        with_(ANALYZE, ["load"], {**LOAD, "ram_incline_deg": -95.0}),
+        "ram_incline_deg",
+    ),
+    (
+        "/v1/analyze",
+        with_(ANALYZE, ["load"], {**LOAD, "ram_incline_deg": 0.0, "gravity_deg": 0.0}),
+        "not both",
+    ),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "motor_rpm": -960.0}), "motor_rpm"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "flywheel_width": "inf"}), "flywheel_width"),
     ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "colour": 1}), "colour"),
-    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, 5.0], [1.2, 6.0]]}),
-     "force_profile"),
-    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.5, 5.0], [0.4, 6.0]]}),
-     "force_profile"),
-    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, -5.0], [1, 6.0]]}),
-     "force_profile"),
-    ("/v1/analyze", with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, 5.0], [1, 6.0]]}),
-     "not both"),
+    (
+        "/v1/analyze",
+        with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, 5.0], [1.2, 6.0]]}),
+        "force_profile",
+    ),
+    (
+        "/v1/analyze",
+        with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.5, 5.0], [0.4, 6.0]]}),
+        "force_profile",
+    ),
+    (
+        "/v1/analyze",
+        with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, -5.0], [1, 6.0]]}),
+        "force_profile",
+    ),
+    (
+        "/v1/analyze",
+        with_(ANALYZE, ["load"], {**LOAD, "force_profile": [[0.0, 5.0], [1, 6.0]]}),
+        "not both",
+    ),
     ("/v1/analyze", {**ANALYZE, "load": LOAD, "crank_speed": 2.0}, "crank_speed"),
     ("/v1/analyze", {**ANALYZE, "load": LOAD, "crank_acceleration": 2.0}, "crank_acceleration"),
     ("/v1/synthesize", {**SYNTH, "time_ratio": 0.5}, "time_ratio"),
@@ -494,32 +550,54 @@ BAD = [
     ("/v1/synthesize", {**SYNTH, "max_candidates": 51}, "max_candidates"),
     ("/v1/synthesize", {**SYNTH, "time_budget_ms": 0}, "time_budget_ms"),
     ("/v1/synthesize", {**SYNTH, "objective": "cheapest"}, "objective"),
-    ("/v1/synthesize", {**SYNTH, "objective": "uniform_cutting_speed",
-                        "max_working_speed_fluctuation": 0.9}, "max_working_speed_fluctuation"),
-    ("/v1/synthesize", {**SYNTH, "max_working_speed_fluctuation": 1.5},
-     "max_working_speed_fluctuation"),
-    ("/v1/synthesize", {**SYNTH, "max_working_speed_fluctuation": "NaN",
-                        "objective": "min_peak_acceleration"}, "max_working_speed_fluctuation"),
+    (
+        "/v1/synthesize",
+        {**SYNTH, "objective": "uniform_cutting_speed", "max_working_speed_fluctuation": 0.9},
+        "max_working_speed_fluctuation",
+    ),
+    (
+        "/v1/synthesize",
+        {**SYNTH, "max_working_speed_fluctuation": 1.5},
+        "max_working_speed_fluctuation",
+    ),
+    (
+        "/v1/synthesize",
+        {**SYNTH, "max_working_speed_fluctuation": "NaN", "objective": "min_peak_acceleration"},
+        "max_working_speed_fluctuation",
+    ),
     ("/v1/synthesize", {**SYNTH, "include": ["colour"]}, "include"),
     ("/v1/synthesize", {**SYNTH, "load": {**LOAD, "length_unit": None}}, "length_unit"),
     ("/v1/synthesize", {**SYNTH, "objective": "min_peak_torque"}, "load"),
-    ("/v1/synthesize", {**SYNTH, "objective": "min_peak_torque", "load": LOAD,
-                        "max_peak_torque": 0}, "max_peak_torque"),
+    (
+        "/v1/synthesize",
+        {**SYNTH, "objective": "min_peak_torque", "load": LOAD, "max_peak_torque": 0},
+        "max_peak_torque",
+    ),
     ("/v1/synthesize", {**SYNTH, "load": LOAD, "max_peak_torque": 5.0}, "max_peak_torque"),
-    ("/v1/synthesize", {**SYNTH, "load": {**LOAD, "speed_fluctuation": 0.0}},
-     "speed_fluctuation"),
+    ("/v1/synthesize", {**SYNTH, "load": {**LOAD, "speed_fluctuation": 0.0}}, "speed_fluctuation"),
     ("/v1/synthesize", {**SYNTH, "include": ["pins"]}, "include"),
     ("/v1/synthesize", {**SYNTH, "tolerance": {"relative": -1e-3}}, "tolerance"),
     ("/v1/synthesize", {**SYNTH, "stroke_mm": 1.0}, "stroke_mm"),
     ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "fixed": {"rod": 1.0}}]}, "rod"),
     ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "fixed": {"lever": 0.0}}]}, "lever"),
-    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "bounds": {"lever": [2.0, 1.0]}}]},
-     "lower bound 2 > upper bound 1"),
-    ("/v1/synthesize", {**SYNTH, "mechanisms": [{**SPEC, "bounds": {"lever": [1.0, "inf"]}}]},
-     "lever"),
-    ("/v1/synthesize", {**SYNTH, "mechanisms": [
-        {**SPEC, "fixed": {"lever": 1.0}, "bounds": {"lever": [0.5, 2.0]}}]},
-     "lever: both fixed and bounded"),
+    (
+        "/v1/synthesize",
+        {**SYNTH, "mechanisms": [{**SPEC, "bounds": {"lever": [2.0, 1.0]}}]},
+        "lower bound 2 > upper bound 1",
+    ),
+    (
+        "/v1/synthesize",
+        {**SYNTH, "mechanisms": [{**SPEC, "bounds": {"lever": [1.0, "inf"]}}]},
+        "lever",
+    ),
+    (
+        "/v1/synthesize",
+        {
+            **SYNTH,
+            "mechanisms": [{**SPEC, "fixed": {"lever": 1.0}, "bounds": {"lever": [0.5, 2.0]}}],
+        },
+        "lever: both fixed and bounded",
+    ),
     ("/v1/synthesize", {**SYNTH, "mechanisms": [{"type": "cam"}]}, "mechanisms"),
     ("/v1/sweep", {**SWEEP, "points": 10_001}, "points"),
     ("/v1/sweep", {**SWEEP, "start": 60.0}, "start 60 > stop 50"),
@@ -529,7 +607,7 @@ BAD = [
     ("/v1/report", {**ANALYZE, "targets": {"speed": 1.0}}, "speed"),
     ("/v1/report", {**ANALYZE, "load": LOAD, "length_unit": "in"}, "length_unit"),
     ("/v1/report", {**ANALYZE, "crank_angle_deg": "inf"}, "crank_angle_deg"),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize(("path", "body", "named"), BAD)
@@ -546,13 +624,23 @@ def test_an_analysis_answers_every_field_synth_gives(client):
     client, value for value: a field added to synth.Analysis is served, not dropped."""
     params = {"crank": 75.0, "pivot_distance": 50.0, "lever": 150.0, "connecting_rod": 200.0}
     everything = list(ANALYSIS_INCLUDE)
-    body = {"mechanism": {"type": "whitworth", "params": params}, "samples": 4,
-            "include": everything, "tolerance": {"relative": 1e-3}, "load": LOAD}  # fmt: skip
+    body = {
+        "mechanism": {"type": "whitworth", "params": params},
+        "samples": 4,
+        "include": everything,
+        "tolerance": {"relative": 1e-3},
+        "load": LOAD,
+    }
     r = client.post("/v1/analyze", json=body)
     assert r.status_code == 200, r.text
-    want = synth.analyze("whitworth", params, samples=4, include=everything,
-                         tolerance=synth.Tolerance(relative=1e-3),
-                         load=synth.Load(**LOAD)).to_dict()  # fmt: skip
+    want = synth.analyze(
+        "whitworth",
+        params,
+        samples=4,
+        include=everything,
+        tolerance=synth.Tolerance(relative=1e-3),
+        load=synth.Load(**LOAD),
+    ).to_dict()
     assert set(want) == {f.name for f in dataclasses.fields(synth.Analysis)}
     assert r.json() == json.loads(json.dumps(want))
 
@@ -585,8 +673,11 @@ def test_a_synthesis_on_the_exact_solvers_alone_runs_without_a_solver_slot(clien
     app.dependency_overrides[engine] = lambda: busy
     one = {"time_ratio": 1.6, "stroke": 300.0, "min_transmission_angle_deg": 20.0}
     try:
-        for body in ({**one, "mechanisms": [{"type": "crank_shaper"}]}, one,
-                     {**one, "objective": "min_size"}):  # fmt: skip
+        for body in (
+            {**one, "mechanisms": [{"type": "crank_shaper"}]},
+            one,
+            {**one, "objective": "min_size"},
+        ):
             r = client.post("/v1/synthesize", json=body)
             assert r.status_code == 200 and r.json()["candidates"], body
         for body in (
@@ -600,13 +691,26 @@ def test_a_synthesis_on_the_exact_solvers_alone_runs_without_a_solver_slot(clien
         busy.close()
 
 
-@pytest.mark.parametrize("kwargs", [
-    {}, {"samples": 7}, {"crank_angles_deg": [0.0, 33.3, 90.0], "include": ["pins"]},
-    {"samples": 4, "include": ["motion", "sensitivities", "envelope", "pins"],
-     "tolerance": synth.Tolerance(relative=1e-3)},
-    {"samples": 5, "include": ["forces"],
-     "load": synth.Load("mm", 40.0, cutting_force=2000.0, slider_mass=50.0, guide_friction=0.1)},
-])  # fmt: skip
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {},
+        {"samples": 7},
+        {"crank_angles_deg": [0.0, 33.3, 90.0], "include": ["pins"]},
+        {
+            "samples": 4,
+            "include": ["motion", "sensitivities", "envelope", "pins"],
+            "tolerance": synth.Tolerance(relative=1e-3),
+        },
+        {
+            "samples": 5,
+            "include": ["forces"],
+            "load": synth.Load(
+                "mm", 40.0, cutting_force=2000.0, slider_mass=50.0, guide_friction=0.1
+            ),
+        },
+    ],
+)
 @pytest.mark.parametrize("mtype", DESIGNS)
 def test_an_analysis_is_encoded_as_its_model_encodes_it(mtype, kwargs):
     """The analysis reply, encoded straight from synth's dataclasses, is the JSON the response
@@ -619,20 +723,35 @@ def test_an_analysis_is_encoded_as_its_model_encodes_it(mtype, kwargs):
 @pytest.mark.parametrize(
     ("body", "loc", "msg"),
     [
-        ({"time_ratio": 0.5, "stroke": 250}, ["body", "time_ratio"],
-         "time_ratio must be ≥ 1, got 0.5"),
-        ({"time_ratio": 1.5, "stroke": -250}, ["body", "stroke"],
-         "stroke must be ≥ 1e-09, got -250"),
+        (
+            {"time_ratio": 0.5, "stroke": 250},
+            ["body", "time_ratio"],
+            "time_ratio must be ≥ 1, got 0.5",
+        ),
+        (
+            {"time_ratio": 1.5, "stroke": -250},
+            ["body", "stroke"],
+            "stroke must be ≥ 1e-09, got -250",
+        ),
         ({"stroke": 250}, ["body", "time_ratio"], "time_ratio is required"),
-        ({"time_ratio": "x", "stroke": 250}, ["body", "time_ratio"],
-         "time_ratio must be a finite number, got 'x'"),
-        ({"time_ratio": 1.5, "stroke": 250, "colour": 1}, ["body", "colour"],
-         "colour: no such field here"),
-        ({"time_ratio": 1.5, "stroke": 250, "objective": "fast"}, ["body", "objective"],
-         "objective must be 'pareto', 'max_transmission_angle', 'min_size', "
-         "'uniform_cutting_speed', 'min_peak_acceleration' or 'min_peak_torque', got 'fast'"),
+        (
+            {"time_ratio": "x", "stroke": 250},
+            ["body", "time_ratio"],
+            "time_ratio must be a finite number, got 'x'",
+        ),
+        (
+            {"time_ratio": 1.5, "stroke": 250, "colour": 1},
+            ["body", "colour"],
+            "colour: no such field here",
+        ),
+        (
+            {"time_ratio": 1.5, "stroke": 250, "objective": "fast"},
+            ["body", "objective"],
+            "objective must be 'pareto', 'max_transmission_angle', 'min_size', "
+            "'uniform_cutting_speed', 'min_peak_acceleration' or 'min_peak_torque', got 'fast'",
+        ),
     ],
-)  # fmt: skip
+)
 def test_a_schemas_refusal_is_worded_like_the_librarys(client, body, loc, msg):
     """The field, the rule with its number and what was given, as the library says its own
     refusals; the machine-readable type and context as pydantic gives them."""
@@ -640,5 +759,10 @@ def test_a_schemas_refusal_is_worded_like_the_librarys(client, body, loc, msg):
     assert r.status_code == 422
     (e,) = r.json()["detail"]
     assert e["loc"] == loc and e["msg"] == msg
-    assert e["type"] in {"greater_than_equal", "missing", "float_type", "extra_forbidden",
-                         "literal_error"}  # fmt: skip
+    assert e["type"] in {
+        "greater_than_equal",
+        "missing",
+        "float_type",
+        "extra_forbidden",
+        "literal_error",
+    }

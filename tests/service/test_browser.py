@@ -25,9 +25,15 @@ pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tes
 
 CHROMIUM = os.environ.get("CHROMIUM") or shutil.which("chromium")
 # as root, without a sandbox; no background connections (this machine's network is closed)
-ARGS = ["--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update",
-        "--disable-sync"]  # fmt: skip
+ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 SHOTS = ROOT / "build" / "screenshots"
 DESKTOP, PHONE = {"width": 1280, "height": 900}, {"width": 390, "height": 844}
 # Podhorodeski, Nokleby & Wittchen (2005): time ratio 1.5, stroke 0.3, its two couplers
@@ -124,8 +130,14 @@ def test_a_chosen_design_is_drawn_to_scale_and_moves(page):
             "ls => ls.map(l => [l.dataset.name, +l.getAttribute('x1'), +l.getAttribute('y1'),"
             " +l.getAttribute('x2'), +l.getAttribute('y2')])",
         )
-        assert {m[0] for m in members} == {"ground", "crank", "coupler", "follower",
-                                           "follower_arm", "connecting_rod"}  # fmt: skip
+        assert {m[0] for m in members} == {
+            "ground",
+            "crank",
+            "coupler",
+            "follower",
+            "follower_arm",
+            "connecting_rod",
+        }
         for name, x1, y1, x2, y2 in members:
             # the table shows 7 digits: the design's own numbers are in the page's state
             want = pg.evaluate(f"current.params[{name!r}]")
@@ -271,8 +283,10 @@ def test_the_analysis_takes_a_load(page):
     pg.fill("#a-load-flywheel_rpm", "1450")  # the flywheel on the motor's shaft, a disc
     pg.fill("#a-load-flywheel_width", "0.1")
     pg.click("#a-run")
-    pg.wait_for_function("document.querySelector('#loads-summary').textContent"
-                         ".includes('on a shaft at 1450 rpm, a steel disc')")  # fmt: skip
+    pg.wait_for_function(
+        "document.querySelector('#loads-summary').textContent"
+        ".includes('on a shaft at 1450 rpm, a steel disc')"
+    )
     with pg.expect_download() as d:  # the design's report, with the load shown
         pg.click("#export-report")
     assert d.value.suggested_filename == f"{pg.evaluate('current.type')}-report.html"
@@ -302,8 +316,10 @@ def test_the_synthesis_takes_a_load(page):
     only(pg, "whitworth")
     pg.select_option("#objective", "min_peak_torque")
     pg.click("#run")
-    pg.wait_for_function("document.querySelector('#candidates tbody tr')"
-                         "?.textContent.includes('certified the best of its type')")  # fmt: skip
+    pg.wait_for_function(
+        "document.querySelector('#candidates tbody tr')"
+        "?.textContent.includes('certified the best of its type')"
+    )
 
 
 def test_a_sweep_out_of_budget_says_where_it_ended(page):
@@ -430,8 +446,11 @@ def test_no_view_scrolls_sideways_on_a_phone(site):
     p = Page(site, viewport=PHONE)
     pg = p.page
     try:
-        for tab, ready in (("#tab-synthesize", "#run"), ("#tab-analyze", "#a-param-crank"),
-                           ("#tab-sweep", "#s-param-crank")):  # fmt: skip
+        for tab, ready in (
+            ("#tab-synthesize", "#run"),
+            ("#tab-analyze", "#a-param-crank"),
+            ("#tab-sweep", "#s-param-crank"),
+        ):
             pg.click(tab)
             pg.wait_for_selector(ready)
             width = pg.evaluate("document.documentElement.scrollWidth")

@@ -63,18 +63,41 @@ def test_every_type_exports_in_both_formats(client, mtype):
         ({"length_unit": "ft"}, ["body", "length_unit"]),
         ({"crank_angle_deg": 1e7}, ["body", "crank_angle_deg"]),
         ({"paths": "sometimes"}, ["body", "paths"]),
-        ({"mechanism": {"type": "whitworth", "params": {"crank": 75, "pivot_distance": 50,
-                                                        "lever": 150, "connecting_rod": 20}}},
-         ["body", "mechanism", "params", "connecting_rod"]),
-        ({"mechanism": {"type": "whitworth", "params": {"crank": -75, "pivot_distance": 50,
-                                                        "lever": 150, "connecting_rod": 200}}},
-         ["body", "mechanism", "whitworth", "params", "crank"]),
+        (
+            {
+                "mechanism": {
+                    "type": "whitworth",
+                    "params": {
+                        "crank": 75,
+                        "pivot_distance": 50,
+                        "lever": 150,
+                        "connecting_rod": 20,
+                    },
+                }
+            },
+            ["body", "mechanism", "params", "connecting_rod"],
+        ),
+        (
+            {
+                "mechanism": {
+                    "type": "whitworth",
+                    "params": {
+                        "crank": -75,
+                        "pivot_distance": 50,
+                        "lever": 150,
+                        "connecting_rod": 200,
+                    },
+                }
+            },
+            ["body", "mechanism", "whitworth", "params", "crank"],
+        ),
         ({"colour": "red"}, ["body", "colour"]),
     ],
-)  # fmt: skip
+)
 def test_a_bad_export_is_a_422_naming_the_field(client, change, loc):
-    good = body("whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150,
-                              "connecting_rod": 200})  # fmt: skip
+    good = body(
+        "whitworth", {"crank": 75, "pivot_distance": 50, "lever": 150, "connecting_rod": 200}
+    )
     r = client.post("/v1/export", json=good | change)
     assert r.status_code == 422, r.text
     assert loc in [e["loc"] for e in r.json()["detail"]], r.text

@@ -33,7 +33,7 @@ SYNTH = {
     "objective": "uniform_cutting_speed",
     "mechanisms": [{"type": "crank_rocker_slider"}],
     "time_budget_ms": 1000,
-}  # fmt: skip — ~0.3 s of SLSQP in a solver
+}  # ~0.3 s of SLSQP in a solver
 SWEEP = {
     "mechanism": {"type": "drag_link_slider", "params": DRAG_LINK},
     "vary": "coupler",
@@ -45,8 +45,11 @@ SWEEP = {
 
 def post(port: int, path: str, body: dict, timeout: float = 60) -> int | str:
     """The status, or the name of the connection error."""
-    req = urllib.request.Request(f"http://127.0.0.1:{port}{path}", json.dumps(body).encode(),
-                                 {"Content-Type": "application/json"})  # fmt: skip
+    req = urllib.request.Request(
+        f"http://127.0.0.1:{port}{path}",
+        json.dumps(body).encode(),
+        {"Content-Type": "application/json"},
+    )
     try:
         with urllib.request.urlopen(req, timeout=timeout) as r:
             r.read()
@@ -128,8 +131,9 @@ def test_a_killed_server_process_is_replaced_and_the_other_keeps_answering():
         while len(spawned(proc.pid)) < 2 and time.monotonic() < deadline:
             time.sleep(0.2)
         assert len(spawned(proc.pid)) == 2, "the killed server process was not replaced"
-        statuses = [post(port, "/v1/synthesize", {**SYNTH, "objective": "pareto"})
-                    for _ in range(8)]  # fmt: skip
+        statuses = [
+            post(port, "/v1/synthesize", {**SYNTH, "objective": "pareto"}) for _ in range(8)
+        ]
         assert statuses == [200] * 8
 
 

@@ -42,8 +42,10 @@ ANALYZE = '{"mechanism":' + SCOTCH  # an analysis's body, but for its closing br
 SWEEP = ANALYZE + ',"vary":"crank","start":1,"stop":2'
 WHIT = '{"time_ratio":1.6,"stroke":300,"mechanisms":[{"type":"whitworth",'
 BIG_LIST = "[" + ",".join(["1"] * 1_000_000) + "]"  # 2 MB: under the byte limit, over the count
-DRAG = ('{"type":"drag_link_slider","params":{"ground":0.1,"crank":0.225,"coupler":0.2504,'
-        '"follower":0.275,"follower_arm":0.15,"connecting_rod":0.3}}')  # fmt: skip
+DRAG = (
+    '{"type":"drag_link_slider","params":{"ground":0.1,"crank":0.225,"coupler":0.2504,'
+    '"follower":0.275,"follower_arm":0.15,"connecting_rod":0.3}}'
+)
 FOURBAR = '{"time_ratio":1.5,"stroke":1,"mechanisms":[{"type":"%s","bounds":%s}]}'
 ZERO = '{"ground":[0,1],"crank":[0,1],"coupler":[0,1],"follower":[0,1]}'
 
@@ -57,6 +59,8 @@ def deep_object(depth: int) -> str:
 
 
 # (name, method, path, body, status, a field the 4xx must name, or None)
+# a table: one request a line
+# fmt: off
 CASES = [
     ("NaN parameter", "POST", "/v1/analyze",
      '{"mechanism":{"type":"scotch_yoke","params":{"crank":NaN}}}', 422, "crank"),
@@ -166,7 +170,8 @@ CASES = [
     ("HEAD /redoc", "HEAD", "/redoc", None, 200, None),
     ("HEAD /", "HEAD", "/", None, 307, None),
     ("sweep, fine", "POST", "/v1/sweep", SWEEP + "}", 200, None),
-]  # fmt: skip
+]
+# fmt: on
 
 
 @pytest.fixture(scope="module")
@@ -292,8 +297,10 @@ def reply(s: socket.socket) -> tuple[bytes, float | None]:
 
 def post(path: str, body: bytes, *headers: bytes) -> bytes:
     head = b"".join(h + b"\r\n" for h in headers)
-    return (b"POST %s HTTP/1.1\r\nHost: localhost\r\nContent-Type: application/json\r\n%s"
-            b"Content-Length: %d\r\n\r\n%s" % (path.encode(), head, len(body), body))  # fmt: skip
+    return (
+        b"POST %s HTTP/1.1\r\nHost: localhost\r\nContent-Type: application/json\r\n%s"
+        b"Content-Length: %d\r\n\r\n%s" % (path.encode(), head, len(body), body)
+    )
 
 
 def status_of(data: bytes) -> int | None:
@@ -348,8 +355,17 @@ def test_a_trickled_request_is_closed_at_the_deadline_not_kept_by_each_byte(port
     assert time.monotonic() - t0 < REQUEST_TIMEOUT_S + 2.0
 
 
-GET_ROUTES = ["/health", "/v1/mechanisms", "/v1/mechanisms/whitworth", "/v1/atlas",
-              "/openapi.json", "/docs", "/redoc", "/app/", "/favicon.ico"]  # fmt: skip
+GET_ROUTES = [
+    "/health",
+    "/v1/mechanisms",
+    "/v1/mechanisms/whitworth",
+    "/v1/atlas",
+    "/openapi.json",
+    "/docs",
+    "/redoc",
+    "/app/",
+    "/favicon.ico",
+]
 POSTS = {
     "/v1/analyze": BODY,
     "/v1/synthesize": b'{"time_ratio":1.5,"stroke":1,"mechanisms":[{"type":"whitworth"}]}',
@@ -371,8 +387,10 @@ def test_a_half_closed_request_is_answered_on_every_route(port):
 
 def test_transfer_encoding_with_content_length_is_refused(port):
     chunked = b"%x\r\n%s\r\n0\r\n\r\n" % (len(BODY), BODY)
-    request = (b"POST /v1/analyze HTTP/1.1\r\nHost: localhost\r\nContent-Type: application/json\r\n"
-               b"Transfer-Encoding: chunked\r\nContent-Length: 5\r\n\r\n" + chunked)  # fmt: skip
+    request = (
+        b"POST /v1/analyze HTTP/1.1\r\nHost: localhost\r\nContent-Type: application/json\r\n"
+        b"Transfer-Encoding: chunked\r\nContent-Length: 5\r\n\r\n" + chunked
+    )
     got, closed = reply(raw(port, request))
     assert status_of(got) == 400 and closed is not None
 
@@ -426,8 +444,10 @@ def test_an_empty_host_binds_loopback_only():
 
 def test_a_sweep_that_runs_out_of_its_budget_ends_where_it_was(port):
     conn = http.client.HTTPConnection("127.0.0.1", port, timeout=60)
-    body = ('{"mechanism":' + DRAG + ',"vary":"coupler","start":0.14,"stop":0.5,'
-            '"points":4000,"time_budget_ms":%s}')  # fmt: skip
+    body = (
+        '{"mechanism":' + DRAG + ',"vary":"coupler","start":0.14,"stop":0.5,'
+        '"points":4000,"time_budget_ms":%s}'
+    )
     r, data = send(conn, "POST", "/v1/sweep", body % 20)
     short = json.loads(data)
     assert r.status == 200 and short["complete"] is False
@@ -488,10 +508,14 @@ def bounded(draw, mtype: str) -> dict:
                 lo, hi = min(lo, hi), max(lo, hi)
             scale = stroke if lo in (0.0, 1.0) or lo not in SPECIAL else 1.0
             bounds[q.name] = [lo * scale, hi * scale]
-    return {"time_ratio": draw(st.sampled_from([1.0, 1.5, 3.0])), "stroke": stroke,
-            "min_transmission_angle_deg": draw(st.sampled_from([0.0, 20.0])),
-            "objective": draw(st.sampled_from(["pareto", "max_transmission_angle"])),
-            "mechanisms": [{"type": mtype, "bounds": bounds}], "time_budget_ms": 300}  # fmt: skip
+    return {
+        "time_ratio": draw(st.sampled_from([1.0, 1.5, 3.0])),
+        "stroke": stroke,
+        "min_transmission_angle_deg": draw(st.sampled_from([0.0, 20.0])),
+        "objective": draw(st.sampled_from(["pareto", "max_transmission_angle"])),
+        "mechanisms": [{"type": mtype, "bounds": bounds}],
+        "time_budget_ms": 300,
+    }
 
 
 @pytest.mark.parametrize("mtype", [t for t in all_types() if get(t).quick_return])

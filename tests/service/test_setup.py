@@ -31,10 +31,16 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def fresh_checkout(dest: Path) -> Path:
     """The tracked files as they are in the working tree, without .venv or caches."""
-    files = subprocess.run(
-        ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
-        cwd=ROOT, capture_output=True, check=True,
-    ).stdout.decode().split("\0")  # fmt: skip
+    files = (
+        subprocess.run(
+            ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"],
+            cwd=ROOT,
+            capture_output=True,
+            check=True,
+        )
+        .stdout.decode()
+        .split("\0")
+    )
     for f in filter(None, files):
         if (ROOT / f).is_file():
             (dest / f).parent.mkdir(parents=True, exist_ok=True)
@@ -63,8 +69,9 @@ def chosen_python(tmp_path: Path, versions: dict[str, str], *args: str):
     (bin_dir / "echo").symlink_to(shutil.which("echo"))  # make runs `@echo …` without a shell
     make = shutil.which("make")
     env = {"PATH": str(bin_dir), "HOME": str(tmp_path)}
-    return subprocess.run([make, "-s", "-C", str(ROOT), "python", *args],
-                          env=env, capture_output=True, text=True)  # fmt: skip
+    return subprocess.run(
+        [make, "-s", "-C", str(ROOT), "python", *args], env=env, capture_output=True, text=True
+    )
 
 
 @pytest.mark.parametrize(
@@ -107,11 +114,17 @@ def served(tmp_path_factory):
     assert not (work / ".venv").exists()
     port = free_port()
     proc = subprocess.Popen(
-        ["make", "serve", f"PORT={port}"], cwd=work, start_new_session=True,
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-        env={k: v for k, v in os.environ.items()
-             if not k.startswith("VIRTUAL_ENV") and k != "SYNTH_WARM"},  # as shipped
-    )  # fmt: skip
+        ["make", "serve", f"PORT={port}"],
+        cwd=work,
+        start_new_session=True,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env={
+            k: v
+            for k, v in os.environ.items()
+            if not k.startswith("VIRTUAL_ENV") and k != "SYNTH_WARM"
+        },  # as shipped
+    )
     try:
         assert wait_for_health(port, proc, timeout=600)["status"] == "ok"
         yield port, work
@@ -125,12 +138,21 @@ def server(served):
     return served[0]
 
 
-ANALYZE = {"mechanism": {"type": "drag_link_slider",
-                         "params": {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504}},
-           "crank_speed": 10.0, "crank_angles_deg": [60.0]}  # fmt: skip
-SHAPER = {"mechanism": {"type": "crank_shaper",
-                        "params": {"crank": 40, "pivot_distance": 160, "lever": 240}},
-          "samples": 360}  # fmt: skip
+ANALYZE = {
+    "mechanism": {
+        "type": "drag_link_slider",
+        "params": {**ref.DRAG_LINK_PROJECT, "coupler": 0.2504},
+    },
+    "crank_speed": 10.0,
+    "crank_angles_deg": [60.0],
+}
+SHAPER = {
+    "mechanism": {
+        "type": "crank_shaper",
+        "params": {"crank": 40, "pivot_distance": 160, "lever": 240},
+    },
+    "samples": 360,
+}
 PROJECT = {
     "time_ratio": 1.5,
     "stroke": 0.3,
@@ -138,10 +160,18 @@ PROJECT = {
         {"type": "drag_link_slider", "fixed": {**ref.DRAG_LINK_FIXED, "connecting_rod": 0.3}}
     ],
 }
-TEXTBOOK = {"time_ratio": 2.73524, "stroke": 300.0, "time_budget_ms": 1000,
-            "mechanisms": [{"type": "whitworth", "fixed": {"pivot_distance": 50}}]}  # fmt: skip
-MIXED = [("/v1/analyze", ANALYZE), ("/v1/analyze", SHAPER),
-         ("/v1/synthesize", PROJECT), ("/v1/synthesize", TEXTBOOK)]  # fmt: skip
+TEXTBOOK = {
+    "time_ratio": 2.73524,
+    "stroke": 300.0,
+    "time_budget_ms": 1000,
+    "mechanisms": [{"type": "whitworth", "fixed": {"pivot_distance": 50}}],
+}
+MIXED = [
+    ("/v1/analyze", ANALYZE),
+    ("/v1/analyze", SHAPER),
+    ("/v1/synthesize", PROJECT),
+    ("/v1/synthesize", TEXTBOOK),
+]
 
 
 def stable(body: dict) -> dict:
@@ -202,9 +232,12 @@ def test_sigterm_to_the_server_stops_every_process_it_started():
     port = free_port()
     env = {**os.environ, "WEB_CONCURRENCY": "2", "SYNTH_EXECUTOR": "process"}
     proc = subprocess.Popen(
-        [sys.executable, "-m", "api.serve", "--port", str(port)], cwd=ROOT, env=env,
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-    )  # fmt: skip
+        [sys.executable, "-m", "api.serve", "--port", str(port)],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
         wait_for_health(port, proc, timeout=120)
         assert call(port, "/v1/synthesize", PROJECT)[0] == 200  # the pools have started
@@ -257,8 +290,15 @@ def same(shown, got, path="") -> None:
 
 def test_the_readme_shows_a_curl_for_every_endpoint():
     commands = " ".join(cmd for cmd, _ in readme_console_commands())
-    for path in ("/health", "/v1/mechanisms", "/v1/mechanisms/", "/v1/analyze",
-                 "/v1/synthesize", "/v1/sweep", "/v1/export"):  # fmt: skip
+    for path in (
+        "/health",
+        "/v1/mechanisms",
+        "/v1/mechanisms/",
+        "/v1/analyze",
+        "/v1/synthesize",
+        "/v1/sweep",
+        "/v1/export",
+    ):
         assert f"localhost:8000{path}" in commands, path
 
 
@@ -268,8 +308,11 @@ def test_every_readme_command_gives_the_output_shown(server):
     for cmd, shown in readme_console_commands():
         got = subprocess.run(
             ["bash", "-c", cmd.replace("localhost:8000", f"localhost:{server}")],
-            capture_output=True, text=True, timeout=120, check=True,
-        ).stdout.strip()  # fmt: skip
+            capture_output=True,
+            text=True,
+            timeout=120,
+            check=True,
+        ).stdout.strip()
         try:
             expected = json.loads(shown)
         except json.JSONDecodeError:
@@ -280,9 +323,10 @@ def test_every_readme_command_gives_the_output_shown(server):
 
 def test_the_readme_python_examples_run():
     failed, tried = doctest.testfile(
-        str(ROOT / "README.md"), module_relative=False,
+        str(ROOT / "README.md"),
+        module_relative=False,
         optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE,
-    )  # fmt: skip
+    )
     assert tried >= 5 and failed == 0
 
 
@@ -344,22 +388,35 @@ def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
     # the project's install from what the base copied (into a folder here, not the venv)
     project = installs[1].split("pip install ", 1)[1].split()
     site = tmp_path / "site"
-    subprocess.run([str(work / ".venv/bin/python"), "-m", "pip", "install", "--quiet",
-                    *project[:-1], "--target", str(site), project[-1]], cwd=app, check=True,
-                   timeout=300)  # fmt: skip
+    subprocess.run(
+        [
+            str(work / ".venv/bin/python"),
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            *project[:-1],
+            "--target",
+            str(site),
+            project[-1],
+        ],
+        cwd=app,
+        check=True,
+        timeout=300,
+    )
     assert (site / "bin" / "quickreturn").exists() and (site / "api" / "static").is_dir()
 
     def environment(stage) -> dict[str, str]:
         pairs = [shlex.split(e) for e in stage["ENV"]]
         env = dict(pair.split("=", 1) for p in pairs for pair in p)
         return {k: at(v) for k, v in env.items()} | {
-            "PATH": f"{work / '.venv/bin'}:{os.environ['PATH']}", "HOME": str(tmp_path)
-        }  # fmt: skip
+            "PATH": f"{work / '.venv/bin'}:{os.environ['PATH']}",
+            "HOME": str(tmp_path),
+        }
 
     # the native stage: its compiler is this machine's; its build writes the libraries
     (build,) = [r for r in native["RUN"] if "apt-get" not in r]
-    subprocess.run(["sh", "-c", build], cwd=app, env=environment(base), check=True,
-                   timeout=300)  # fmt: skip
+    subprocess.run(["sh", "-c", build], cwd=app, env=environment(base), check=True, timeout=300)
     (copy,) = image["COPY"]
     src, dest = copy.removeprefix("--from=native ").split()
     assert Path(at(src)).is_dir() and at(src) == at(dest)  # the same folder, now in the image
@@ -369,15 +426,23 @@ def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
         "from synth.analysis.model import model; from synth.mechanisms import all_types, get; "
         "print({model(get(t), frozenset()).fn.fn.class_name() for t in all_types()})"
     )
-    out = subprocess.run(["python", "-c", probe], cwd=app, env=env, check=True,
-                         capture_output=True, text=True, timeout=120).stdout  # fmt: skip
+    out = subprocess.run(
+        ["python", "-c", probe],
+        cwd=app,
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    ).stdout
     assert out.strip() == "{'External'}", out
     cmd = json.loads(image["CMD"][0])
     assert cmd[:3] == ["python", "-m", "api.serve"] and "--port" not in cmd  # PORT's
     image_port = free_port()
     env |= {"PORT": str(image_port)}  # docker run -e PORT=…
-    proc = subprocess.Popen(cmd, cwd=app, env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)  # fmt: skip
+    proc = subprocess.Popen(
+        cmd, cwd=app, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
     try:
         wait_for_health(image_port, proc, timeout=120)
         health = image["HEALTHCHECK"][0].split(" CMD ", 1)[1]

@@ -30,8 +30,10 @@ def test_a_freed_slot_goes_to_the_earliest_start_by_not_the_first_to_come():
                 await asyncio.sleep(0.01)
 
         # arriving in this order, by start-by: long, short, middle
-        tasks = [asyncio.create_task(waiter(n, now + s)) for n, s in
-                 (("long", 9.0), ("short", 5.0), ("middle", 7.0))]  # fmt: skip
+        tasks = [
+            asyncio.create_task(waiter(n, now + s))
+            for n, s in (("long", 9.0), ("short", 5.0), ("middle", 7.0))
+        ]
         await asyncio.sleep(0.05)
         holder.set()
         await asyncio.gather(*tasks)

@@ -64,8 +64,13 @@ def _grashof(rng, shortest: int) -> list[float]:
 
 def _crank_rocker_slider(rng):
     r1, r2, r3, r4 = _grashof(rng, shortest=1)
-    p = {"ground": r1, "crank": r2, "coupler": r3, "rocker": r4,
-         "rocker_arm": r4 * rng.uniform(0.3, 2.0)}  # fmt: skip
+    p = {
+        "ground": r1,
+        "crank": r2,
+        "coupler": r3,
+        "rocker": r4,
+        "rocker_arm": r4 * rng.uniform(0.3, 2.0),
+    }
     if rng.random() < 0.6:
         p["connecting_rod"] = p["rocker_arm"] * rng.uniform(1.0, 3.0)
     return p
@@ -74,8 +79,14 @@ def _crank_rocker_slider(rng):
 def _drag_link_slider(rng):
     r1, r2, r3, r4 = _grashof(rng, shortest=0)
     r5 = rng.uniform(0.2, 3.0)
-    return {"ground": r1, "crank": r2, "coupler": r3, "follower": r4,
-            "follower_arm": r5, "connecting_rod": r5 * rng.uniform(1.05, 4.0)}  # fmt: skip
+    return {
+        "ground": r1,
+        "crank": r2,
+        "coupler": r3,
+        "follower": r4,
+        "follower_arm": r5,
+        "connecting_rod": r5 * rng.uniform(1.05, 4.0),
+    }
 
 
 GENERATORS = {t: globals()[f"_{t}"] for t in TYPES}

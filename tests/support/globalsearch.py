@@ -124,15 +124,22 @@ def _in_bounds(mtype: str, params: dict[str, np.ndarray], names, fx=None) -> lis
 
 
 # the four-bar types' links: the first fixed one sets the scale
-LINKS = {"crank_rocker_slider": ("ground", "crank", "coupler", "rocker"),
-         "drag_link_slider": ("ground", "crank", "coupler", "follower")}  # fmt: skip
+LINKS = {
+    "crank_rocker_slider": ("ground", "crank", "coupler", "rocker"),
+    "drag_link_slider": ("ground", "crank", "coupler", "follower"),
+}
 # parameters the targets set alone: a fixed one is only checked
-SET_ALONE = {"crank_shaper": ("lever",), "whitworth": ("lever",),
-             "drag_link_slider": ("follower_arm",)}  # fmt: skip
+SET_ALONE = {
+    "crank_shaper": ("lever",),
+    "whitworth": ("lever",),
+    "drag_link_slider": ("follower_arm",),
+}
 # parameters that, once one of them is fixed, the targets and it set alone: not bounded
-SET_TOGETHER = {"offset_slider_crank": ("crank", "coupler", "offset"),
-                "crank_shaper": ("crank", "pivot_distance"),
-                "whitworth": ("crank", "pivot_distance")}  # fmt: skip
+SET_TOGETHER = {
+    "offset_slider_crank": ("crank", "coupler", "offset"),
+    "crank_shaper": ("crank", "pivot_distance"),
+    "whitworth": ("crank", "pivot_distance"),
+}
 
 
 @dataclass(frozen=True)
@@ -391,8 +398,15 @@ class Family:
     spans: tuple[tuple[float, float], ...] = ()
 
 
-_ROCKER = {"ground": (1, 0), "crank": (1, 0), "coupler": (1, 0), "rocker": (0, 1),
-           "rocker_arm": (1, 0), "connecting_rod": (2,), "slider_height": (3,)}  # fmt: skip
+_ROCKER = {
+    "ground": (1, 0),
+    "crank": (1, 0),
+    "coupler": (1, 0),
+    "rocker": (0, 1),
+    "rocker_arm": (1, 0),
+    "connecting_rod": (2,),
+    "slider_height": (3,),
+}
 FAMILIES: dict[str, tuple[Family, ...]] = {
     "offset_slider_crank": (
         Family(
@@ -697,8 +711,10 @@ class _Problem:
 
         ok, f0 = self.feasible(w0, fb)
         x0 = np.append(w0, f0) if epi else w0
-        spans = [self.fam.spans[c] if any(c == k for k, _ in self.solved) else (0.0, 1.0)
-                 for c in range(self.fam.dim)]  # fmt: skip
+        spans = [
+            self.fam.spans[c] if any(c == k for k, _ in self.solved) else (0.0, 1.0)
+            for c in range(self.fam.dim)
+        ]
         bounds = [(0.0, 1.0)] * self.free_beta + spans + ([(0.0, 1.0)] if epi else [])
         constraints = [{"type": "ineq", "fun": cons}]
         if eqs:

@@ -44,8 +44,9 @@ def peak(f, lo, hi):
     y = f(t)
     k = int(np.argmax(y))
     a, b = t[max(k - 1, 0)], t[min(k + 1, t.size - 1)]
-    r = minimize_scalar(lambda x: -f(np.array([x]))[0], bounds=(a, b), method="bounded",
-                        options={"xatol": 1e-13})  # fmt: skip
+    r = minimize_scalar(
+        lambda x: -f(np.array([x]))[0], bounds=(a, b), method="bounded", options={"xatol": 1e-13}
+    )
     return max(y[k], -r.fun, f(np.array([lo]))[0], f(np.array([hi]))[0])
 
 
@@ -66,8 +67,13 @@ def brute_motion(mtype, p):
     whole = peak(speed, start, start + work) / mean
 
     def at(level):
-        return brentq(lambda t: bruteforce.position(mtype, p, np.array([t]))[0] - level,
-                      start, start + work, xtol=1e-15, rtol=1e-15)  # fmt: skip
+        return brentq(
+            lambda t: bruteforce.position(mtype, p, np.array([t]))[0] - level,
+            start,
+            start + work,
+            xtol=1e-15,
+            rtol=1e-15,
+        )
 
     a, b_ = at(s0 + 0.1 * (s1 - s0)), at(s0 + 0.9 * (s1 - s0))
     middle = peak(speed, a, b_) / (0.8 * stroke / (b_ - a))

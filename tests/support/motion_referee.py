@@ -50,9 +50,17 @@ def measure(a, objective: str) -> float:
     return max(p.working_stroke, p.return_stroke)
 
 
-def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1),
-           popsize: int = 12, maxiter: int = 60,
-           fixed: Mapping[str, float] | None = None, load=None) -> Best:  # fmt: skip
+def search(
+    mtype: str,
+    objective: str,
+    tr: float,
+    bound_deg: float,
+    seeds=(0, 1),
+    popsize: int = 12,
+    maxiter: int = 60,
+    fixed: Mapping[str, float] | None = None,
+    load=None,
+) -> Best:
     """The least measure over every family and branch of ``mtype`` at time ratio ``tr``,
     stroke 1, minimum transmission ≥ ``bound_deg``, within the default bounds; ``fixed``:
     parts kept at their values (stroke 1), the search space then a request's with them
@@ -109,9 +117,16 @@ def search(mtype: str, objective: str, tr: float, bound_deg: float, seeds=(0, 1)
                     best = Best(f, design(z)[0])
                 continue
             for seed in seeds:
-                res = differential_evolution(value, [(0.0, 1.0)] * dim, seed=seed,
-                                             popsize=popsize, maxiter=maxiter, tol=1e-12,
-                                             init="sobol", polish=False)  # fmt: skip
+                res = differential_evolution(
+                    value,
+                    [(0.0, 1.0)] * dim,
+                    seed=seed,
+                    popsize=popsize,
+                    maxiter=maxiter,
+                    tol=1e-12,
+                    init="sobol",
+                    polish=False,
+                )
                 if res.fun >= PENALTY:
                     continue
                 polished = minimize(
@@ -137,8 +152,9 @@ if __name__ == "__main__":  # the referee against synthesize() on one target per
             t0 = time.monotonic()
             ref = search(mtype, objective, tr, bound)
             t1 = time.monotonic()
-            r = synth.synthesize(tr, 1.0, bound, [{"type": mtype}], objective=objective,
-                                 time_budget_ms=60_000)  # fmt: skip
+            r = synth.synthesize(
+                tr, 1.0, bound, [{"type": mtype}], objective=objective, time_budget_ms=60_000
+            )
             ours = r.candidates[0].objective_value if r.candidates else math.inf
             rel = (ours - ref.value) / ref.value
             print(

@@ -18,8 +18,9 @@ NOTEBOOKS = Path(__file__).resolve().parents[2] / "notebooks"
 def execute(name: str) -> nbformat.NotebookNode:
     """The notebook ``name`` run top to bottom in a fresh kernel of this environment."""
     nb = nbformat.read(NOTEBOOKS / f"{name}.ipynb", as_version=4)
-    NotebookClient(nb, timeout=600, kernel_name="python3",
-                   resources={"metadata": {"path": str(NOTEBOOKS)}}).execute()  # fmt: skip
+    NotebookClient(
+        nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(NOTEBOOKS)}}
+    ).execute()
     return nb
 
 

@@ -64,8 +64,12 @@ def crank_shaper(draw):
 @st.composite
 def whitworth(draw):
     lever = draw(log_uniform(1e-3, 1e3))
-    return {"crank": 1.0, "pivot_distance": draw(unit_fraction()), "lever": lever,
-            "connecting_rod": lever * (1 + draw(log_uniform(1e-9, 1e3)))}  # fmt: skip
+    return {
+        "crank": 1.0,
+        "pivot_distance": draw(unit_fraction()),
+        "lever": lever,
+        "connecting_rod": lever * (1 + draw(log_uniform(1e-9, 1e3))),
+    }
 
 
 def _coupler_range(short: float, a: float, b: float) -> tuple[float, float]:
@@ -79,8 +83,13 @@ def crank_rocker_slider(draw):
     r1, r4 = (1 + draw(log_uniform(1e-6, 1e3)) for _ in range(2))
     lo, hi = _coupler_range(1.0, r1, r4)
     r3 = where(lo, hi, draw(st.one_of(st.sampled_from([0.0, 1.0]), st.floats(0, 1))))
-    p = {"ground": r1, "crank": 1.0, "coupler": r3, "rocker": r4,
-         "rocker_arm": r4 * draw(log_uniform(1e-3, 1e3))}  # fmt: skip
+    p = {
+        "ground": r1,
+        "crank": 1.0,
+        "coupler": r3,
+        "rocker": r4,
+        "rocker_arm": r4 * draw(log_uniform(1e-3, 1e3)),
+    }
     if draw(st.booleans()):
         p["connecting_rod"] = p["rocker_arm"] * (1 + draw(excess()))  # ≥ the largest reach
     return p
@@ -92,16 +101,31 @@ def drag_link_slider(draw):
     lo, hi = _coupler_range(1.0, r2, r4)
     r3 = where(lo, hi, draw(st.one_of(st.sampled_from([0.0, 1.0]), st.floats(0, 1))))
     r5 = draw(log_uniform(1e-3, 1e3))
-    return {"ground": 1.0, "crank": r2, "coupler": r3, "follower": r4, "follower_arm": r5,
-            "connecting_rod": r5 * (1 + draw(log_uniform(1e-9, 1e3)))}  # fmt: skip
+    return {
+        "ground": 1.0,
+        "crank": r2,
+        "coupler": r3,
+        "follower": r4,
+        "follower_arm": r5,
+        "connecting_rod": r5 * (1 + draw(log_uniform(1e-9, 1e3))),
+    }
 
 
 def scotch_yoke():
     return st.just({"crank": 1.0})
 
 
-SHAPES = {f.__name__: f for f in (scotch_yoke, offset_slider_crank, crank_shaper, whitworth,
-                                  crank_rocker_slider, drag_link_slider)}  # fmt: skip
+SHAPES = {
+    f.__name__: f
+    for f in (
+        scotch_yoke,
+        offset_slider_crank,
+        crank_shaper,
+        whitworth,
+        crank_rocker_slider,
+        drag_link_slider,
+    )
+}
 
 
 @st.composite

@@ -61,10 +61,12 @@ def test_synthesis_by_the_generic_path():
 def test_the_generic_path_finds_the_exact_solvers_optimum(tr, bound, objective):
     if objective == "min_size" and bound == 0:
         return  # no smallest design without a bound
-    exact = synth.synthesize(tr, 1.0, bound, [{"type": "offset_slider_crank"}],
-                             objective=objective).candidates[0]  # fmt: skip
-    generic = synth.synthesize(tr, 1.0, bound, [{"type": GENERIC}], objective=objective,
-                               time_budget_ms=20_000).candidates[0]  # fmt: skip
+    exact = synth.synthesize(
+        tr, 1.0, bound, [{"type": "offset_slider_crank"}], objective=objective
+    ).candidates[0]
+    generic = synth.synthesize(
+        tr, 1.0, bound, [{"type": GENERIC}], objective=objective, time_budget_ms=20_000
+    ).candidates[0]
     assert generic.method == "ipopt" and exact.method == "closed_form"
     assert generic.min_transmission_angle_deg == pytest.approx(
         exact.min_transmission_angle_deg, rel=1e-7
@@ -86,9 +88,15 @@ def test_the_api_serves_them():
     design = {"type": TOY, "params": {"crank": 1, "coupler": 3}}
     a = client.post("/v1/analyze", json={"mechanism": design})
     assert a.status_code == 200 and a.json()["stroke"] == pytest.approx(2.0)
-    s = client.post("/v1/synthesize", json={"time_ratio": 1.0, "stroke": 2.0,
-                                            "min_transmission_angle_deg": 60,
-                                            "mechanisms": [{"type": TOY}]})  # fmt: skip
+    s = client.post(
+        "/v1/synthesize",
+        json={
+            "time_ratio": 1.0,
+            "stroke": 2.0,
+            "min_transmission_angle_deg": 60,
+            "mechanisms": [{"type": TOY}],
+        },
+    )
     assert s.status_code == 200 and len(s.json()["candidates"]) >= 3
 
 

@@ -187,8 +187,11 @@ class ActiveSet:
                         crossed.append((0.0 if last is None else _fraction(lv.value(last), gk), k))
             if psi is None and guard.last is not None:
                 was = guard.last[0]
-                crossed += [((w - was) / (at - was), w) for w in self.walls
-                            if min(was, at) < w < max(was, at)]  # fmt: skip
+                crossed += [
+                    ((w - was) / (at - was), w)
+                    for w in self.walls
+                    if min(was, at) < w < max(was, at)
+                ]
             if crossed:
                 guard.blocked = min(crossed)[1]
                 return None

@@ -59,14 +59,27 @@ WHOLE = 1024
 
 # the parameter vector: the names of its entries, in order
 PARAMS = (
-    "ep_r", "ep_i",  # e^{iφ}, φ = π + σβ
-    "lo0", "lo1", "lo2", "lo3", "hi0", "hi1", "hi2", "hi3",  # the links' boxes (scale 1)
-    "free_scale", "set0", "set1", "set2", "set3",  # the scale free, or set by link i
-    "swings", "arm",  # the arm swings (r5 = 1/(2 sin(ψ/2))), else its length
-    "rod", *rod.PARAMS,  # a connecting rod (rod.rule)
-)  # fmt: skip
-ROWS = ("valid", "feasible", "f", "size", "k", "a2", "a3", "a4", "r5", "l", "h", "rod_cos",
-        "slack")  # fmt: skip
+    "ep_r",
+    "ep_i",  # e^{iφ}, φ = π + σβ
+    "lo0",
+    "lo1",
+    "lo2",
+    "lo3",
+    "hi0",
+    "hi1",
+    "hi2",
+    "hi3",  # the links' boxes (scale 1)
+    "free_scale",
+    "set0",
+    "set1",
+    "set2",
+    "set3",  # the scale free, or set by link i
+    "swings",
+    "arm",  # the arm swings (r5 = 1/(2 sin(ψ/2))), else its length
+    "rod",
+    *rod.PARAMS,  # a connecting rod (rod.rule)
+)
+ROWS = ("valid", "feasible", "f", "size", "k", "a2", "a3", "a4", "r5", "l", "h", "rod_cos", "slack")
 # the rows of the local model (``Compiled.taylor``): the coupler's worst cos, the size and the
 # logs of the links at scale 1 (the ground's is 0)
 TAYLOR = ("f", "size", "log_a2", "log_a3", "log_a4")
@@ -227,8 +240,10 @@ class Construction:
         if math.prod(shape) >= WHOLE:
             with np.errstate(all="ignore"):
                 grid = rows(psi, lam, self._params(sigma), NUMPY)
-            e = {n: r if np.shape(r) == shape else np.broadcast_to(r, shape)
-                 for n, r in zip(ROWS, grid, strict=True)}  # fmt: skip
+            e = {
+                n: r if np.shape(r) == shape else np.broadcast_to(r, shape)
+                for n, r in zip(ROWS, grid, strict=True)
+            }
         else:
             if psi.shape != shape or lam.shape != shape or psi.ndim != 1:
                 psi, lam = (np.broadcast_to(a, shape).ravel() for a in (psi, lam))
@@ -254,9 +269,18 @@ class Construction:
         p, r = self.p, self.r
         sb = sigma * p.beta
         the_rod = rod.params(p, r.rod, r.height) if self.rod else [0.0] * len(rod.PARAMS)
-        return [-math.cos(sb), -math.sin(sb), *self.lo, *self.hi,
-                float(self.set_by is None), *(float(self.set_by == i) for i in range(4)),
-                float(r.swings), p.fixed.get(r.arm, 0.5), float(self.rod), *the_rod]  # fmt: skip
+        return [
+            -math.cos(sb),
+            -math.sin(sb),
+            *self.lo,
+            *self.hi,
+            float(self.set_by is None),
+            *(float(self.set_by == i) for i in range(4)),
+            float(r.swings),
+            p.fixed.get(r.arm, 0.5),
+            float(self.rod),
+            *the_rod,
+        ]
 
     def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict[str, Any]]:
         """The design at one point, and its evaluation (numbers; valid and feasible 1 or 0)."""

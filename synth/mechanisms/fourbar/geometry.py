@@ -92,8 +92,10 @@ def grashof_margins(links: Sequence[Any], shortest: int) -> tuple[Any, ...]:
 
 
 # for each shortest link: each other link x with the remaining two, in order
-_OTHERS = {s: tuple((x, *(k for k in range(4) if k not in (s, x))) for x in range(4) if x != s)
-           for s in range(4)}  # fmt: skip
+_OTHERS = {
+    s: tuple((x, *(k for k in range(4) if k not in (s, x))) for x in range(4) if x != s)
+    for s in range(4)
+}
 
 
 def grashof_conditions(

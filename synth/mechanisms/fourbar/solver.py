@@ -222,8 +222,11 @@ class FourBar(Search):
             exact = all(exact for _, f, exact in sheets if f)  # then the best alone is the answer
             at: tuple[Any, ...] = ()
             if exact and not self.ratios and self.p.objective == MIN_SIZE:
-                at = tuple(self._onward(s, f[0][1]["at"], cos_bound, floor=self._floor(s))
-                           for s, f, _ in sheets if f)  # fmt: skip
+                at = tuple(
+                    self._onward(s, f[0][1]["at"], cos_bound, floor=self._floor(s))
+                    for s, f, _ in sheets
+                    if f
+                )
                 at = () if None in at else at
             return Reduced([d for d, _ in found[: 1 if exact else None]], exact, at)
         return Reduced([start] if start else best, exact=False)

@@ -112,9 +112,14 @@ def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     vx, vy, _ = output_pin(r1, r2, p["coupler"], r4, th)
     mx, my = _mid(p)
     h, s = p["slider_height"], position(p, th)  # R = O4 + h m + s m⊥, m⊥ = (−my, mx)
-    return {"O2": (0.0, 0.0), "A": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (r1, 0.0),
-            "D": (r1 + vx, vy), "C": (r1 + r5 * vx / r4, r5 * vy / r4),
-            "R": (r1 + h * mx - s * my, h * my + s * mx)}  # fmt: skip
+    return {
+        "O2": (0.0, 0.0),
+        "A": (r2 * ca.cos(th), r2 * ca.sin(th)),
+        "O4": (r1, 0.0),
+        "D": (r1 + vx, vy),
+        "C": (r1 + r5 * vx / r4, r5 * vy / r4),
+        "R": (r1 + h * mx - s * my, h * my + s * mx),
+    }
 
 
 def facts(p: Params) -> dict[str, Any]:
@@ -142,8 +147,12 @@ def frame(variant: frozenset[str]) -> Frame:
     """The rocker and its arm are one body; C drives the slider through the rod, or through
     a block in the slider's slot across its path."""
     bodies = (("crank",), ("coupler",), ("rocker", "rocker_arm"))
-    pins = (("O2", "crank", GROUND), ("A", "crank", "coupler"), ("D", "coupler", "rocker"),
-            ("O4", "rocker", GROUND))  # fmt: skip
+    pins = (
+        ("O2", "crank", GROUND),
+        ("A", "crank", "coupler"),
+        ("D", "coupler", "rocker"),
+        ("O4", "rocker", GROUND),
+    )
     if "connecting_rod" in variant:
         return Frame(bodies, pins, _path, slots=(("C", "rocker", RAM, None),))
     rod = (("C", "rocker", "connecting_rod"), ("R", "connecting_rod", RAM))

@@ -99,8 +99,13 @@ def defaults(p: Params) -> dict[str, Any]:
 def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r2, d, L, h = p["crank"], p["pivot_distance"], p["lever"], p["ram_height"]
     c, s = _lever(p, th)
-    return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (-d, 0.0),
-            "P": (-d + L * c, L * s), "R": (-d + h, position(p, th))}  # fmt: skip
+    return {
+        "O2": (0.0, 0.0),
+        "B": (r2 * ca.cos(th), r2 * ca.sin(th)),
+        "O4": (-d, 0.0),
+        "P": (-d + L * c, L * s),
+        "R": (-d + h, position(p, th)),
+    }
 
 
 def facts(p: Params) -> dict[str, Any]:

@@ -84,9 +84,14 @@ def transmission(p: Params, th: Any) -> dict[str, Any]:
 def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r1, r2, r4, r5 = p["ground"], p["crank"], p["follower"], p["follower_arm"]
     vx, vy, _ = output_pin(r1, r2, p["coupler"], r4, th)
-    return {"O2": (0.0, 0.0), "A": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (r1, 0.0),
-            "B": (r1 + vx, vy), "C": (r1 + r5 * vx / r4, r5 * vy / r4),
-            "D": (position(p, th), 0.0)}  # fmt: skip
+    return {
+        "O2": (0.0, 0.0),
+        "A": (r2 * ca.cos(th), r2 * ca.sin(th)),
+        "O4": (r1, 0.0),
+        "B": (r1 + vx, vy),
+        "C": (r1 + r5 * vx / r4, r5 * vy / r4),
+        "D": (position(p, th), 0.0),
+    }
 
 
 def facts(p: Params) -> dict[str, Any]:
@@ -153,11 +158,16 @@ ROLES = Roles(
 # the follower and its arm are one body
 FRAME = Frame(
     bodies=(("crank",), ("coupler",), ("follower", "follower_arm"), ("connecting_rod",)),
-    pins=(("O2", "crank", GROUND), ("A", "crank", "coupler"), ("B", "coupler", "follower"),
-          ("O4", "follower", GROUND), ("C", "follower", "connecting_rod"),
-          ("D", "connecting_rod", RAM)),
+    pins=(
+        ("O2", "crank", GROUND),
+        ("A", "crank", "coupler"),
+        ("B", "coupler", "follower"),
+        ("O4", "follower", GROUND),
+        ("C", "follower", "connecting_rod"),
+        ("D", "connecting_rod", RAM),
+    ),
     path=lambda p: (1.0, 0.0),
-)  # fmt: skip
+)
 
 
 register(

@@ -66,8 +66,11 @@ def transmission(p: Params, th: Any) -> dict[str, Any]:
 
 def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r2 = p["crank"]
-    return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)),
-            "C": (position(p, th), p["offset"])}  # fmt: skip
+    return {
+        "O2": (0.0, 0.0),
+        "B": (r2 * ca.cos(th), r2 * ca.sin(th)),
+        "C": (position(p, th), p["offset"]),
+    }
 
 
 def facts(p: Params) -> dict[str, Any]:

@@ -37,8 +37,7 @@ def transmission(p: Params, th: Any) -> dict[str, Any]:
 
 def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r = p["crank"]
-    return {"O2": (0.0, 0.0), "B": (r * ca.cos(th), r * ca.sin(th)),
-            "yoke": (position(p, th), 0.0)}  # fmt: skip
+    return {"O2": (0.0, 0.0), "B": (r * ca.cos(th), r * ca.sin(th)), "yoke": (position(p, th), 0.0)}
 
 
 def facts(p: Params) -> dict[str, Any]:

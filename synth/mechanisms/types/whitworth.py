@@ -75,8 +75,13 @@ def transmission(p: Params, th: Any) -> dict[str, Any]:
 def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     r2, d, L = p["crank"], p["pivot_distance"], p["lever"]
     c, s = _lever(p, th)
-    return {"O2": (0.0, 0.0), "B": (r2 * ca.cos(th), r2 * ca.sin(th)), "O4": (-d, 0.0),
-            "P": (-d - L * c, -L * s), "R": (-d, position(p, th))}  # fmt: skip
+    return {
+        "O2": (0.0, 0.0),
+        "B": (r2 * ca.cos(th), r2 * ca.sin(th)),
+        "O4": (-d, 0.0),
+        "P": (-d - L * c, -L * s),
+        "R": (-d, position(p, th)),
+    }
 
 
 def facts(p: Params) -> dict[str, Any]:
@@ -145,11 +150,15 @@ def space(p: Problem) -> Space | None:
 # arm O4P points the other way (the slot's own length is left out of the lever's mass)
 FRAME = Frame(
     bodies=(("crank",), ("lever",), ("connecting_rod",)),
-    pins=(("O2", "crank", GROUND), ("O4", "lever", GROUND), ("P", "lever", "connecting_rod"),
-          ("R", "connecting_rod", RAM)),
+    pins=(
+        ("O2", "crank", GROUND),
+        ("O4", "lever", GROUND),
+        ("P", "lever", "connecting_rod"),
+        ("R", "connecting_rod", RAM),
+    ),
     path=lambda p: (0.0, 1.0),
     slots=(("B", "crank", "lever", ("O4", "B")),),
-)  # fmt: skip
+)
 
 
 register(
