@@ -30,6 +30,7 @@ import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from concurrent.futures import BrokenExecutor, Executor, ProcessPoolExecutor, ThreadPoolExecutor
 from contextlib import asynccontextmanager, suppress
+from dataclasses import replace
 from functools import partial
 from multiprocessing.context import BaseContext
 from multiprocessing.process import BaseProcess
@@ -59,9 +60,9 @@ class Busy(Exception):
         self.retry_after_s = retry_after_s
 
 
-def _call(op: str, kwargs: dict[str, Any], then: Callable[[Any], Any] | None = None) -> Any:
+def _call(op: str, request: Any, then: Callable[[Any], Any] | None = None) -> Any:
     """The operation, and ``then`` of its result (its reply's encoding: off the loop too)."""
-    result = OPERATIONS[op].run(**kwargs)
+    result = OPERATIONS[op].run(request)
     return result if then is None else then(result)
 
 
@@ -143,19 +144,20 @@ class Engine:
     async def run(
         self,
         op: str,
-        short: bool = False,
+        request: Any,
         arrival: float | None = None,
         then: Callable[[Any], Any] | None = None,
-        **kwargs: Any,
     ) -> Any:
-        """``op`` on a slot of the short lane (``short``) or the solvers', waited for from
+        """``op`` on its ``request`` (``operations``: its value, checked), on a slot of the
+        short lane where the operation says it is short or else the solvers', waited for from
         ``arrival`` (monotonic seconds; None: now) until the start-by time; ``then`` of its
         result, in the lane too. With a ``time_budget_ms`` (a synthesis, a sweep) the budget
         counts from ``arrival``: the operation gets what is left of it when it starts, and
         again if it is retried (a worker process died under it)."""
         s = self.settings
+        short = OPERATIONS[op].short(request)
         arrival = time.monotonic() if arrival is None else arrival
-        budget_s = kwargs.get("time_budget_ms", 0) / 1000
+        budget_s = (getattr(request, "time_budget_ms", None) or 0) / 1000
         wait = s.max_queue_ms / 1000
         if budget_s:  # not under MIN_WAIT_S: what reading and checking it took is no wait
             wait = max(min(wait, s.queue_share * budget_s), MIN_WAIT_S)
@@ -164,7 +166,7 @@ class Engine:
         loop = asyncio.get_running_loop()
         async with slots.held(arrival, arrival + wait):
             executor = self.short_executor if short else self.executor
-            call = partial(_call, op, _left(kwargs, deadline), then)
+            call = partial(_call, op, _left(request, deadline), then)
             try:
                 return await loop.run_in_executor(executor, call)
             except BrokenExecutor:
@@ -174,7 +176,7 @@ class Engine:
                 # saw this one break, and each tried once more on it, with what is left of
                 # its budget once the new pool has warmed up (a 503 if that is too little)
                 await self._replace(executor, arrival, deadline)
-                call = partial(_call, op, _left(kwargs, deadline, arrival), then)
+                call = partial(_call, op, _left(request, deadline, arrival), then)
                 return await loop.run_in_executor(self.executor, call)
 
     async def _replace(self, broken: Executor, arrival: float, deadline: float | None) -> None:
@@ -244,20 +246,18 @@ class Engine:
             p.terminate()
 
 
-def _left(
-    kwargs: dict[str, Any], deadline: float | None, retried: float | None = None
-) -> dict[str, Any]:
-    """``kwargs`` with what is left of the budget until ``deadline`` (None: no budget), less
+def _left(request: Any, deadline: float | None, retried: float | None = None) -> Any:
+    """``request`` with what is left of its budget until ``deadline`` (None: no budget), less
     what the reply takes after it; ``retried`` (the arrival): a retry, refused with ``Busy``
     where less than ``REPLY_S`` is left (its own work could not end by the deadline)."""
     if deadline is None:
-        return kwargs
+        return request
     rest = deadline - time.monotonic()
     rest -= min(REPLY_S, 0.1 * rest)
     if retried is not None and rest < REPLY_S:
         waited = (time.monotonic() - retried) * 1000
         raise Busy(waited, 1, "a solver process died, and the request's budget ran out")
-    return {**kwargs, "time_budget_ms": max(rest * 1000, 1e-3)}
+    return replace(request, time_budget_ms=max(rest * 1000, 1e-3))
 
 
 class Slots:

@@ -1,19 +1,22 @@
-"""The operations the service runs, by name: each the library's function, its checks, and
-whether given arguments make it short work (``api.engine``'s short lane)."""
+"""The operations the service runs, by name: each the request value the library checks its
+arguments with (built from a body: a request synth refuses gets its 422 before it waits for a
+slot), the library's function that runs it, and whether it is short work (``api.engine``'s
+short lane)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-import synth
-from synth.analysis.kinematics import check as check_analysis
-from synth.analysis.sweep import check as check_sweep
-from synth.drawing.export import check as check_export
-from synth.drawing.report import check as check_report
-from synth.synthesis.driver import check as check_synthesis
-from synth.synthesis.driver import short as short_synthesis
+from synth.analysis import kinematics, sweep
+from synth.analysis.request import AnalysisRequest
+from synth.analysis.sweep import SweepRequest
+from synth.drawing import export, report
+from synth.drawing.export import ExportRequest
+from synth.drawing.report import ReportRequest
+from synth.synthesis import driver
+from synth.synthesis.driver import SynthesisRequest
 
 # an analysis with at most this many curve points is short work: ~1 ms, ~15 ms with a load
 # (a four-bar's), against tens of ms and more for the longest (100 000 points)
@@ -22,30 +25,25 @@ SHORT_CURVE_POINTS = 1000
 
 @dataclass(frozen=True)
 class Operation:
-    """``run``: the library's function; ``check``: its checks of the same arguments (cheap, no
-    solving: a request synth refuses gets its 422 before it waits for a slot); ``short``:
-    whether these arguments cost about what an analysis does (at most some tens of ms), so
-    the service runs them on its short lane, not behind long solves (``Engine.run``)."""
+    """``request``: the operation's arguments as one value, checked when built; ``run``: the
+    library's function of it; ``short``: whether it costs about what an analysis does (at
+    most some tens of ms), so the service runs it on its short lane, not behind long solves
+    (``Engine.run``)."""
 
-    run: Callable[..., Any]
-    check: Callable[..., Any]
-    short: Callable[..., bool] = lambda **_: False
-
-
-def short_analysis(
-    crank_angles_deg: Sequence[float] | None = None, samples: int | None = None, **_: Any
-) -> bool:
-    """Whether an analysis has at most ``SHORT_CURVE_POINTS`` curve points (its extras and
-    load, at most ~15 ms on top, do not change that it is short)."""
-    return len(crank_angles_deg or ()) + (samples or 0) <= SHORT_CURVE_POINTS
+    request: Callable[..., Any]
+    run: Callable[[Any], Any]
+    short: Callable[[Any], bool] = lambda _: False
 
 
 OPERATIONS: dict[str, Operation] = {
-    "analyze": Operation(synth.analyze, check_analysis, short_analysis),
-    "synthesize": Operation(synth.synthesize, check_synthesis, short_synthesis),
-    "sweep": Operation(synth.sweep, check_sweep),
+    "analyze": Operation(
+        AnalysisRequest, kinematics.run, lambda r: r.curve_points <= SHORT_CURVE_POINTS
+    ),
+    # with nothing but the exact solvers to ask: under a millisecond a type
+    "synthesize": Operation(SynthesisRequest, driver.run, lambda r: r.exact_only),
+    "sweep": Operation(SweepRequest, sweep.run),
     # a drawing: under 2 ms, ~20 ms as DXF with the pins' paths (ezdxf); a GIF's 36 frames ~80
-    "export": Operation(synth.export, check_export, lambda format="svg", **_: format != "gif"),
+    "export": Operation(ExportRequest, export.run, lambda r: r.format != "gif"),
     # a report: an analysis at 361 angles with every extra, and a drawing; ~20–40 ms
-    "report": Operation(synth.report, check_report, lambda **_: True),
+    "report": Operation(ReportRequest, report.run, lambda _: True),
 }

@@ -23,13 +23,14 @@ from pydantic import (
 )
 
 from synth import results
-from synth.analysis.kinematics import ANALYSIS_INCLUDE, INCLUDE, MAX_CURVE_POINTS
 from synth.analysis.quality import CUT
+from synth.analysis.request import MAX_CURVE_POINTS
 from synth.analysis.sweep import MAX_POINTS
 from synth.drawing import FORMATS
 from synth.load import GAP, LENGTH_UNITS, RANGES
 from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.objectives import all_objectives
+from synth.requests import ANALYSIS_INCLUDE, INCLUDE
 from synth.synthesis.driver import MAX_CANDIDATES, PER_TYPE
 from synth.targets import PARETO
 

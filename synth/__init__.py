@@ -24,29 +24,36 @@ from .version import __version__ as __version__
 if TYPE_CHECKING:
     from . import atlas, mechanisms
     from .analysis.kinematics import analyze, analyze_many, joints
-    from .analysis.sweep import sweep
-    from .drawing.export import export
+    from .analysis.request import AnalysisRequest
+    from .analysis.sweep import SweepRequest, sweep
+    from .drawing.export import ExportRequest, export
     from .drawing.figure import draw
     from .drawing.gif import animate
-    from .drawing.report import report
+    from .drawing.report import ReportRequest, report
     from .errors import InvalidDesign, InvalidParameters, SynthError, UnknownMechanism
     from .load import Load
     from .mechanisms import register
     from .results import Analysis, Candidate, Infeasible, SweepResult, SynthesisResult, Tolerance
     from .synthesis import Solver, Spec, synthesize
+    from .synthesis.driver import SynthesisRequest
 
 # each public name and the module that defines it (None: the name is that submodule)
 _WHERE = {
     "Analysis": ".results",
+    "AnalysisRequest": ".analysis.request",
     "Candidate": ".results",
+    "ExportRequest": ".drawing.export",
     "Infeasible": ".results",
     "InvalidDesign": ".errors",
     "InvalidParameters": ".errors",
     "Load": ".load",
+    "ReportRequest": ".drawing.report",
     "Solver": ".synthesis",
     "Spec": ".synthesis",
+    "SweepRequest": ".analysis.sweep",
     "SweepResult": ".results",
     "SynthError": ".errors",
+    "SynthesisRequest": ".synthesis.driver",
     "SynthesisResult": ".results",
     "Tolerance": ".results",
     "UnknownMechanism": ".errors",
@@ -65,15 +72,20 @@ _WHERE = {
 }
 __all__ = [
     "Analysis",
+    "AnalysisRequest",
     "Candidate",
+    "ExportRequest",
     "Infeasible",
     "InvalidDesign",
     "InvalidParameters",
     "Load",
+    "ReportRequest",
     "Solver",
     "Spec",
+    "SweepRequest",
     "SweepResult",
     "SynthError",
+    "SynthesisRequest",
     "SynthesisResult",
     "Tolerance",
     "UnknownMechanism",

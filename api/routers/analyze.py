@@ -15,6 +15,8 @@ from ..schemas import REFUSALS, AnalyzeRequest, AnalyzeResponse
 from .common import EngineDep, load, run_design, tolerance
 
 router = APIRouter(tags=["analysis"], route_class=Route)
+# the fields the library takes as another value than the body's (the rest as they are)
+_CONVERTED = {"mechanism", "tolerance", "load"}
 # what an analysis and its curves hold only when asked: the fields whose default is None
 _ASKED = {c: frozenset(f.name for f in fields(c) if f.default is None) for c in (Analysis, Curves)}
 
@@ -41,11 +43,7 @@ async def analyze(
         "analyze",
         body.mechanism,
         encoded,  # where it ran: 1 000 points with pins take ~0.7 ms to encode, 29 000 ~20
-        crank_speed=body.crank_speed,
-        crank_acceleration=body.crank_acceleration,
-        crank_angles_deg=body.crank_angles_deg,
-        samples=body.samples,
-        include=body.include,
+        **body.model_dump(exclude=_CONVERTED),  # the library's names
         tolerance=tolerance(body),
         load=load(body.load),
     )

@@ -58,14 +58,13 @@ async def run(
     then: Callable[[Any], Any] | None = None,
     **kwargs: Any,
 ) -> Any:
-    """Run ``op`` on the engine, on its short lane where the operation says it is short (waits
-    and budgets count from the request's arrival), once its checks pass: a 422 under any load;
-    ``then`` of its result, in the lane too (``Engine.run``). A domain error goes where
-    ``locate`` places it in the request body."""
-    operation = OPERATIONS[op]
+    """Run ``op`` on the engine with its request value built from ``kwargs`` (checked there:
+    a 422 under any load), on its short lane where the operation says it is short (waits and
+    budgets count from the request's arrival); ``then`` of its result, in the lane too
+    (``Engine.run``). A domain error goes where ``locate`` places it in the request body."""
     try:
-        operation.check(**kwargs)
-        return await engine.run(op, operation.short(**kwargs), arrival(request), then, **kwargs)
+        value = OPERATIONS[op].request(**kwargs)
+        return await engine.run(op, value, arrival(request), then)
     except SynthError as e:
         raise Located(e, locate(e)) from None
 

@@ -12,6 +12,8 @@ from ..schemas import REFUSALS, SynthesizeRequest, SynthesizeResponse
 from .common import EngineDep, Loc, budget, load, run, tolerance
 
 router = APIRouter(tags=["synthesis"], route_class=Route)
+# the fields the library takes as another value than the body's (the rest as they are)
+_CONVERTED = {"mechanisms", "time_budget_ms", "tolerance", "load"}
 
 
 @router.post("/v1/synthesize", response_model=SynthesizeResponse, responses=REFUSALS)
@@ -48,17 +50,10 @@ async def synthesize(
         engine,
         locate,
         "synthesize",
-        time_ratio=body.time_ratio,
-        stroke=body.stroke,
-        min_transmission_angle_deg=body.min_transmission_angle_deg,
+        **body.model_dump(exclude=_CONVERTED),  # the library's names
         mechanisms=specs,
-        objective=body.objective,
-        max_candidates=body.max_candidates,
         time_budget_ms=budget(engine, body.time_budget_ms),
-        include=body.include,
-        max_working_speed_fluctuation=body.max_working_speed_fluctuation,
         tolerance=tolerance(body),
         load=load(body.load),
-        max_peak_torque=body.max_peak_torque,
     )
     return r

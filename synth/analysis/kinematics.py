@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import fields, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -20,6 +20,7 @@ from ..load import Load
 from ..mechanisms import Mechanism, get
 from ..mechanisms.fourbar.geometry import grashof_class
 from ..mechanisms.registry import GROUND, RAM
+from ..requests import keyword
 from ..results import (
     NEAR_DEAD_POINT_DEG,
     NEAR_LIMIT,
@@ -36,30 +37,11 @@ from ..results import (
 )
 from . import loads, quality
 from .model import Model, model
+from .request import AnalysisRequest, asked
 from .roots import TWO_PI, Points, stationary_points, stationary_points_many
 
-MAX_CURVE_POINTS = 100_000
-# the numbers an analysis's curves may carry, points × (each curve, and x and y of each pin):
-# 100 000 points of curves alone, ~8 MB of JSON (README, "What a client can rely on")
-MAX_CURVE_VALUES = 500_000
-INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis or a candidate adds when asked
-# an analysis also adds its curves' pins when asked (they need the curves' angles), and with a
-# load its curves' forces
-ANALYSIS_INCLUDE = (*INCLUDE, "pins", "forces")
 
-
-def analyze(
-    mechanism: str,
-    params: Mapping[str, float],
-    *,
-    crank_speed: float | None = None,
-    crank_acceleration: float = 0.0,
-    crank_angles_deg: Sequence[float] | None = None,
-    samples: int | None = None,
-    include: Collection[str] = (),
-    tolerance: Tolerance | None = None,
-    load: Load | Mapping[str, Any] | None = None,
-) -> Analysis:
+def run(r: AnalysisRequest) -> Analysis:
     """Analyse one design over a crank revolution (the semantics of POST /v1/analyze).
 
     Curves are computed only when asked: at exactly ``crank_angles_deg``, or at ``samples``
@@ -77,13 +59,24 @@ def analyze(
     >>> round(a.time_ratio, 5), round(a.stroke, 9)
     (2.73524, 300.0)
     """
-    load = Load.of(load)  # a Load, or the API's load object
-    deg = _asked(mechanism, include, crank_angles_deg, samples, load is not None)
-    m, p, variant, f, pv, found = prepared(mechanism, params)  # checked there
-    crank_speed = loads.speed(m, load, crank_speed, crank_acceleration)
+    m, p, variant, f, pv, found = _prepared(get(r.mechanism), r.design)
     return _analysis(
-        m, p, variant, f, pv, found, crank_speed, crank_acceleration, deg, include, tolerance, load
+        m,
+        p,
+        variant,
+        f,
+        pv,
+        found,
+        r.omega,
+        r.crank_acceleration,
+        r.angles,
+        r.include,
+        r.tolerance,
+        r.load,
     )
+
+
+analyze = keyword(AnalysisRequest, run, "analyze")
 
 
 def analyze_many(
@@ -97,7 +90,7 @@ def analyze_many(
     SynthError that refuses it. The same analyses to the bit, for less: the dead centres and
     transmission extremes of the designs of one variant are found in shared compiled calls
     (``roots.stationary_points_many``), which a front's verification and a sweep repeat."""
-    _asked(mechanism, include, None, None)
+    asked(mechanism, include, None, None)
     m = get(mechanism)
     out: list[Any] = [None] * len(designs)
     variants: dict[frozenset[str], list[tuple[int, dict[str, float]]]] = {}
@@ -172,75 +165,16 @@ def prepared(
     """The completed design, its variant's compiled model, its parameter vector, and the
     stationary points of its rows (the dead centres and transmission extremes)."""
     m = get(mechanism)
-    p = m.complete(params)
+    return _prepared(m, m.complete(params))
+
+
+def _prepared(
+    m: Mechanism, p: dict[str, float]
+) -> tuple[Mechanism, dict[str, float], frozenset[str], Model, np.ndarray, Points]:
     variant = m.variant(p)
     f = model(m, variant)
     pv = np.array([p[n] for n in m.names], dtype=float)
     return m, p, variant, f, pv, stationary_points(f, pv)
-
-
-def check_include(include: Collection[str], allowed: Sequence[str] = INCLUDE) -> None:
-    """Raise InvalidParameters for anything ``include`` names that is not ``allowed``: by
-    default what a candidate's analysis can add (``ANALYSIS_INCLUDE`` for an analysis's)."""
-    unknown = sorted(set(include) - set(allowed))
-    if unknown:
-        raise InvalidParameters(
-            f"include: unknown {', '.join(map(repr, unknown))}; choose from {', '.join(allowed)}",
-            ("include",),
-        )
-
-
-def _asked(
-    mechanism: str,
-    include: Collection[str],
-    crank_angles_deg: Sequence[float] | None,
-    samples: int | None,
-    loaded: bool = False,
-) -> np.ndarray | None:
-    """The curves' angles (``curve_angles``), once ``include`` is checked against them: pins
-    need angles to be at, and a drawing; ``loaded``: a load adds the torque curve."""
-    check_include(include, ANALYSIS_INCLUDE)
-    deg = curve_angles(crank_angles_deg, samples)
-    if "pins" in include and deg is None:
-        msg = "include 'pins' needs crank_angles_deg or samples (the angles the pins are wanted at)"
-        raise InvalidParameters(msg, ("include",))
-    check_drawn(mechanism, include)
-    if "forces" in include and not (loaded and deg is not None):
-        msg = "include 'forces' needs a load, and crank_angles_deg or samples (its curves' angles)"
-        raise InvalidParameters(msg, ("include",))
-    if deg is not None:
-        loc = "samples" if samples else "crank_angles_deg"
-        _check_values(mechanism, include, deg.size, loc, loaded)
-    return deg
-
-
-def _check_values(
-    mechanism: str, include: Collection[str], points: int, loc: str, loaded: bool
-) -> None:
-    m = get(mechanism)
-    curves = len(fields(Curves)) - 3 + loaded  # the pins and forces aside, the torque with a load
-    pins = len({pin for d in m.drawing for pin in d[1:]}) if "pins" in include else 0
-    if "forces" in include:
-        curves += loads.forces_of(m)
-    per = curves + 2 * pins
-    if points * per > MAX_CURVE_VALUES:
-        what = f"{curves} curves" + (f" and x, y of {pins} pins" if pins else "")
-        raise InvalidParameters(
-            f"the curves would carry {points * per} numbers ({points} points × {per}: {what}); "
-            f"an analysis carries at most {MAX_CURVE_VALUES}: ask for at most "
-            f"{MAX_CURVE_VALUES // per} points" + (" (or no pins)" if pins else ""),
-            (loc,),
-        )
-
-
-def check_drawn(mechanism: str, include: Collection[str]) -> None:
-    """Raise InvalidParameters where ``include`` asks for what needs the type's pins (its
-    drawing: ``pins``, the ``envelope``) and the type has none."""
-    needs = [k for k in ("pins", "envelope") if k in include]
-    if needs and get(mechanism).joints is None:
-        raise InvalidParameters(
-            f"include {needs[0]!r}: {mechanism} has no drawing yet", ("include",)
-        )
 
 
 def slider_extremes(
@@ -389,45 +323,6 @@ def conditioning(m: Mechanism, p: dict[str, float], mu_deg: float, reversals: in
     if reversals > 2:
         flags.append("dithering")
     return Conditioning(mu_deg, margin, name, tuple(flags))
-
-
-def check(
-    mechanism: str,
-    params: Mapping[str, float],
-    crank_angles_deg: Sequence[float] | None = None,
-    samples: int | None = None,
-    include: Collection[str] = (),
-    load: Load | None = None,
-    **_: Any,
-) -> None:
-    """What ``analyze`` checks before it analyses: the design's validity, and the arguments'
-    meaning (``curve_angles``, and ``include`` with them). Takes (and ignores) ``analyze``'s
-    other arguments."""
-    get(mechanism).complete(params)
-    _asked(mechanism, include, crank_angles_deg, samples, load is not None)
-
-
-def curve_angles(
-    crank_angles_deg: Sequence[float] | None, samples: int | None
-) -> np.ndarray | None:
-    """The crank angles of the curves asked for, in degrees (None: no curves), checked."""
-    if crank_angles_deg is None and samples is None:
-        return None
-    if crank_angles_deg is not None and samples is not None:
-        raise InvalidParameters("give crank_angles_deg or samples, not both", ("samples",))
-    if crank_angles_deg is not None:
-        deg = np.asarray(crank_angles_deg, dtype=float).ravel()
-    else:
-        if not (isinstance(samples, int) and samples >= 1):
-            raise InvalidParameters(f"samples must be ≥ 1, got {samples}", ("samples",))
-        deg = np.arange(samples) * (360.0 / samples)
-    if deg.size > MAX_CURVE_POINTS:
-        raise InvalidParameters(
-            f"at most {MAX_CURVE_POINTS} curve points, got {deg.size}", ("crank_angles_deg",)
-        )
-    if not np.all(np.isfinite(deg)):
-        raise InvalidParameters("crank angles must be finite", ("crank_angles_deg",))
-    return deg
 
 
 def _curves(f: Model, pv: np.ndarray, omega: float, alpha: float, deg: np.ndarray) -> Curves:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -19,6 +20,7 @@ import numpy as np
 from ..errors import InvalidParameters, SynthError
 from ..mechanisms import get
 from ..numerics.dense import bisect
+from ..requests import check_budget, keyword
 from ..results import Analysis, Extremum, SweepResult, TimeRatioRange
 from .kinematics import analyze, analyze_many
 
@@ -34,47 +36,42 @@ MAX_POINTS = 10_000
 CHUNK = 256  # points analysed between two looks at the clock (~25 ms of a four-bar's)
 
 
-def check(
-    mechanism: str,
-    params: Mapping[str, float],
-    vary: str,
-    start: float,
-    stop: float,
-    points: int = 101,
-    time_budget_ms: float | None = None,
-    **_: Any,
-) -> None:
-    """What ``sweep`` checks before it sweeps (its arguments' meaning)."""
-    m = get(mechanism)
-    for k in params:
-        m.parameter(k)
-    try:
-        q = m.parameter(vary)
-    except InvalidParameters as e:
-        raise InvalidParameters(e.msg, ("vary",)) from None
-    if not (math.isfinite(start) and math.isfinite(stop)):
-        raise InvalidParameters(f"need finite start and stop, got {start!r}, {stop!r}", ("stop",))
-    if start > stop:
-        raise InvalidParameters(f"start {start:g} > stop {stop:g}", ("stop",))
-    if not q.signed and start <= 0 and not (q.zero_means and start == 0):
-        raise InvalidParameters(f"{vary} is a length: start must be > 0, got {start:g}", ("start",))
-    if not (isinstance(points, int) and 1 <= points <= MAX_POINTS):
-        raise InvalidParameters(f"points must be 1 … {MAX_POINTS}, got {points!r}", ("points",))
-    if time_budget_ms is not None and not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
-        raise InvalidParameters(
-            f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
-        )
+@dataclass(frozen=True)
+class SweepRequest:
+    """``sweep``'s arguments (``run``), checked when built."""
+
+    mechanism: str
+    params: Mapping[str, float]
+    vary: str
+    start: float
+    stop: float
+    points: int = 101
+    time_budget_ms: float | None = None
+
+    def __post_init__(self) -> None:
+        m = get(self.mechanism)
+        for k in self.params:
+            m.parameter(k)
+        try:
+            q = m.parameter(self.vary)
+        except InvalidParameters as e:
+            raise InvalidParameters(e.msg, ("vary",)) from None
+        start, stop, points, budget = self.start, self.stop, self.points, self.time_budget_ms
+        if not (math.isfinite(start) and math.isfinite(stop)):
+            msg = f"need finite start and stop, got {start!r}, {stop!r}"
+            raise InvalidParameters(msg, ("stop",))
+        if start > stop:
+            raise InvalidParameters(f"start {start:g} > stop {stop:g}", ("stop",))
+        if not q.signed and start <= 0 and not (q.zero_means and start == 0):
+            msg = f"{self.vary} is a length: start must be > 0, got {start:g}"
+            raise InvalidParameters(msg, ("start",))
+        if not (isinstance(points, int) and 1 <= points <= MAX_POINTS):
+            raise InvalidParameters(f"points must be 1 … {MAX_POINTS}, got {points!r}", ("points",))
+        if budget is not None:
+            check_budget(budget)
 
 
-def sweep(
-    mechanism: str,
-    params: Mapping[str, float],
-    vary: str,
-    start: float,
-    stop: float,
-    points: int = 101,
-    time_budget_ms: float | None = None,
-) -> SweepResult:
+def run(r: SweepRequest) -> SweepResult:
     """Analyse the design at ``points`` values of ``vary`` from ``start`` to ``stop``; within
     ``time_budget_ms`` (None: however long it takes), else up to the last point analysed by
     then (``complete`` False), the intervals and the range over those.
@@ -85,8 +82,8 @@ def sweep(
     >>> [[round(v, 12) for v in iv] for iv in r.valid_interval]
     [[0.15, 0.4]]
     """
-    check(mechanism, params, vary, start, stop, points, time_budget_ms)
-    deadline = time.monotonic() + (time_budget_ms / 1000 if time_budget_ms else math.inf)
+    mechanism, params, vary = r.mechanism, r.params, r.vary
+    deadline = time.monotonic() + (r.time_budget_ms / 1000 if r.time_budget_ms else math.inf)
     held = {k: v for k, v in params.items() if k != vary}
 
     def at(v: float) -> Analysis | None:
@@ -95,7 +92,7 @@ def sweep(
         except SynthError:
             return None
 
-    values = np.linspace(start, stop, points) if points > 1 else np.array([start])
+    values = np.linspace(r.start, r.stop, r.points) if r.points > 1 else np.array([r.start])
     designs = [{**held, vary: float(v)} for v in values]
     runs: list[Any] = []
     for k in range(0, len(designs), CHUNK):
@@ -121,6 +118,9 @@ def sweep(
         time_ratio_range=_tr_range(at, values, runs, intervals),
         complete=complete,
     )
+
+
+sweep = keyword(SweepRequest, run, "sweep")
 
 
 def _intervals(

@@ -17,7 +17,6 @@ from ..errors import InvalidParameters, SynthError
 from ..load import Load
 from ..mechanisms import all_types
 
-INCLUDE = ("motion", "sensitivities", "envelope", "pins", "forces")
 CURVES = ("crank_angle_deg", "position", "velocity", "acceleration", "transmission_deg", "torque")
 
 

@@ -13,13 +13,13 @@ from ..load import Load
 from ..mechanisms import all_types, get
 from ..objectives import all_objectives
 from ..objectives import get as objective_of
+from ..requests import ANALYSIS_INCLUDE, INCLUDE
 from ..targets import PARETO
 
 if TYPE_CHECKING:
     from ..results import Analysis, Loads, Sensitivities, SweepResult, SynthesisResult
 from .base import (
     CURVES,
-    INCLUDE,
     design_args,
     emit,
     fail,
@@ -81,7 +81,7 @@ from .base import (
 @click.option(
     "--include",
     multiple=True,
-    type=click.Choice(INCLUDE[:3]),
+    type=click.Choice(INCLUDE),
     help="add to each candidate (repeat)",
 )
 @click.option("--load", "load_json", metavar="JSON", help="the API's load object")
@@ -202,7 +202,7 @@ def _candidate_text(r: SynthesisResult, objective: str) -> str:
     type=float,
     help="curves at this crank angle, degrees (repeat)",
 )
-@click.option("--include", multiple=True, type=click.Choice(INCLUDE), help="repeat")
+@click.option("--include", multiple=True, type=click.Choice(ANALYSIS_INCLUDE), help="repeat")
 @click.option("--crank-speed", type=float, help="rad/s for the curves (default 1)")
 @click.option("--load", "load_json", metavar="JSON", help="the API's load object")
 @formats

@@ -11,6 +11,7 @@ import datetime
 import math
 import re
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import KW_ONLY, dataclass, field
 from typing import Any
 from xml.sax.saxutils import escape
 
@@ -19,7 +20,7 @@ import numpy as np
 from ..analysis.kinematics import analyze
 from ..errors import InvalidParameters
 from ..load import Load
-from ..mechanisms import Mechanism
+from ..requests import keyword
 from ..results import Analysis, Loads
 from ..version import __version__
 from . import TARGETS
@@ -41,15 +42,42 @@ svg.chart{width:100%;height:auto;max-width:640px;display:block}
 """
 
 
-def report(
-    mechanism: str,
-    params: Mapping[str, float],
-    *,
-    load: Load | Mapping[str, Any] | None = None,
-    targets: Mapping[str, float] | None = None,
-    crank_angle_deg: float | None = None,
-    length_unit: str | None = None,
-) -> str:
+@dataclass(frozen=True)
+class ReportRequest:
+    """``report``'s arguments (``run``), checked when built: ``load`` a ``Load`` or a mapping
+    of its fields; ``unit`` the lengths' unit (``length_unit``, else the load's, else mm)."""
+
+    mechanism: str
+    params: Mapping[str, float]
+    _: KW_ONLY
+    load: Load | None = None
+    targets: Mapping[str, float] | None = None
+    crank_angle_deg: float | None = None
+    length_unit: str | None = None
+    unit: str = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        m = drawn(self.mechanism)
+        for k in self.params:
+            m.parameter(k)
+        q = Load.of(self.load)
+        object.__setattr__(self, "load", q)
+        unit = self.length_unit or (q.length_unit if q else "mm")
+        unit_mm(unit)
+        if q is not None and unit != q.length_unit:
+            msg = f"length_unit {unit!r} differs from the load's {q.length_unit!r}"
+            raise InvalidParameters(msg, ("length_unit",))
+        for k, v in (self.targets or {}).items():
+            if k not in TARGETS:
+                msg = f"targets may name {', '.join(TARGETS)}, got {k!r}"
+                raise InvalidParameters(msg, ("targets", k))
+            if not math.isfinite(v):
+                raise InvalidParameters(f"targets.{k} must be finite, got {v!r}", ("targets", k))
+        check_angle(self.crank_angle_deg)
+        object.__setattr__(self, "unit", unit)
+
+
+def run(r: ReportRequest) -> str:
     """The design's report as an HTML document. Lengths are in ``length_unit`` (a load's,
     where one is given; else mm), forces and the rest SI; ``targets`` (any of ``TARGETS``)
     are compared with what the design achieves; the drawing is at ``crank_angle_deg`` (None:
@@ -59,12 +87,12 @@ def report(
     >>> page.startswith("<!doctype html>") and "time ratio" in page
     True
     """
-    m, q, unit = _checked(mechanism, params, load, targets, crank_angle_deg, length_unit)
-    goals = dict(targets or {})
+    mechanism, params, q, unit = r.mechanism, r.params, r.load, r.unit
+    m, goals = drawn(mechanism), dict(r.targets or {})
     angles = np.linspace(0.0, 360.0, SAMPLES)
     include = ("motion", "sensitivities", "envelope", *(("forces",) if q else ()))
     a = analyze(mechanism, params, crank_angles_deg=angles.tolist(), include=include, load=q)
-    d = drawing(mechanism, params, crank_angle_deg)
+    d = drawing(mechanism, params, r.crank_angle_deg)
     picture = re.sub(r"^<\?xml[^>]*>\s*", "", svg(d, unit))
     now = datetime.datetime.now(datetime.UTC)
     parts = [
@@ -104,45 +132,7 @@ def report(
     return "\n".join(parts)
 
 
-def check(
-    mechanism: str,
-    params: Mapping[str, float],
-    *,
-    load: Load | Mapping[str, Any] | None = None,
-    targets: Mapping[str, float] | None = None,
-    crank_angle_deg: float | None = None,
-    length_unit: str | None = None,
-) -> None:
-    """What ``report`` checks before it analyses (its arguments' meaning)."""
-    _checked(mechanism, params, load, targets, crank_angle_deg, length_unit)
-
-
-def _checked(
-    mechanism: str,
-    params: Mapping[str, float],
-    load: Load | Mapping[str, Any] | None,
-    targets: Mapping[str, float] | None,
-    crank_angle_deg: float | None,
-    length_unit: str | None,
-) -> tuple[Mechanism, Load | None, str]:
-    """The arguments checked: the type, the load (a ``Load``) and the lengths' unit."""
-    m = drawn(mechanism)
-    for k in params:
-        m.parameter(k)
-    q = Load.of(load)
-    unit = length_unit or (q.length_unit if q else "mm")
-    unit_mm(unit)
-    if q is not None and unit != q.length_unit:
-        msg = f"length_unit {unit!r} differs from the load's {q.length_unit!r}"
-        raise InvalidParameters(msg, ("length_unit",))
-    for k, v in (targets or {}).items():
-        if k not in TARGETS:
-            msg = f"targets may name {', '.join(TARGETS)}, got {k!r}"
-            raise InvalidParameters(msg, ("targets", k))
-        if not math.isfinite(v):
-            raise InvalidParameters(f"targets.{k} must be finite, got {v!r}", ("targets", k))
-    check_angle(crank_angle_deg)
-    return m, q, unit
+report = keyword(ReportRequest, run, "report")
 
 
 def _section(key: str, title: str, body: str) -> str:

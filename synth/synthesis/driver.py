@@ -13,15 +13,17 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import KW_ONLY, dataclass, field, replace
 from typing import Any
 
 from .. import objectives
-from ..analysis.kinematics import analyze, check_drawn, check_include
+from ..analysis.kinematics import analyze
+from ..analysis.request import check_drawn, check_include
 from ..errors import InvalidDesign, InvalidParameters
 from ..load import Load
 from ..mechanisms import all_types, get
 from ..objectives import FLUCTUATION, REGISTRY, TORQUE
+from ..requests import check_budget, keyword
 from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
 from ..targets import PARETO
 from .candidate import candidate, predicted_rank
@@ -30,7 +32,15 @@ from .front import pareto
 from .motion import motion
 from .search import DEFAULT, Searched, Solver, Spec, Targets, search
 
-__all__ = ["MAX_CANDIDATES", "Solver", "Spec", "check", "checked_spec", "short", "synthesize"]
+__all__ = [
+    "MAX_CANDIDATES",
+    "Solver",
+    "Spec",
+    "SynthesisRequest",
+    "checked_spec",
+    "run",
+    "synthesize",
+]
 
 MAX_CANDIDATES = 50
 # the solvers work in the stroke's unit: a stroke within STROKES and bounds within SCALE of it
@@ -42,22 +52,63 @@ Specs = Sequence[Spec | Mapping[str, Any] | str] | str | None
 PER_TYPE = 5  # candidates per type when max_candidates is not given (pareto: per type's front)
 
 
-def synthesize(
-    time_ratio: float,
-    stroke: float,
-    min_transmission_angle_deg: float = 0.0,
-    mechanisms: Specs = None,
-    objective: str = PARETO,
-    max_candidates: int | None = None,
-    time_budget_ms: float = 2000.0,
-    *,
-    include: Collection[str] = (),
-    tolerance: Tolerance | None = None,
-    max_working_speed_fluctuation: float | None = None,
-    load: Load | Mapping[str, Any] | None = None,
-    max_peak_torque: float | None = None,
-    solver: Solver = DEFAULT,
-) -> SynthesisResult:
+@dataclass(frozen=True)
+class SynthesisRequest:
+    """``synthesize``'s arguments (``run``), checked when built: an ``InvalidParameters``
+    located at the argument, e.g. ``("mechanisms", 0, "bounds", "crank")``. ``load`` takes a
+    ``Load`` or a mapping of its fields; ``specs`` are the types to search, each checked."""
+
+    time_ratio: float
+    stroke: float
+    min_transmission_angle_deg: float = 0.0
+    mechanisms: Specs = None
+    objective: str = PARETO
+    max_candidates: int | None = None
+    time_budget_ms: float = 2000.0
+    _: KW_ONLY
+    include: Collection[str] = ()
+    tolerance: Tolerance | None = None
+    max_working_speed_fluctuation: float | None = None
+    load: Load | None = None
+    max_peak_torque: float | None = None
+    solver: Solver = DEFAULT
+    specs: tuple[Spec, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        load = Load.of(self.load)
+        object.__setattr__(self, "load", load)
+        specs = _specs(self.mechanisms)
+        objective, bound = self.objective, self.min_transmission_angle_deg
+        _check_targets(self.time_ratio, self.stroke, bound, objective, self.max_candidates)
+        for i, s in enumerate(specs):
+            _check_scale(s, i, self.stroke)
+        _check_limit(self.max_working_speed_fluctuation, objective)
+        _check_torque(objective, load, self.max_peak_torque)
+        check_include(self.include)
+        for s in specs:
+            check_drawn(s.type, self.include)
+            if load is not None and get(s.type).frame is None:
+                raise InvalidParameters(f"load: {s.type} has no force model yet", ("load",))
+        check_budget(self.time_budget_ms)
+        object.__setattr__(self, "specs", tuple(specs))
+
+    @property
+    def exact_only(self) -> bool:
+        """Whether it takes only the types' exact reduced solvers on the default bounds
+        (nothing fixed or bounded, not a searched objective, nothing added to the candidates):
+        then it costs about what an analysis does, well under a millisecond for one type and
+        at most ~15 ms for the six over time ratios 1.005–4.5 and bounds 0–70°
+        (``docs/benchmarks.md``)."""
+        if REGISTRY[self.objective].searched or self.include or self.tolerance is not None:
+            return False
+        if self.load is not None or not self.solver.accelerators:  # IPOPT's multistart
+            return False
+        return all(
+            not s.fixed and not s.bounds and get(s.type).reduced is not None for s in self.specs
+        )
+
+
+def run(r: SynthesisRequest) -> SynthesisResult:
     """Every good design for the targets, verified and ranked (POST /v1/synthesize).
 
     ``mechanisms``: the types to search, each a type's name, a ``Spec`` or a mapping with the
@@ -90,46 +141,39 @@ def synthesize(
     [120.0, 450.0]
     """
     t0 = time.monotonic()
-    load = Load.of(load)  # a Load, or the API's load object
-    specs = check(
-        time_ratio,
-        stroke,
-        min_transmission_angle_deg,
-        mechanisms,
-        objective,
-        max_candidates,
-        time_budget_ms,
-        include=include,
-        max_working_speed_fluctuation=max_working_speed_fluctuation,
-        load=load,
-        max_peak_torque=max_peak_torque,
-    )
-    o = objectives.get(objective)
-    per_type = max_candidates or PER_TYPE  # the most one type's front takes
+    o = objectives.get(r.objective)
+    per_type = r.max_candidates or PER_TYPE  # the most one type's front takes
+    max_candidates = r.max_candidates
     if max_candidates is None:
-        max_candidates = min(PER_TYPE * (len(specs) if o.found == "front" else 1), MAX_CANDIDATES)
-    deadline = t0 + time_budget_ms / 1000
-    targets = Targets(time_ratio, stroke, min_transmission_angle_deg, objective, deadline, solver)
+        max_candidates = min(PER_TYPE * (len(r.specs) if o.found == "front" else 1), MAX_CANDIDATES)
+    deadline = t0 + r.time_budget_ms / 1000
+    targets = Targets(
+        r.time_ratio, r.stroke, r.min_transmission_angle_deg, r.objective, deadline, r.solver
+    )
     # what the objective measures; with its load, every candidate's analysis has its loads
-    extras: dict[str, Any] = {"include": sorted({*include, *o.include}), "tolerance": tolerance}
+    extras: dict[str, Any] = {"include": sorted({*r.include, *o.include}), "tolerance": r.tolerance}
+    specs = list(r.specs)
     if o.found == "front":
         cands, infeasible = pareto(specs, targets, max_candidates, per_type, extras)
     elif o.searched:
-        limit = {FLUCTUATION: max_working_speed_fluctuation, TORQUE: max_peak_torque}
-        extras |= {"load": load} if o.needs_load else {}
+        limit = {FLUCTUATION: r.max_working_speed_fluctuation, TORQUE: r.max_peak_torque}
+        extras |= {"load": r.load} if o.needs_load else {}
         cands, infeasible = motion(
             specs, targets, max_candidates, extras, limit.get(o.limit) if o.limit else None
         )
     else:
         cands, infeasible = _single(specs, targets, max_candidates, extras)
-    if load is not None:  # what the returned candidates carry, theirs alone
-        cands, infeasible = _loaded(cands, infeasible, load, targets.deadline)
+    if r.load is not None:  # what the returned candidates carry, theirs alone
+        cands, infeasible = _loaded(cands, infeasible, r.load, targets.deadline)
     return SynthesisResult(
         candidates=tuple(cands),
         infeasible=tuple(infeasible),
         complete=time.monotonic() < targets.deadline,
         elapsed_ms=(time.monotonic() - t0) * 1000,
     )
+
+
+synthesize = keyword(SynthesisRequest, run, "synthesize")
 
 
 def _single(
@@ -211,44 +255,7 @@ def _catalogue() -> str:
     return "\n".join(["", "    Types (parameters):", *types, "", "    Objectives:", *named])
 
 
-synthesize.__doc__ = (synthesize.__doc__ or "") + _catalogue()
-
-
-def check(
-    time_ratio: float,
-    stroke: float,
-    min_transmission_angle_deg: float = 0.0,
-    mechanisms: Specs = None,
-    objective: str = PARETO,
-    max_candidates: int | None = None,
-    time_budget_ms: float = 2000.0,
-    *,
-    include: Collection[str] = (),
-    max_working_speed_fluctuation: float | None = None,
-    load: Load | None = None,
-    max_peak_torque: float | None = None,
-    **_: Any,
-) -> list[Spec]:
-    """What ``synthesize`` checks before it solves (its arguments' meaning); the specs, every
-    quick-return type when ``mechanisms`` is None. Takes (and ignores) ``synthesize``'s other
-    arguments. Raises ``InvalidParameters`` located at the
-    argument, e.g. ``("mechanisms", 0, "bounds", "crank")``."""
-    specs = _specs(mechanisms)
-    _check_targets(time_ratio, stroke, min_transmission_angle_deg, objective, max_candidates)
-    for i, s in enumerate(specs):
-        _check_scale(s, i, stroke)
-    _check_limit(max_working_speed_fluctuation, objective)
-    _check_torque(objective, load, max_peak_torque)
-    check_include(include)
-    for s in specs:
-        check_drawn(s.type, include)
-        if load is not None and get(s.type).frame is None:
-            raise InvalidParameters(f"load: {s.type} has no force model yet", ("load",))
-    if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
-        raise InvalidParameters(
-            f"time_budget_ms must be > 0, got {time_budget_ms}", ("time_budget_ms",)
-        )
-    return specs
+synthesize.__doc__ = run.__doc__ = (run.__doc__ or "") + _catalogue()
 
 
 def _specs(mechanisms: Specs) -> list[Spec]:
@@ -259,34 +266,6 @@ def _specs(mechanisms: Specs) -> list[Spec]:
     if isinstance(mechanisms, str):
         mechanisms = [mechanisms]
     return [checked_spec(s, i) for i, s in enumerate(mechanisms)]
-
-
-def short(
-    mechanisms: Specs = None,
-    objective: str = PARETO,
-    *,
-    include: Collection[str] = (),
-    tolerance: Tolerance | None = None,
-    load: Load | None = None,
-    solver: Solver = DEFAULT,
-    **_: Any,
-) -> bool:
-    """Whether ``synthesize`` with these arguments takes only the types' exact reduced solvers
-    on the default bounds (nothing fixed or bounded, not a motion objective, nothing added to
-    the candidates): then it costs about what an analysis does, well under a millisecond for
-    one type and at most ~15 ms for the six over time ratios 1.005–4.5 and bounds 0–70°
-    (``docs/benchmarks.md``). Takes ``synthesize``'s arguments unchecked (and ignores the
-    others); False for any it would refuse."""
-    searched = objective not in REGISTRY or REGISTRY[objective].searched
-    if searched or include or tolerance is not None or load is not None:
-        return False
-    if not solver.accelerators:  # the generic path: IPOPT's multistart
-        return False
-    try:
-        specs = _specs(mechanisms)
-    except (ValueError, TypeError, KeyError, AttributeError):  # SynthError is a ValueError
-        return False
-    return all(not s.fixed and not s.bounds and get(s.type).reduced is not None for s in specs)
 
 
 def _check_targets(

@@ -10,7 +10,7 @@ import pytest
 
 import synth
 from synth.analysis import kinematics
-from synth.analysis.kinematics import check
+from synth.analysis.request import AnalysisRequest as check
 from synth.mechanisms import all_types, get
 
 from ..support.designs import random_designs

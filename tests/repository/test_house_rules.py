@@ -140,7 +140,7 @@ def test_no_module_uses_another_packages_private_names():
 # synth's packages from the ground up (docs/architecture.md): a module imports from its own
 # layer and those below it, never from one above
 LAYERS = (
-    ("synth.errors", "synth.targets", "synth.numerics", "synth.version"),
+    ("synth.errors", "synth.targets", "synth.numerics", "synth.version", "synth.requests"),
     ("synth.results", "synth.load", "synth.objectives"),
     ("synth.mechanisms",),
     ("synth.analysis",),
@@ -186,6 +186,37 @@ def test_synth_imports_only_downwards():
             if layer(name) > here:
                 found.append(f"{p.relative_to(ROOT)}:{line}: imports {name}, a layer above it")
     assert not found, "imports that run back up:\n" + "\n".join(found)
+
+
+def test_the_import_graph_of_synth_has_no_cycle():
+    """No module of synth imports, through others, itself: every import counts, those for the
+    type checker and those inside functions too."""
+    mods = {module_of(p)[0]: p for p in python_files("synth")}
+
+    def owner(dotted: str) -> str | None:  # the module a dotted name is in
+        parts = dotted.split(".")
+        return next(
+            (m for n in range(len(parts), 0, -1) if (m := ".".join(parts[:n])) in mods), None
+        )
+
+    graph = {
+        name: {owner(d) for _, d in synth_imports(p)} - {name, None} for name, p in mods.items()
+    }
+    done: set[str] = set()
+
+    def walk(name: str, path: list[str]) -> None:
+        if name in path:
+            raise AssertionError(
+                "an import cycle: " + " → ".join([*path[path.index(name) :], name])
+            )
+        if name in done:
+            return
+        for other in sorted(graph[name]):  # type: ignore[type-var]
+            walk(other, [*path, name])
+        done.add(name)
+
+    for name in sorted(mods):
+        walk(name, [])
 
 
 def test_no_module_of_synth_is_over_450_lines():

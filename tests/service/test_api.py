@@ -21,8 +21,8 @@ from api.routers.analyze import encoded
 from api.routers.common import engine
 from api.schemas import AnalyzeResponse
 from benchmarks.analysis import DESIGNS  # a valid design of each type
-from synth.analysis.kinematics import ANALYSIS_INCLUDE
 from synth.mechanisms import all_types, get
+from synth.requests import ANALYSIS_INCLUDE
 
 from ..support import bruteforce
 from ..support import reference_cases as ref

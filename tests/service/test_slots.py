@@ -10,6 +10,7 @@ import pytest
 
 from api.config import Settings
 from api.engine import Busy, Engine, Slots
+from synth.synthesis.driver import SynthesisRequest
 
 pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
 
@@ -130,10 +131,10 @@ def test_a_request_that_waited_past_its_start_by_before_the_engine_is_refused():
     request = {"time_ratio": 1.5, "stroke": 1.0, "time_budget_ms": 1000.0}
     try:
         now = time.monotonic()
-        late = engine.run("synthesize", True, now - 0.6, **request)
+        late = engine.run("synthesize", SynthesisRequest(**request), now - 0.6)
         with pytest.raises(Busy):
             run(late)
-        assert run(engine.run("synthesize", True, now - 0.4, **request)).candidates
+        assert run(engine.run("synthesize", SynthesisRequest(**request), now - 0.4)).candidates
     finally:
         engine.close()
 
