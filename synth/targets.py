@@ -37,3 +37,8 @@ def beta(time_ratio: T) -> T:
 def time_ratio(beta: T) -> T:
     """The time ratio (π + β)/(π − β) of the crank angle β (``beta``'s inverse)."""
     return (math.pi + beta) / (math.pi - beta)
+
+
+def transmission_deg(cos_mu: float) -> float:
+    """The transmission angle (degrees, 0–90) of a joint whose cos μ is ``cos_mu``."""
+    return math.degrees(math.acos(min(1.0, abs(cos_mu))))

@@ -35,10 +35,11 @@ from ..results import (
     Tolerance,
     Transmission,
 )
+from ..targets import transmission_deg
 from . import loads, quality
 from .model import Model, model
 from .request import AnalysisRequest, asked
-from .roots import TWO_PI, Points, stationary_points, stationary_points_many
+from .roots import Points, stationary_points, stationary_points_many
 
 
 def run(r: AnalysisRequest) -> Analysis:
@@ -264,9 +265,8 @@ def _summary(
     if reversals < 2:
         raise InvalidDesign("the slider does not move: no dead centres found", (), "stroke")
     t_min, t_max, s_min, s_max = slider_extremes(rows, theta, values)
-    up = (t_max - t_min) % TWO_PI  # crank travel while the slider goes min -> max (+ direction)
-    down = TWO_PI - up
-    if min(up, down) < 1e-12:
+    st = quality.Strokes(t_min, t_max, s_min, s_max)
+    if st.back < 1e-12:
         raise InvalidDesign(
             f"the slider's extremes fall at one crank angle ({math.degrees(t_max):.6g}°): the "
             "linkage passes a change point there and its assembly circuit switches, so the "
@@ -274,26 +274,24 @@ def _summary(
             (),
             "change_point",
         )
-    slow_up = up >= down
     joints = []
     for j, name in enumerate(f.names, start=1):
         c = values[rows == j]
         lo, hi = float(c.min()), float(c.max())
-        worst = min(1.0, max(abs(lo), abs(hi)))
-        best = 0.0 if lo < 0 < hi else min(1.0, abs(lo), abs(hi))
-        joints.append(Joint(name, math.degrees(math.acos(worst)), math.degrees(math.acos(best))))
+        best = 0.0 if lo < 0 < hi else min(abs(lo), abs(hi))
+        joints.append(Joint(name, transmission_deg(max(abs(lo), abs(hi))), transmission_deg(best)))
     mu_min = min((jt.min_deg for jt in joints), default=90.0)
     return {
         "type": m.type,
         "params": p,
-        "time_ratio": max(up, down) / min(up, down),
+        "time_ratio": st.working / st.back,
         "stroke": s_max - s_min,
         "extremes": DeadCentres(
             Extreme(s_min, math.degrees(t_min)),
             Extreme(s_max, math.degrees(t_max)),
         ),
-        "working_stroke": Stroke(math.degrees(max(up, down)), 1 if slow_up else -1),
-        "return_stroke": Stroke(math.degrees(min(up, down)), -1 if slow_up else 1),
+        "working_stroke": Stroke(math.degrees(st.working), 1 if st.slow_up else -1),
+        "return_stroke": Stroke(math.degrees(st.back), -1 if st.slow_up else 1),
         "transmission": Transmission(
             mu_min,
             max((jt.max_deg for jt in joints), default=90.0),

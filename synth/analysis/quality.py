@@ -42,12 +42,14 @@ CUT = 0.1  # a tool cuts over the middle 80% of the working stroke: 10% run-in, 
 
 class Strokes:
     """The working stroke of an analysed design: it starts at crank angle ``start`` (radians)
-    and lasts ``working`` radians, while the slider goes from ``s0`` to ``s1``."""
+    and lasts ``working`` radians (the return stroke ``back``), while the slider goes from
+    ``s0`` to ``s1``."""
 
     def __init__(self, t_min: float, t_max: float, s_min: float, s_max: float) -> None:
         up = (t_max - t_min) % TWO_PI  # crank travel while the slider goes min -> max
-        slow_up = up >= TWO_PI - up
-        self.start, self.working = (t_min, up) if slow_up else (t_max, TWO_PI - up)
+        down = TWO_PI - up
+        slow_up = up >= down
+        self.start, self.working, self.back = (t_min, up, down) if slow_up else (t_max, down, up)
         self.s0, self.s1 = (s_min, s_max) if slow_up else (s_max, s_min)
         self.t_min, self.t_max, self.slow_up = t_min, t_max, slow_up
         self.stroke = s_max - s_min

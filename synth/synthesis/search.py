@@ -228,7 +228,7 @@ def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float
         return None  # the slider turns back within a swing: the closed forms do not hold
     beta = abs(float(f["beta"]))
     cos = [abs(float(c)) for c in f["transmission_cos"]]
-    angle = math.degrees(math.acos(min(1.0, max(cos)))) if cos else 90.0
+    angle = targets.transmission_deg(max(cos)) if cos else 90.0
     size = m.size(p)
     return targets.time_ratio(beta), float(f["stroke"]), angle, size
 
