@@ -30,12 +30,12 @@ import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from concurrent.futures import BrokenExecutor, Executor, ProcessPoolExecutor, ThreadPoolExecutor
 from contextlib import asynccontextmanager, suppress
-from dataclasses import replace
 from functools import partial
 from multiprocessing.context import BaseContext
 from multiprocessing.process import BaseProcess
 from typing import Any, cast
 
+from synth.requests import rebudgeted
 from synth.synthesis import scans, warm
 
 from .config import Settings, get_settings
@@ -257,7 +257,7 @@ def _left(request: Any, deadline: float | None, retried: float | None = None) ->
     if retried is not None and rest < REPLY_S:
         waited = (time.monotonic() - retried) * 1000
         raise Busy(waited, 1, "a solver process died, and the request's budget ran out")
-    return replace(request, time_budget_ms=max(rest * 1000, 1e-3))
+    return rebudgeted(request, max(rest * 1000, 1e-3))
 
 
 class Slots:

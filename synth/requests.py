@@ -7,6 +7,7 @@ fields, and an argument nobody knows is an error everywhere."""
 
 from __future__ import annotations
 
+import copy
 import inspect
 import math
 from collections.abc import Callable
@@ -43,3 +44,12 @@ def check_budget(time_budget_ms: float) -> None:
     if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
         msg = f"time_budget_ms must be > 0, got {time_budget_ms}"
         raise InvalidParameters(msg, ("time_budget_ms",))
+
+
+def rebudgeted(request: R, time_budget_ms: float) -> R:
+    """``request`` (checked when built) with another time budget, not checked again: a
+    budget is the one field a service changes, and a valid one keeps the request valid."""
+    check_budget(time_budget_ms)
+    out = copy.copy(request)
+    object.__setattr__(out, "time_budget_ms", time_budget_ms)
+    return out
