@@ -13,6 +13,7 @@ from dataclasses import MISSING
 from dataclasses import fields as dataclass_fields
 from typing import TYPE_CHECKING, Annotated, Any, Literal, TypedDict, Union, get_type_hints
 
+from annotated_types import Ge, Le
 from pydantic import (
     BaseModel,
     ConfigDict,
@@ -22,17 +23,15 @@ from pydantic import (
     model_validator,
 )
 
+import synth
 from synth import results
 from synth.analysis.quality import CUT
 from synth.analysis.request import MAX_CURVE_POINTS
-from synth.analysis.sweep import MAX_POINTS
-from synth.drawing import FORMATS
-from synth.load import GAP, LENGTH_UNITS, RANGES
+from synth.load import GAP, Load
 from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.objectives import all_objectives
-from synth.requests import ANALYSIS_INCLUDE, INCLUDE
-from synth.synthesis.driver import MAX_CANDIDATES, PER_TYPE
-from synth.targets import PARETO
+from synth.requests import Argument, argument, arguments
+from synth.results import Tolerance
 
 from .body_limit import MAX_BODY_BYTES
 from .config import DEFAULT_BUDGET_MS, Settings
@@ -192,135 +191,56 @@ else:
 # --- requests ----------------------------------------------------------------------------
 
 
-class ToleranceSpec(Strict):
-    """± on every parameter of the design: one of the two."""
-
-    absolute: float | None = Field(None, ge=0.0, le=LENGTH_MAX, description="in the lengths' unit")
-    relative: float | None = Field(None, ge=0.0, le=1.0, description="a fraction of each length")
-
-    @model_validator(mode="after")
-    def _one(self) -> ToleranceSpec:
-        if (self.absolute is None) == (self.relative is None):
-            raise ValueError("give absolute or relative, one of them")
-        return self
+def _annotation(a: Argument, caps: tuple[Any, ...]) -> Any:
+    """A field's type in a body: its kind (its choices as a ``Literal``), its limits and the
+    service's ``caps`` on it (the narrower limit wins: it is given last)."""
+    kind: Any = a.kind if a.choices is None else Literal[a.choices]
+    if a.limits or caps:
+        kind = Annotated[kind, *a.limits, *caps]
+    if a.many:
+        kind = list[kind]
+    return kind | None if a.optional else kind
 
 
-_INCLUDES = {
-    "motion": "motion (cutting-speed fluctuation over the working stroke, peak accelerations "
-    "per stroke)",
-    "sensitivities": "sensitivities (first-order derivatives of time ratio, stroke and minimum "
-    "transmission angle to every parameter)",
-    "envelope": "envelope (the box the frame must hold: every pivot and every pin's path)",
-    "pins": "pins (with crank_angles_deg or samples: curves.pins, every pin of the type's "
-    "drawing at the curves' angles)",
-    "forces": "forces (with a load and curves: curves.forces, each joint's and the guide's "
-    "force at the curves' angles)",
-}
+def _body(
+    value: type,
+    name: str,
+    wire: dict[str, tuple[Any, Any]],
+    caps: dict[str, tuple[Any, ...]] | None = None,
+    base: type[BaseModel] = Strict,
+    doc: str | None = None,
+) -> type[BaseModel]:
+    """The body of an operation whose request value is ``value``: its fields that the edges
+    take (``synth.requests.arguments``), in order, with their words, defaults, limits and
+    choices; ``wire``: the fields the body takes in a shape of its own (a model), as (type,
+    ``Field``), and those it leaves out (None, folded into another); ``caps``: the service's
+    narrower limits on a field; ``base``: the model it extends (with rules of its own);
+    ``doc``: its words."""
+    fields: dict[str, Any] = {}
+    for a in arguments(value):
+        if not a.edge or (a.name in wire and wire[a.name] is None):
+            continue
+        if a.name in wire:
+            fields[a.name] = wire[a.name]
+            continue
+        default = ... if a.default is MISSING else list(a.default) if a.many else a.default
+        # a collection of choices names each once at most
+        most = len(a.choices) if a.many and a.choices is not None else None
+        info = Field(default, max_length=most, description=a.help.text if a.help else None)
+        fields[a.name] = (_annotation(a, (caps or {}).get(a.name, ())), info)
+    return create_model(name, __base__=base, __doc__=doc, **fields)
 
 
-def _include(names: tuple[str, ...]) -> str:
-    *most, last = (_INCLUDES[k] for k in names)
-    return f"computed only when asked: {', '.join(most)} and {last}"
+def _help(value: type, name: str) -> str | None:
+    """A field's words (``synth.requests.Help``)."""
+    h = argument(value, name).help
+    return h.text if h else None
 
 
-class Extras(Strict):
-    """What an analysis adds only when asked: to the analysis, or to each candidate."""
+class _LoadRules(Strict):
+    """A load's fractions checked where a body holds them, each error at its field."""
 
-    include: list[Literal[INCLUDE]] = Field(  # type: ignore[valid-type]
-        [], max_length=len(INCLUDE), description=_include(INCLUDE)
-    )
-    tolerance: ToleranceSpec | None = Field(
-        None,
-        description="± on every parameter: adds the sensitivities and their worst-case "
-        "first-order deviations",
-    )
-
-
-def _ranged(name: str, default: Any, description: str) -> Any:
-    """A load's number as ``Load`` ranges it (``RANGES``)."""
-    lo, hi = RANGES[name]
-    return Field(default, ge=lo, le=hi, description=description)
-
-
-class LoadSpec(Strict):
-    """What the design drives at constant crank speed: adds ``loads`` (the crank torque, power
-    and flywheel, the joints' and the guide's largest forces) and, with curves, the torque
-    curve. Forces and masses are SI; the design's lengths are in ``length_unit``."""
-
-    length_unit: Literal[tuple(LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
-        ..., description="the unit of the design's lengths (forces and masses are SI)"
-    )
-    crank_rpm: float = _ranged("crank_rpm", ..., "the crank's constant speed")
-    cutting_force: float = Field(
-        0.0, ge=0.0, le=1e12, description="N, resisting the ram through the cutting zone"
-    )
-    cutting_zone: Annotated[
-        list[Annotated[float, Field(ge=0.0, le=1.0)]], Field(min_length=2, max_length=2)
-    ] = Field(
-        [0.1, 0.9],
-        description="[start, end]: the fractions of the working stroke (by position) where "
-        "the tool cuts, 0 ≤ start < end ≤ 1",
-    )
-    slider_mass: float = Field(0.0, ge=0.0, le=1e12, description="kg: the ram and its tool")
-    link_mass_per_length: float = Field(
-        0.0, ge=0.0, le=1e12, description="kg/m: each drawn link a uniform slender rod (0: none)"
-    )
-    speed_fluctuation: float = _ranged(
-        "speed_fluctuation", 0.05, "Cs = (ω_max − ω_min)/ω the flywheel keeps the crank to"
-    )
-    efficiency: float = _ranged("efficiency", 1.0, "the drive's, motor to crank")
-    guide_friction: float = Field(
-        0.0, ge=0.0, le=2.0, description="Coulomb coefficient at the ram's guide (0: none)"
-    )
-    flywheel_rpm: float | None = _ranged(
-        "flywheel_rpm",
-        None,
-        "the speed of the shaft that carries the flywheel (omitted: the crank's)",
-    )
-    flywheel_width: float | None = _ranged(
-        "flywheel_width",
-        None,
-        "in length_unit: adds the diameter of a solid steel disc flywheel this wide",
-    )
-    motor_rpm: float | None = _ranged(
-        "motor_rpm", None, "the motor's speed: adds its rated torque there"
-    )
-    gravity_deg: float | None = Field(
-        None,
-        ge=-360.0,
-        le=360.0,
-        description="the direction gravity pulls in, in the drawing's frame (degrees from +x, "
-        "counter-clockwise: -90 is down the drawing's y axis); omitted, and no "
-        "ram_incline_deg: no weight",
-    )
-    ram_incline_deg: float | None = Field(
-        None,
-        ge=-90.0,
-        le=90.0,
-        description="instead of gravity_deg, gravity in the machine's frame, the same for "
-        "every type: the mechanism in a vertical plane, its drive below the ram's path, the "
-        "working stroke this many degrees above the horizontal (0: a shaper, -90: a slotter "
-        "cutting downwards)",
-    )
-    force_profile: (
-        Annotated[
-            list[
-                Annotated[
-                    list[Annotated[float, Field(ge=0.0, le=1e12)]],
-                    Field(min_length=2, max_length=2),
-                ]
-            ],
-            Field(min_length=2, max_length=100),
-        ]
-        | None
-    ) = Field(
-        None,
-        description="instead of cutting_force and cutting_zone: [fraction of the working "
-        "stroke, N] points, the fractions increasing in [0, 1], the force linear between them "
-        "and 0 outside them",
-    )
-
-    @field_validator("cutting_zone")
+    @field_validator("cutting_zone", check_fields=False)
     @classmethod
     def _zone(cls, zone: list[float]) -> list[float]:
         if not zone[1] - zone[0] >= GAP:
@@ -329,7 +249,7 @@ class LoadSpec(Strict):
             )
         return zone
 
-    @field_validator("force_profile")
+    @field_validator("force_profile", check_fields=False)
     @classmethod
     def _profile(cls, profile: list[list[float]] | None) -> list[list[float]] | None:
         fractions = [u for u, _ in profile or ()]
@@ -344,38 +264,69 @@ class LoadSpec(Strict):
         return profile
 
     @model_validator(mode="after")
-    def _one_force(self) -> LoadSpec:
-        if self.force_profile is not None and (
-            self.cutting_force or "cutting_zone" in self.model_fields_set
+    def _one_force(self) -> Any:
+        given = vars(self)  # the fields of the model built on this (``_load``)
+        if given["force_profile"] is not None and (
+            given["cutting_force"] or "cutting_zone" in self.model_fields_set
         ):
             raise ValueError("give cutting_force (and cutting_zone) or force_profile, not both")
         return self
 
 
-class AnalyzeRequest(Extras):
-    # an analysis also has its curves' pins (a candidate has no curves)
-    include: list[Literal[ANALYSIS_INCLUDE]] = Field(  # type: ignore[valid-type]
-        [],
-        max_length=len(ANALYSIS_INCLUDE),
-        description=_include(ANALYSIS_INCLUDE),
+def _load() -> type[BaseModel]:
+    """``Load`` as a body takes it: its fractions as lists, and the service's caps."""
+    zone = argument(Load, "cutting_zone")
+    fraction = Annotated[float, Field(ge=0.0, le=1.0)]
+    pair = Annotated[list[fraction], Field(min_length=2, max_length=2)]
+    point = Annotated[
+        list[Annotated[float, Field(ge=0.0, le=1e12)]], Field(min_length=2, max_length=2)
+    ]
+    return _body(
+        Load,
+        "LoadSpec",
+        {
+            "cutting_zone": (pair, Field(list(zone.default), description=_help(Load, zone.name))),
+            "force_profile": (
+                Annotated[list[point], Field(min_length=2, max_length=100)] | None,
+                Field(None, description=_help(Load, "force_profile")),
+            ),
+        },
+        {
+            "cutting_force": (Le(1e12),),
+            "slider_mass": (Le(1e12),),
+            "link_mass_per_length": (Le(1e12),),
+            "guide_friction": (Le(2.0),),
+            "gravity_deg": (Ge(-360.0), Le(360.0)),
+        },
+        base=_LoadRules,
+        doc="What the design drives at constant crank speed: adds ``loads`` (the crank torque, "
+        "power and flywheel, the joints' and the guide's largest forces) and, with curves, the "
+        "torque curve. Forces and masses are SI; the design's lengths are in ``length_unit``.",
     )
-    mechanism: Design
-    crank_speed: float | None = Field(
-        None, ge=-1e6, le=1e6, description="ω, rad/s; omitted: 1, or a load's crank_rpm"
+
+
+def _tolerance() -> type[BaseModel]:
+    """``Tolerance`` as a body takes it, within the service's caps."""
+    return _body(
+        Tolerance,
+        "ToleranceSpec",
+        {},
+        {"absolute": (Le(LENGTH_MAX),), "relative": (Le(1.0),)},
+        doc="± on every parameter of the design: one of the two.",
     )
-    crank_acceleration: float = Field(0.0, ge=-1e9, le=1e9, description="α, rad/s²")
-    crank_angles_deg: list[Annotated[float, Field(ge=-1e6, le=1e6)]] | None = Field(
-        None,
-        max_length=MAX_CURVE_POINTS,
-        fail_fast=True,  # the first bad angle, not one error per angle
-        description="curves at exactly these angles",
-    )
-    samples: int | None = Field(
-        None, ge=1, le=MAX_CURVE_POINTS, description="curves at evenly spaced angles"
-    )
-    load: LoadSpec | None = Field(
-        None, description="what the design drives: adds loads (its crank_rpm is the curves' speed)"
-    )
+
+
+if TYPE_CHECKING:
+    # static stand-ins for the models built from synth's values at run time (below)
+
+    class LoadSpec(Strict):
+        pass
+
+    class ToleranceSpec(Strict):
+        pass
+
+else:
+    LoadSpec, ToleranceSpec = _load(), _tolerance()
 
 
 BUDGET: Any = Field(
@@ -387,96 +338,7 @@ BUDGET: Any = Field(
     f"{_number(_default('max_budget_ms'))} by default). A request waits for a solver at most "
     f"{_QUEUE} of it ({_QUEUE_MAX}), else 503",
 )
-
-
-class SynthesizeRequest(Extras):
-    # the service's limit (the library takes any ratio): a quick stroke of at least 0.36°
-    time_ratio: float = Field(..., ge=1.0, le=1e3, description="slow/quick crank angle, ≥ 1")
-    stroke: float = Field(..., ge=LENGTH_MIN, le=LENGTH_MAX)
-    min_transmission_angle_deg: float = Field(0.0, ge=0.0, lt=90.0)
-    mechanisms: list[TypeSpec] | None = Field(
-        None,
-        min_length=1,
-        max_length=24,
-        description="omitted: every quick-return type, nothing fixed",
-    )
-    objective: Literal[tuple(o.name for o in all_objectives())] = Field(  # type: ignore[valid-type]
-        PARETO,
-        # the playground's words for each, and those whose value it shows beside each design
-        json_schema_extra={
-            "x-titles": {o.name: o.words for o in all_objectives()},
-            "x-searched": [o.name for o in all_objectives() if o.searched],
-        },
-        description="pareto: per type, the trade-off front between the smallest design that "
-        "meets the bound (min_size) and the best-transmitting one (max_transmission_angle), "
-        "points spread evenly in angle, each the smallest design with at least its angle "
-        "(size: the sum of link lengths; each candidate's front says where it sits); "
-        "max_transmission_angle: the best minimum transmission angle, ties to the smallest "
-        "design; min_size: the smallest sum of link lengths meeting the bound (which must "
-        "then be > 0°); uniform_cutting_speed: the least speed fluctuation (largest speed over "
-        f"mean speed) over the {_MIDDLE}, where a tool cuts; "
-        "min_peak_acceleration: the least peak acceleration over both strokes, in ω²·stroke; "
-        "min_peak_torque: the least peak crank torque under the request's load. "
-        "The last three are local optima from many starts (method slsqp), each candidate "
-        "carrying its motion, or its loads",
-    )
-    max_working_speed_fluctuation: float | None = Field(
-        None,
-        ge=1.0,
-        le=1e3,
-        description=f"a limit on the speed fluctuation over the {_MIDDLE} "
-        "(≥ 1: 1 is a uniform speed), with the objectives uniform_cutting_speed and "
-        "min_peak_acceleration",
-    )
-    max_candidates: int | None = Field(
-        None,
-        ge=1,
-        le=MAX_CANDIDATES,
-        description=f"in all; omitted: {PER_TYPE} (pareto: {PER_TYPE} per type of the request, "
-        f"at most {MAX_CANDIDATES}, a front of one point taking one)",
-    )
-    time_budget_ms: float | None = BUDGET
-    load: LoadSpec | None = Field(
-        None,
-        description="what the design drives: adds each candidate's loads; the objective "
-        "min_peak_torque minimises its peak crank torque",
-    )
-    max_peak_torque: float | None = Field(
-        None,
-        gt=0.0,
-        le=1e15,
-        description="N·m: a limit on the peak crank torque, with the objective min_peak_torque",
-    )
-
-
-class SweepRequest(Strict):
-    mechanism: Design
-    vary: str = Field(..., description="the parameter to vary")
-    start: float = Field(..., ge=-LENGTH_MAX, le=LENGTH_MAX)
-    stop: float = Field(..., ge=-LENGTH_MAX, le=LENGTH_MAX)
-    points: int = Field(101, ge=1, le=MAX_POINTS)
-    time_budget_ms: float | None = BUDGET
-
-
-class ExportRequest(Strict):
-    mechanism: Design
-    format: Literal[FORMATS] = Field(  # type: ignore[valid-type]
-        "svg",
-        description="svg: true size; dxf: each link on its own layer; json: the drawing and "
-        "its symbols' shapes, for a page that draws them; gif: a turn of the crank from "
-        "crank_angle_deg, animated",
-    )
-    crank_angle_deg: float | None = Field(
-        None,
-        ge=-1e6,
-        le=1e6,
-        description="where the crank is drawn; omitted: a third of the way through the working "
-        "stroke, where the mechanism stands open",
-    )
-    length_unit: Literal[tuple(LENGTH_UNITS)] = Field(  # type: ignore[valid-type]
-        "mm", description="the unit of the design's lengths: the SVG's size, the DXF's units"
-    )
-    paths: bool = Field(False, description="each moving pin's path over a turn")
+ANGLE = (Ge(-1e6), Le(1e6))  # a crank angle's, degrees (any, in the library)
 
 
 class ReportTargets(Strict):
@@ -491,21 +353,125 @@ class ReportTargets(Strict):
     )
 
 
-class ReportRequest(Strict):
-    mechanism: Design
-    load: LoadSpec | None = Field(
-        None,
-        description="what the design drives: adds the loads, the torque diagram, the "
-        "flywheel and the joint forces",
+def _wired(value: type, name: str, kind: Any, default: Any = None, **more: Any) -> Any:
+    """A field the body takes as ``kind`` (a model of its own), with its words."""
+    return (kind, Field(default, description=_help(value, name), **more))
+
+
+def _on_design() -> dict[str, Any]:
+    """The design of a request on one: ``mechanism`` a ``Design``, holding its ``params``."""
+    return {"mechanism": (Design, ...), "params": None}
+
+
+def _extras(value: type) -> dict[str, Any]:
+    """What an analysis adds when asked, as the body takes it."""
+    return {
+        "tolerance": _wired(value, "tolerance", ToleranceSpec | None),
+        "load": _wired(value, "load", LoadSpec | None),
+    }
+
+
+if TYPE_CHECKING:
+    # static stand-ins for the bodies built from the request values at run time (below): the
+    # fields the routers read by name, as the body holds them
+
+    class SynthesizeRequest(Strict):
+        mechanisms: list[TypeSpec] | None
+        time_budget_ms: float | None
+        tolerance: ToleranceSpec | None
+        load: LoadSpec | None
+
+    class AnalyzeRequest(Strict):
+        mechanism: Design
+        tolerance: ToleranceSpec | None
+        load: LoadSpec | None
+
+    class SweepRequest(Strict):
+        mechanism: Design
+        time_budget_ms: float | None
+
+    class ExportRequest(Strict):
+        mechanism: Design
+        format: str
+
+    class ReportRequest(Strict):
+        mechanism: Design
+        load: LoadSpec | None
+        targets: ReportTargets | None
+
+else:
+    SynthesizeRequest = _body(
+        synth.SynthesisRequest,
+        "SynthesizeRequest",
+        {
+            **_extras(synth.SynthesisRequest),
+            "mechanisms": _wired(
+                synth.SynthesisRequest,
+                "mechanisms",
+                list[TypeSpec] | None,
+                min_length=1,
+                max_length=24,
+            ),
+            "objective": (
+                Literal[tuple(o.name for o in all_objectives())],
+                Field(
+                    argument(synth.SynthesisRequest, "objective").default,
+                    # the playground's words for each, and those whose value it shows beside
+                    # each design
+                    json_schema_extra={
+                        "x-titles": {o.name: o.words for o in all_objectives()},
+                        "x-searched": [o.name for o in all_objectives() if o.searched],
+                    },
+                    description=_help(synth.SynthesisRequest, "objective"),
+                ),
+            ),
+            "time_budget_ms": (float | None, BUDGET),
+        },
+        {
+            # the service's limit (the library takes any ratio): a quick stroke of at least 0.36°
+            "time_ratio": (Le(1e3),),
+            "stroke": (Ge(LENGTH_MIN), Le(LENGTH_MAX)),
+            "max_working_speed_fluctuation": (Le(1e3),),
+            "max_peak_torque": (Le(1e15),),
+        },
     )
-    targets: ReportTargets | None = Field(
-        None, description="compared with what the design achieves"
+    AnalyzeRequest = _body(
+        synth.AnalysisRequest,
+        "AnalyzeRequest",
+        {
+            **_on_design(),
+            **_extras(synth.AnalysisRequest),
+            "crank_angles_deg": _wired(
+                synth.AnalysisRequest,
+                "crank_angles_deg",
+                list[Annotated[float, *ANGLE]] | None,
+                max_length=MAX_CURVE_POINTS,
+                fail_fast=True,  # the first bad angle, not one error per angle
+            ),
+        },
+        {"crank_speed": (Ge(-1e6), Le(1e6)), "crank_acceleration": (Ge(-1e9), Le(1e9))},
     )
-    crank_angle_deg: float | None = Field(
-        None, ge=-1e6, le=1e6, description="the drawing's; omitted: where the mechanism stands open"
+    SweepRequest = _body(
+        synth.SweepRequest,
+        "SweepRequest",
+        {**_on_design(), "time_budget_ms": (float | None, BUDGET)},
+        {"start": (Ge(-LENGTH_MAX), Le(LENGTH_MAX)), "stop": (Ge(-LENGTH_MAX), Le(LENGTH_MAX))},
     )
-    length_unit: Literal[tuple(LENGTH_UNITS)] | None = Field(  # type: ignore[valid-type]
-        None, description="the design's lengths; omitted: the load's, else mm"
+    ExportRequest = _body(
+        synth.ExportRequest,
+        "ExportRequest",
+        _on_design(),
+        {"crank_angle_deg": ANGLE},
+    )
+    ReportRequest = _body(
+        synth.ReportRequest,
+        "ReportRequest",
+        {
+            **_on_design(),
+            "load": _wired(synth.ReportRequest, "load", LoadSpec | None),
+            "targets": _wired(synth.ReportRequest, "targets", ReportTargets | None),
+        },
+        {"crank_angle_deg": ANGLE},
     )
 
 
@@ -522,6 +488,23 @@ class NotFound(BaseModel):
     detail: list[ErrorItem]
 
 
+Echoed = str | float | bool | None  # what a 422 echoes of a request's input (api.errors.safe)
+
+
+class InvalidItem(ErrorItem):
+    """One place of a request that is wrong: where (``loc``), why (``msg``, ``type``), what
+    was given when short (``input``) and the rule's numbers (``ctx``)."""
+
+    input: Echoed | list[Echoed | dict[str, Any]] | dict[str, Any] = None
+    ctx: dict[str, Any] | None = None
+
+
+class Invalid(BaseModel):
+    """A request the service does not take as it is: each place that is wrong."""
+
+    detail: list[InvalidItem]
+
+
 class Refused(BaseModel):
     """A request the service would not take: its body too large, or no solver free in time."""
 
@@ -530,6 +513,7 @@ class Refused(BaseModel):
 
 # what every POST may answer besides 200 and 422 (README, "What a client can rely on")
 REFUSALS: dict[int | str, dict[str, Any]] = {
+    422: {"model": Invalid, "description": "the request, refused: each place that is wrong"},
     413: {
         "model": Refused,
         "description": f"the body is over {MAX_BODY_BYTES / 2**20:g} MiB (the connection is "

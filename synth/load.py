@@ -9,9 +9,12 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, fields, replace
-from typing import Any
+from typing import Annotated, Any
+
+from annotated_types import Ge, Interval, Le
 
 from .errors import InvalidParameters
+from .requests import Help, OneOf, arguments
 
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "in": 0.0254}  # metres per length unit
 GRAVITY = 9.80665  # m/s², standard
@@ -28,11 +31,17 @@ RANGES = {
     "motor_rpm": (1e-6, 1e6),
     "flywheel_width": (1e-9, 1e9),
 }
-OPTIONAL = ("flywheel_rpm", "motor_rpm", "flywheel_width")  # None: not asked for
+_WORDED = ("efficiency", "ram_incline_deg")  # numbers whose ranges their own words say
 STEEL = 7850.0  # kg/m³: the solid disc a flywheel's diameter is given for
 # the least step between two fractions of the working stroke (a cut's zone, a profile's points):
 # a nanometre of a metre's stroke. The force's slope between them, ΔF / (Δu · stroke), is finite
 GAP = 1e-9
+
+
+def _within(name: str) -> Interval:
+    """A number's range as ``RANGES`` gives it."""
+    lo, hi = RANGES[name]
+    return Interval(ge=lo, le=hi)
 
 
 @dataclass(frozen=True)
@@ -58,21 +67,77 @@ class Load:
     ``motor_rpm`` the motor's speed, at which they give its rated torque; each number within
     ``RANGES``."""
 
-    length_unit: str
-    crank_rpm: float
-    cutting_force: float = 0.0
-    cutting_zone: tuple[float, float] = (0.1, 0.9)
-    slider_mass: float = 0.0
-    link_mass_per_length: float = 0.0
-    speed_fluctuation: float = 0.05
-    efficiency: float = 1.0
-    force_profile: tuple[tuple[float, float], ...] | None = None
-    guide_friction: float = 0.0
-    gravity_deg: float | None = None
-    ram_incline_deg: float | None = None
-    flywheel_rpm: float | None = None
-    flywheel_width: float | None = None
-    motor_rpm: float | None = None
+    length_unit: Annotated[
+        str,
+        OneOf(tuple(LENGTH_UNITS)),
+        Help("the unit of the design's lengths (forces and masses are SI)"),
+    ]
+    crank_rpm: Annotated[float, _within("crank_rpm"), Help("the crank's constant speed")]
+    cutting_force: Annotated[
+        float, Ge(0.0), Help("N, resisting the ram through the cutting zone")
+    ] = 0.0
+    cutting_zone: Annotated[
+        tuple[float, float],
+        Help(
+            "[start, end]: the fractions of the working stroke (by position) where the tool "
+            f"cuts, 0 ≤ start < end ≤ 1, end − start ≥ {GAP:g}"
+        ),
+    ] = (0.1, 0.9)
+    slider_mass: Annotated[float, Ge(0.0), Help("kg: the ram and its tool")] = 0.0
+    link_mass_per_length: Annotated[
+        float, Ge(0.0), Help("kg/m: each drawn link a uniform slender rod (0: none)")
+    ] = 0.0
+    speed_fluctuation: Annotated[
+        float,
+        _within("speed_fluctuation"),
+        Help("Cs = (ω_max − ω_min)/ω the flywheel keeps the crank to"),
+    ] = 0.05
+    efficiency: Annotated[float, _within("efficiency"), Help("the drive's, motor to crank")] = 1.0
+    force_profile: Annotated[
+        tuple[tuple[float, float], ...] | None,
+        Help(
+            "instead of cutting_force and cutting_zone: [fraction of the working stroke, N] "
+            f"points, the fractions increasing in [0, 1] (each by {GAP:g} or more), the force "
+            "≥ 0, linear between them and 0 outside them"
+        ),
+    ] = None
+    guide_friction: Annotated[
+        float, Ge(0.0), Help("Coulomb coefficient at the ram's guide (0: none)")
+    ] = 0.0
+    gravity_deg: Annotated[
+        float | None,
+        Help(
+            "the direction gravity pulls in, in the drawing's frame (degrees from +x, "
+            "counter-clockwise: -90 is down the drawing's y axis); omitted, and no "
+            "ram_incline_deg: no weight"
+        ),
+    ] = None
+    ram_incline_deg: Annotated[
+        float | None,
+        Ge(-90.0),
+        Le(90.0),
+        Help(
+            "instead of gravity_deg, gravity in the machine's frame, the same for every type: "
+            "the mechanism in a vertical plane, its drive below the ram's path, the working "
+            "stroke this many degrees above the horizontal (0: a shaper, -90: a slotter "
+            "cutting downwards)"
+        ),
+    ] = None
+    flywheel_rpm: Annotated[
+        float | None,
+        _within("flywheel_rpm"),
+        Help("the speed of the shaft that carries the flywheel (omitted: the crank's)"),
+    ] = None
+    flywheel_width: Annotated[
+        float | None,
+        _within("flywheel_width"),
+        Help("in length_unit: adds the diameter of a solid steel disc flywheel this wide"),
+    ] = None
+    motor_rpm: Annotated[
+        float | None,
+        _within("motor_rpm"),
+        Help("the motor's speed: adds its rated torque there"),
+    ] = None
 
     @classmethod
     def of(cls, load: Load | Mapping[str, Any] | None) -> Load | None:
@@ -100,18 +165,11 @@ class Load:
                 f"design's lengths: forces and masses are SI), got {self.length_unit!r}",
                 ("load", "length_unit"),
             )
-        for name in (
-            "crank_rpm",
-            "cutting_force",
-            "slider_mass",
-            "link_mass_per_length",
-            "guide_friction",
-            "speed_fluctuation",
-            *OPTIONAL,
-        ):
-            v, (lo, hi) = getattr(self, name), RANGES.get(name, (0.0, math.inf))
-            if v is None and name in OPTIONAL:
+        for a in arguments(Load):  # the numbers from 0, or within RANGES
+            v, name, limits = getattr(self, a.name), a.name, {type(m): m for m in a.limits}
+            if Ge not in limits or a.many or name in _WORDED or (v is None and a.optional):
                 continue
+            lo, hi = limits[Ge].ge, limits[Le].le if Le in limits else math.inf
             if not (_number(v) and lo <= v <= hi):
                 rule = f"> 0, at least {lo:g} and at most {hi:g}" if name in RANGES else "≥ 0"
                 msg = f"load.{name} must be a finite number {rule}, got {v!r}"

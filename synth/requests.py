@@ -1,17 +1,24 @@
 """Each operation's arguments as one value: a frozen dataclass beside the operation
 (``SynthesisRequest``, ``AnalysisRequest``, ``SweepRequest``, ``ExportRequest``,
-``ReportRequest``), checked when it is built, as ``Load`` is. The library's function takes
-its keyword form from it (``keyword``), the service builds it from a request's body and the
-command line through the keyword form: each argument list is written once, in the request's
-fields, and an argument nobody knows is an error everywhere."""
+``ReportRequest``), checked when it is built, as ``Load`` is. A field says once what it is
+(``Help``), its range (annotated_types' ``Ge``, ``Gt``, ``Le``, ``Lt``) and its choices
+(``OneOf``) in its annotation; the request checks them (``check``), the service's schema and
+the command line's options are made from them (``arguments``). The library's function takes
+its keyword form from the request (``keyword``): each argument list is written once, in the
+request's fields, and an argument nobody knows is an error everywhere."""
 
 from __future__ import annotations
 
 import copy
 import inspect
 import math
-from collections.abc import Callable
-from typing import ParamSpec, TypeVar
+import operator
+import types
+from collections.abc import Callable, Collection, Mapping
+from dataclasses import MISSING, dataclass, fields
+from typing import Annotated, Any, ParamSpec, TypeVar, Union, get_args, get_origin, get_type_hints
+
+from annotated_types import Ge, GroupedMetadata, Gt, Le, Lt
 
 from .errors import InvalidParameters
 
@@ -19,9 +26,180 @@ INCLUDE = ("motion", "sensitivities", "envelope")  # what an analysis or a candi
 # an analysis also adds its curves' pins when asked (they need the curves' angles), and with a
 # load its curves' forces
 ANALYSIS_INCLUDE = (*INCLUDE, "pins", "forces")
+_INCLUDED = {
+    "motion": "motion (cutting-speed fluctuation over the working stroke, peak accelerations "
+    "per stroke)",
+    "sensitivities": "sensitivities (first-order derivatives of time ratio, stroke and minimum "
+    "transmission angle to every parameter)",
+    "envelope": "envelope (the box the frame must hold: every pivot and every pin's path)",
+    "pins": "pins (with crank_angles_deg or samples: curves.pins, every pin of the type's "
+    "drawing at the curves' angles)",
+    "forces": "forces (with a load and curves: curves.forces, each joint's and the guide's "
+    "force at the curves' angles)",
+}
+TOLERANCE = (
+    "± on every parameter, absolute (the lengths' unit) or relative: adds the sensitivities "
+    "and their worst-case first-order deviations"
+)
 P = ParamSpec("P")
 R = TypeVar("R")
 T = TypeVar("T")
+# a limit's words, as the service's refusals say them too
+_WORDS = {
+    Ge: ("≥", "ge", operator.ge),
+    Gt: (">", "gt", operator.gt),
+    Le: ("≤", "le", operator.le),
+    Lt: ("<", "lt", operator.lt),
+}
+
+
+_ARGUMENTS: dict[type, tuple[Argument, ...]] = {}
+
+
+@dataclass(frozen=True)
+class Help:
+    """What a request's field is, in a few words: the command line's help and the schema's
+    description; ``flag``: a shorter name the command line takes it by too."""
+
+    text: str
+    flag: str | None = None
+
+
+@dataclass(frozen=True)
+class OneOf:
+    """A text field's choices (each item's, for a collection of texts)."""
+
+    choices: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class LibraryOnly:
+    """Marks a field only the library takes (not the service, not the command line)."""
+
+
+@dataclass(frozen=True)
+class Argument:
+    """A request's field as the edges read it: its ``name``, its full annotation (``hint``,
+    metadata kept), its plain ``kind`` (float, int, str or bool; None for a value of its own
+    such as a ``Load``), whether None is allowed (``optional``) and whether it is a collection
+    of its kind (``many``), its ``default`` (``MISSING``: required), its ``help``, ``limits``
+    and ``choices``, and whether the edges take it (``edge``)."""
+
+    name: str
+    hint: Any
+    kind: type | None
+    optional: bool
+    many: bool
+    default: Any
+    help: Help | None
+    limits: tuple[Any, ...]
+    choices: tuple[str, ...] | None
+    edge: bool
+
+    def check(self, value: Any) -> None:
+        """``InvalidParameters`` at the field where ``value`` is not of its kind, out of its
+        limits or not one of its choices (of a collection of texts: each item)."""
+        if value is None and self.optional:
+            return
+        if not self.many:
+            self._one(value)
+        elif self.kind is str:  # a collection of numbers is its request's to check, at once
+            for v in value:
+                self._one(v)
+
+    def _one(self, v: Any) -> None:
+        name = self.name
+        if self.kind is float and not (
+            isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+        ):
+            raise InvalidParameters(f"{name} must be a finite number, got {v!r}", (name,))
+        if self.kind is int and not (isinstance(v, int) and not isinstance(v, bool)):
+            raise InvalidParameters(f"{name} must be an integer, got {v!r}", (name,))
+        for limit in self.limits:
+            sign, key, holds = _WORDS[type(limit)]
+            bound = getattr(limit, key)
+            if not holds(v, bound):
+                raise InvalidParameters(f"{name} must be {sign} {bound:g}, got {v!r}", (name,))
+        if self.choices is not None and v not in self.choices:
+            *most, last = (repr(c) for c in self.choices)
+            words = f"{', '.join(most)} or {last}" if most else last
+            raise InvalidParameters(f"{name} must be {words}, got {v!r}", (name,))
+
+
+def _plain(hint: Any) -> tuple[Any, tuple[Any, ...], bool]:
+    """The type under ``Annotated`` and ``| None``, the metadata, and whether None is allowed."""
+    meta: list[Any] = []
+    if get_origin(hint) is Annotated:
+        hint, *extra = get_args(hint)
+        meta += extra
+    optional = False
+    if get_origin(hint) in (Union, types.UnionType) and type(None) in get_args(hint):
+        rest = [a for a in get_args(hint) if a is not type(None)]
+        hint, optional = (rest[0] if len(rest) == 1 else hint), True
+        if get_origin(hint) is Annotated:
+            hint, *extra = get_args(hint)
+            meta += extra
+    # a range given as one (annotated_types' Interval) is its limits
+    flat = [m for g in meta for m in (g if isinstance(g, GroupedMetadata) else (g,))]
+    return hint, tuple(flat), optional
+
+
+def arguments(request: type) -> tuple[Argument, ...]:
+    """The fields a request is built from, in order."""
+    if request not in _ARGUMENTS:
+        _ARGUMENTS[request] = _arguments(request)
+    return _ARGUMENTS[request]
+
+
+def _arguments(request: type) -> tuple[Argument, ...]:
+    hints = get_type_hints(request, include_extras=True)
+    out = []
+    for f in fields(request):
+        if not f.init:
+            continue
+        hint = hints[f.name]
+        plain, meta, optional = _plain(hint)
+        origin = get_origin(plain)
+        many = origin is not None and issubclass(origin, Collection)
+        many = many and not issubclass(origin, Mapping)
+        item = get_args(plain)[0] if many and get_args(plain) else plain
+        kind = item if item in (float, int, str, bool) else None
+        default = f.default if f.default is not MISSING else MISSING
+        if f.default_factory is not MISSING:
+            default = f.default_factory()
+        out.append(
+            Argument(
+                name=f.name,
+                hint=hint,
+                kind=kind,
+                optional=optional,
+                many=many and kind is not None,
+                default=default,
+                help=next((m for m in meta if isinstance(m, Help)), None),
+                limits=tuple(m for m in meta if type(m) in _WORDS),
+                choices=next((m.choices for m in meta if isinstance(m, OneOf)), None),
+                edge=not any(isinstance(m, LibraryOnly) for m in meta),
+            )
+        )
+    return tuple(out)
+
+
+def argument(request: type, name: str) -> Argument:
+    """The field ``name`` of a request."""
+    (a,) = (a for a in arguments(request) if a.name == name)
+    return a
+
+
+def check(request: object) -> None:
+    """Each field of ``request`` of its kind, within its limits, one of its choices."""
+    for a in arguments(type(request)):
+        a.check(getattr(request, a.name))
+
+
+def included(names: tuple[str, ...]) -> str:
+    """What ``include`` may name, in words."""
+    *most, last = (_INCLUDED[k] for k in names)
+    return f"computed only when asked: {', '.join(most)} and {last}"
 
 
 def keyword(request: Callable[P, R], run: Callable[[R], T], name: str) -> Callable[P, T]:
@@ -39,17 +217,10 @@ def keyword(request: Callable[P, R], run: Callable[[R], T], name: str) -> Callab
     return call
 
 
-def check_budget(time_budget_ms: float) -> None:
-    """A time budget is a finite number of milliseconds > 0."""
-    if not (time_budget_ms > 0 and math.isfinite(time_budget_ms)):
-        msg = f"time_budget_ms must be > 0, got {time_budget_ms}"
-        raise InvalidParameters(msg, ("time_budget_ms",))
-
-
 def rebudgeted(request: R, time_budget_ms: float) -> R:
     """``request`` (checked when built) with another time budget, not checked again: a
     budget is the one field a service changes, and a valid one keeps the request valid."""
-    check_budget(time_budget_ms)
+    argument(type(request), "time_budget_ms").check(time_budget_ms)
     out = copy.copy(request)
     object.__setattr__(out, "time_budget_ms", time_budget_ms)
     return out

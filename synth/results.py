@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator, Mapping
 from dataclasses import asdict, dataclass
-from typing import Any, TypeVar
+from typing import Annotated, Any, TypeVar
 
 import numpy as np
+from annotated_types import Ge
 
 from .errors import InvalidParameters
+from .requests import Help, check
 
 TOL = 1e-9  # relative: how exactly a design must meet the targets (verification, fixed parts)
 
@@ -160,18 +161,18 @@ class Envelope:
 class Tolerance:
     """± on every length: ``absolute`` (in the lengths' unit) or ``relative`` (of each)."""
 
-    absolute: float | None = None
-    relative: float | None = None
+    absolute: Annotated[float | None, Ge(0.0), Help("in the lengths' unit")] = None
+    relative: Annotated[float | None, Ge(0.0), Help("a fraction of each length")] = None
 
     def __post_init__(self) -> None:
         given = {k: v for k, v in vars(self).items() if v is not None}
         if len(given) != 1:
             msg = "tolerance: give absolute or relative, one of them"
             raise InvalidParameters(msg, ("tolerance",))
-        ((k, v),) = given.items()
-        if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
-            msg = f"tolerance.{k} must be ≥ 0 and finite, got {v!r}"
-            raise InvalidParameters(msg, ("tolerance", k))
+        try:
+            check(self)
+        except InvalidParameters as e:
+            raise InvalidParameters(f"tolerance.{e.msg}", ("tolerance", *e.loc)) from None
 
     def of(self, value: float) -> float:
         return self.absolute if self.absolute is not None else (self.relative or 0.0) * abs(value)

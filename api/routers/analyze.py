@@ -44,7 +44,7 @@ async def analyze(
         body.mechanism,
         encoded,  # where it ran: 1 000 points with pins take ~0.7 ms to encode, 29 000 ~20
         **body.model_dump(exclude=_CONVERTED),  # the library's names
-        tolerance=tolerance(body),
+        tolerance=tolerance(body.tolerance),
         load=load(body.load),
     )
     return Response(reply, media_type="application/json")

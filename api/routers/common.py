@@ -13,7 +13,7 @@ from synth.results import Tolerance
 from ..engine import Engine
 from ..gate import arrival
 from ..operations import OPERATIONS
-from ..schemas import Extras, LoadSpec
+from ..schemas import LoadSpec, ToleranceSpec
 
 Loc = tuple[str | int, ...]
 
@@ -94,9 +94,13 @@ async def run_design(
     )
 
 
-def tolerance(body: Extras) -> Tolerance | None:
-    """The request's tolerance as synth takes it."""
-    return Tolerance(**body.tolerance.model_dump()) if body.tolerance else None
+def tolerance(spec: ToleranceSpec | None) -> Tolerance | None:
+    """A request's tolerance as synth takes it; a rule the schema leaves to ``Tolerance``
+    (one of its two fields): a 422 at its field."""
+    try:
+        return Tolerance(**spec.model_dump()) if spec else None
+    except InvalidParameters as e:
+        raise Located(e, [e.loc]) from None
 
 
 def load(spec: LoadSpec | None) -> Load | None:

@@ -24,7 +24,12 @@ MEDIA = {
     response_class=Response,
     responses={
         **REFUSALS,
-        200: {"content": {m: {} for m in MEDIA.values()}, "description": "the drawing, as a file"},
+        200: {
+            "content": {
+                m: {"schema": {"type": "string", "format": "binary"}} for m in MEDIA.values()
+            },
+            "description": "the drawing, as a file",
+        },
     },
 )
 async def export(
@@ -42,10 +47,7 @@ async def export(
         engine,
         "export",
         body.mechanism,
-        format=body.format,
-        crank_angle_deg=body.crank_angle_deg,
-        length_unit=body.length_unit,
-        paths=body.paths,
+        **body.model_dump(exclude={"mechanism"}),  # the library's names
     )
     name = f"{body.mechanism.type}.{body.format}"
     return Response(

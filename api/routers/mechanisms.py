@@ -4,7 +4,7 @@ from fastapi import APIRouter
 
 from synth import mechanisms
 
-from ..schemas import MechanismInfo, NotFound
+from ..schemas import REFUSALS, MechanismInfo, NotFound
 
 router = APIRouter(prefix="/v1/mechanisms", tags=["mechanisms"])
 
@@ -18,7 +18,10 @@ async def list_mechanisms() -> list[MechanismInfo]:
 @router.get(
     "/{type}",
     response_model=MechanismInfo,
-    responses={404: {"model": NotFound, "description": "unknown type; the known ones listed"}},
+    responses={
+        404: {"model": NotFound, "description": "unknown type; the known ones listed"},
+        422: REFUSALS[422],
+    },
 )
 async def get_mechanism(type: str) -> MechanismInfo:
     """One mechanism type; an unknown type is a 404 listing the known ones."""

@@ -12,12 +12,20 @@ from .common import EngineDep, load, run_design
 
 router = APIRouter(tags=["analysis"], route_class=Route)
 MEDIA = "text/html; charset=utf-8"
+# the fields the library takes as another value than the body's (the rest as they are)
+_CONVERTED = {"mechanism", "load", "targets"}
 
 
 @router.post(
     "/v1/report",
     response_class=Response,
-    responses={**REFUSALS, 200: {"content": {MEDIA: {}}, "description": "the report, as HTML"}},
+    responses={
+        **REFUSALS,
+        200: {
+            "content": {MEDIA: {"schema": {"type": "string"}}},
+            "description": "the report, as HTML",
+        },
+    },
 )
 async def report(
     request: Request,
@@ -34,9 +42,8 @@ async def report(
         engine,
         "report",
         body.mechanism,
+        **body.model_dump(exclude=_CONVERTED),  # the library's names
         load=load(body.load),
         targets=targets,
-        crank_angle_deg=body.crank_angle_deg,
-        length_unit=body.length_unit,
     )
     return Response(page, media_type=MEDIA)

@@ -10,6 +10,8 @@ from ..schemas import REFUSALS, SweepRequest, SweepResponse
 from .common import EngineDep, budget, run_design
 
 router = APIRouter(tags=["analysis"], route_class=Route)
+# the fields the library takes as another value than the body's (the rest as they are)
+_CONVERTED = {"mechanism", "time_budget_ms"}
 
 
 @router.post("/v1/sweep", response_model=SweepResponse, responses=REFUSALS)
@@ -26,10 +28,7 @@ async def sweep(
         engine,
         "sweep",
         body.mechanism,
+        **body.model_dump(exclude=_CONVERTED),  # the library's names
         time_budget_ms=budget(engine, body.time_budget_ms),
-        vary=body.vary,
-        start=body.start,
-        stop=body.stop,
-        points=body.points,
     )
     return r

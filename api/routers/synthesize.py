@@ -53,7 +53,7 @@ async def synthesize(
         **body.model_dump(exclude=_CONVERTED),  # the library's names
         mechanisms=specs,
         time_budget_ms=budget(engine, body.time_budget_ms),
-        tolerance=tolerance(body),
+        tolerance=tolerance(body.tolerance),
         load=load(body.load),
     )
     return r

@@ -38,6 +38,7 @@ from .model import Model, model
 from .roots import TWO_PI, rtsafe, stationary_points
 
 CUT = 0.1  # a tool cuts over the middle 80% of the working stroke: 10% run-in, 10% run-out
+MIDDLE = f"middle {1 - 2 * CUT:.0%} of the working stroke"  # where a tool cuts, in words
 
 
 class Strokes:

@@ -5,13 +5,15 @@ from __future__ import annotations
 
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import KW_ONLY, dataclass, field, fields
+from typing import Annotated
 
 import numpy as np
+from annotated_types import Ge, Le
 
 from ..errors import InvalidParameters
 from ..load import Load
 from ..mechanisms import get
-from ..requests import ANALYSIS_INCLUDE, INCLUDE
+from ..requests import ANALYSIS_INCLUDE, TOLERANCE, Help, OneOf, check, included
 from ..results import Curves, Tolerance
 from . import loads
 
@@ -29,21 +31,31 @@ class AnalysisRequest:
     mapping of its fields) and the crank's speed with it (``omega``, rad/s: the load's, or
     ``crank_speed``, 1 by default)."""
 
-    mechanism: str
-    params: Mapping[str, float]
+    mechanism: Annotated[str, Help("the design's type")]
+    params: Annotated[Mapping[str, float], Help("its parameters, by name, in one length unit")]
     _: KW_ONLY
-    crank_speed: float | None = None
-    crank_acceleration: float = 0.0
-    crank_angles_deg: Sequence[float] | None = None
-    samples: int | None = None
-    include: Collection[str] = ()
-    tolerance: Tolerance | None = None
-    load: Load | None = None
+    crank_speed: Annotated[float | None, Help("ω, rad/s; omitted: 1, or a load's crank_rpm")] = None
+    crank_acceleration: Annotated[float, Help("α, rad/s²")] = 0.0
+    crank_angles_deg: Annotated[
+        Sequence[float] | None, Help("curves at exactly these angles, degrees", "crank-angle")
+    ] = None
+    samples: Annotated[
+        int | None, Ge(1), Le(MAX_CURVE_POINTS), Help("curves at evenly spaced angles")
+    ] = None
+    include: Annotated[
+        Collection[str], OneOf(ANALYSIS_INCLUDE), Help(included(ANALYSIS_INCLUDE))
+    ] = ()
+    tolerance: Annotated[Tolerance | None, Help(TOLERANCE)] = None
+    load: Annotated[
+        Load | None,
+        Help("what the design drives: adds loads (its crank_rpm is the curves' speed)"),
+    ] = None
     design: dict[str, float] = field(init=False, repr=False, compare=False)
     angles: np.ndarray | None = field(init=False, repr=False, compare=False)
     omega: float = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        check(self)
         load = Load.of(self.load)
         object.__setattr__(self, "load", load)
         m = get(self.mechanism)
@@ -59,17 +71,6 @@ class AnalysisRequest:
         return 0 if self.angles is None else int(self.angles.size)
 
 
-def check_include(include: Collection[str], allowed: Sequence[str] = INCLUDE) -> None:
-    """Raise InvalidParameters for anything ``include`` names that is not ``allowed``: by
-    default what a candidate's analysis can add (``ANALYSIS_INCLUDE`` for an analysis's)."""
-    unknown = sorted(set(include) - set(allowed))
-    if unknown:
-        raise InvalidParameters(
-            f"include: unknown {', '.join(map(repr, unknown))}; choose from {', '.join(allowed)}",
-            ("include",),
-        )
-
-
 def asked(
     mechanism: str,
     include: Collection[str],
@@ -77,9 +78,9 @@ def asked(
     samples: int | None,
     load: Load | None = None,
 ) -> np.ndarray | None:
-    """The curves' angles (``curve_angles``), once ``include`` is checked against them: pins
+    """The curves' angles (``curve_angles``), once ``include`` (of what an analysis may
+    include) is checked against them: pins
     need angles to be at, and a drawing; a ``load`` adds the torque curve."""
-    check_include(include, ANALYSIS_INCLUDE)
     deg = curve_angles(crank_angles_deg, samples)
     if "pins" in include and deg is None:
         msg = "include 'pins' needs crank_angles_deg or samples (the angles the pins are wanted at)"

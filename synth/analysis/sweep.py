@@ -13,14 +13,15 @@ import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
+from annotated_types import Ge, Gt, Le
 
 from ..errors import InvalidParameters, SynthError
 from ..mechanisms import get
 from ..numerics.dense import bisect
-from ..requests import check_budget, keyword
+from ..requests import Help, check, keyword
 from ..results import Analysis, Extremum, SweepResult, TimeRatioRange
 from .kinematics import analyze, analyze_many
 
@@ -40,15 +41,18 @@ CHUNK = 256  # points analysed between two looks at the clock (~25 ms of a four-
 class SweepRequest:
     """``sweep``'s arguments (``run``), checked when built."""
 
-    mechanism: str
-    params: Mapping[str, float]
-    vary: str
-    start: float
-    stop: float
-    points: int = 101
-    time_budget_ms: float | None = None
+    mechanism: Annotated[str, Help("the design's type")]
+    params: Annotated[Mapping[str, float], Help("its parameters, by name, in one length unit")]
+    vary: Annotated[str, Help("the parameter to vary")]
+    start: Annotated[float, Help("its first value")]
+    stop: Annotated[float, Help("its last value")]
+    points: Annotated[int, Ge(1), Le(MAX_POINTS), Help("how many values, evenly spaced")] = 101
+    time_budget_ms: Annotated[
+        float | None, Gt(0.0), Help("the sweep's time; past it, the points analysed by then")
+    ] = None
 
     def __post_init__(self) -> None:
+        check(self)
         m = get(self.mechanism)
         for k in self.params:
             m.parameter(k)
@@ -56,19 +60,12 @@ class SweepRequest:
             q = m.parameter(self.vary)
         except InvalidParameters as e:
             raise InvalidParameters(e.msg, ("vary",)) from None
-        start, stop, points, budget = self.start, self.stop, self.points, self.time_budget_ms
-        if not (math.isfinite(start) and math.isfinite(stop)):
-            msg = f"need finite start and stop, got {start!r}, {stop!r}"
-            raise InvalidParameters(msg, ("stop",))
+        start, stop = self.start, self.stop
         if start > stop:
             raise InvalidParameters(f"start {start:g} > stop {stop:g}", ("stop",))
         if not q.signed and start <= 0 and not (q.zero_means and start == 0):
             msg = f"{self.vary} is a length: start must be > 0, got {start:g}"
             raise InvalidParameters(msg, ("start",))
-        if not (isinstance(points, int) and 1 <= points <= MAX_POINTS):
-            raise InvalidParameters(f"points must be 1 … {MAX_POINTS}, got {points!r}", ("points",))
-        if budget is not None:
-            check_budget(budget)
 
 
 def run(r: SweepRequest) -> SweepResult:

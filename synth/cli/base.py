@@ -4,11 +4,13 @@ table, JSON and CSV they print, and exit status 2 on bad input."""
 from __future__ import annotations
 
 import csv
+import importlib
 import io
 import json
 import math
 import sys
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import MISSING
 from typing import Any, NoReturn
 
 import click
@@ -16,6 +18,7 @@ import click
 from ..errors import InvalidParameters, SynthError
 from ..load import Load
 from ..mechanisms import all_types
+from ..requests import Argument, arguments
 
 CURVES = ("crank_angle_deg", "position", "velocity", "acceleration", "transmission_deg", "torque")
 
@@ -125,6 +128,54 @@ def formats(f: Callable[..., Any]) -> Callable[..., Any]:
     f = click.option("--json", "fmt", flag_value="json", help="the reply the API gives, as JSON")(f)
     f = click.option("--csv", "fmt", flag_value="csv", help="rows for a spreadsheet")(f)
     return click.option("--table", "fmt", flag_value="table", default=True, hidden=True)(f)
+
+
+class Command(click.Command):
+    """A command that also takes the fields of its ``request`` (``"module:Name"``, a request
+    value) that the edges take, but those it takes in a shape of its own or not at all
+    (``apart``): each ``--name`` (dashes for underscores; its ``Help.flag`` too), of its kind
+    and choices, with its default and words, a collection's repeated; the command passes
+    them on by their names. They are made when first asked for (its help, a run): the
+    request's module, and the library with it, is imported then, and the group's help
+    stays quick."""
+
+    def __init__(
+        self, *args: Any, request: str, apart: tuple[str, ...] = (), **kwargs: Any
+    ) -> None:
+        self._request, self._apart = request, apart
+        self._made: list[click.Parameter] | None = None
+        super().__init__(*args, **kwargs)
+
+    @property
+    def params(self) -> list[click.Parameter]:
+        if self._made is None:
+            module, name = self._request.split(":")
+            value = getattr(importlib.import_module(module), name)
+            made = [_option(a) for a in arguments(value) if a.edge and a.name not in self._apart]
+            self._made = [*made, *self._declared]
+        return self._made
+
+    @params.setter
+    def params(self, declared: list[click.Parameter]) -> None:
+        self._declared, self._made = declared, None
+
+
+def _option(a: Argument) -> click.Option:
+    names = [f"--{a.name.replace('_', '-')}"]
+    if a.help and a.help.flag:
+        names.insert(0, f"--{a.help.flag}")
+    kw: dict[str, Any] = {"help": a.help.text if a.help else None}
+    if a.kind is bool:
+        kw.update(is_flag=True, default=a.default)
+    else:
+        kw["type"] = click.Choice(a.choices) if a.choices else a.kind
+        if a.many:  # repeated; none given: the field's default
+            kw.update(multiple=True, callback=lambda _c, _p, v: v or a.default)
+        elif a.default is MISSING:
+            kw["required"] = True
+        else:
+            kw.update(default=a.default, show_default=a.default is not None)
+    return click.Option([*names, a.name], **kw)
 
 
 def design_args(f: Callable[..., Any]) -> Callable[..., Any]:

@@ -11,15 +11,13 @@ import click
 from ..errors import SynthError
 from ..load import Load
 from ..mechanisms import all_types, get
-from ..objectives import all_objectives
 from ..objectives import get as objective_of
-from ..requests import ANALYSIS_INCLUDE, INCLUDE
-from ..targets import PARETO
 
 if TYPE_CHECKING:
     from ..results import Analysis, Loads, Sensitivities, SweepResult, SynthesisResult
 from .base import (
     CURVES,
+    Command,
     design_args,
     emit,
     fail,
@@ -32,17 +30,11 @@ from .base import (
 )
 
 
-@main.command(help="Link lengths for the targets, verified, best first (POST /v1/synthesize).")
-@click.option("--time-ratio", type=float, required=True, help="slow stroke / quick stroke")
-@click.option("--stroke", type=float, required=True, help="in your length unit")
-@click.option(
-    "--bound",
-    "--min-transmission-angle-deg",
-    "bound",
-    type=float,
-    default=0.0,
-    show_default=True,
-    help="the least transmission angle allowed, degrees",
+@main.command(
+    help="Link lengths for the targets, verified, best first (POST /v1/synthesize).",
+    cls=Command,
+    request="synth.synthesis.driver:SynthesisRequest",
+    apart=("mechanisms", "tolerance", "load"),
 )
 @click.option(
     "--type",
@@ -63,46 +55,15 @@ from .base import (
     metavar="NAME=LOW:HIGH",
     help="a free part's range, in each type given",
 )
-@click.option(
-    "--objective",
-    type=click.Choice([o.name for o in all_objectives()]),
-    default=PARETO,
-    show_default=True,
-    help="what the candidates are best at",
-)
-@click.option("--max-candidates", type=int, help="at most this many in all")
-@click.option(
-    "--time-budget-ms",
-    type=float,
-    default=2000.0,
-    show_default=True,
-    help="the search's time; past it, what was done (reported incomplete)",
-)
-@click.option(
-    "--include",
-    multiple=True,
-    type=click.Choice(INCLUDE),
-    help="add to each candidate (repeat)",
-)
 @click.option("--load", "load_json", metavar="JSON", help="the API's load object")
-@click.option("--max-peak-torque", type=float, help="N·m, with min_peak_torque")
-@click.option("--max-working-speed-fluctuation", type=float, help="with the motion objectives")
 @formats
 def synthesize(
-    time_ratio: float,
-    stroke: float,
-    bound: float,
     types: tuple[str, ...],
     fix: tuple[str, ...],
     bounds: tuple[str, ...],
-    objective: str,
-    max_candidates: int | None,
-    time_budget_ms: float,
-    include: tuple[str, ...],
     load_json: str | None,
-    max_peak_torque: float | None,
-    max_working_speed_fluctuation: float | None,
     fmt: str,
+    **args: Any,
 ) -> None:
     fixed, boxes = numbers(fix, "--fix"), ranges(bounds)
     names = types or [t for t in all_types() if get(t).quick_return]
@@ -110,22 +71,10 @@ def synthesize(
     try:
         from ..synthesis import synthesize as _synthesize  # on use: --help stays quick
 
-        r = _synthesize(
-            time_ratio,
-            stroke,
-            bound,
-            specs,
-            objective,
-            max_candidates,
-            time_budget_ms,
-            include=include,
-            load=parse_load(load_json),
-            max_peak_torque=max_peak_torque,
-            max_working_speed_fluctuation=max_working_speed_fluctuation,
-        )
+        r = _synthesize(**args, mechanisms=specs, load=parse_load(load_json))
     except SynthError as e:
         fail(e)
-    emit(fmt, r.to_dict(), _candidate_rows(r), _candidate_text(r, objective))
+    emit(fmt, r.to_dict(), _candidate_rows(r), _candidate_text(r, args["objective"]))
     if not r.candidates:
         sys.exit(1)
 
@@ -192,43 +141,23 @@ def _candidate_text(r: SynthesisResult, objective: str) -> str:
     return "\n".join(out)
 
 
-@main.command(help="One design over a crank revolution (POST /v1/analyze).")
-@design_args
-@click.option("--samples", type=int, help="curves at this many evenly spaced angles")
-@click.option(
-    "--crank-angle",
-    "angles",
-    multiple=True,
-    type=float,
-    help="curves at this crank angle, degrees (repeat)",
+@main.command(
+    help="One design over a crank revolution (POST /v1/analyze).",
+    cls=Command,
+    request="synth.analysis.request:AnalysisRequest",
+    apart=("mechanism", "params", "tolerance", "load"),
 )
-@click.option("--include", multiple=True, type=click.Choice(ANALYSIS_INCLUDE), help="repeat")
-@click.option("--crank-speed", type=float, help="rad/s for the curves (default 1)")
+@design_args
 @click.option("--load", "load_json", metavar="JSON", help="the API's load object")
 @formats
 def analyze(
-    mechanism: str,
-    params: tuple[str, ...],
-    samples: int | None,
-    angles: tuple[float, ...],
-    include: tuple[str, ...],
-    crank_speed: float | None,
-    load_json: str | None,
-    fmt: str,
+    mechanism: str, params: tuple[str, ...], load_json: str | None, fmt: str, **args: Any
 ) -> None:
     try:
         load = parse_load(load_json)
         from ..analysis.kinematics import analyze as _analyze
 
-        a = _analyze(
-            mechanism,
-            numbers(params, "--param"),
-            crank_speed=crank_speed,
-            crank_angles_deg=list(angles) or None,
-            samples=samples,
-            include=include,
-            load=load,
-        )
+        a = _analyze(mechanism, numbers(params, "--param"), load=load, **args)
     except SynthError as e:
         fail(e)
     emit(fmt, a.to_dict(), _analysis_rows(a), _analysis_text(a, load))
@@ -313,37 +242,24 @@ def _sensitivities(s: Sensitivities) -> list[str]:
     return out
 
 
-@main.command(help="One parameter varied, the rest held (POST /v1/sweep).")
-@design_args
-@click.option("--vary", required=True, help="the parameter to vary")
-@click.option("--start", type=float, required=True, help="its first value")
-@click.option("--stop", type=float, required=True, help="its last value")
-@click.option(
-    "--points",
-    type=int,
-    default=101,
-    show_default=True,
-    help="values from start to stop, evenly spaced",
+@main.command(
+    help="One parameter varied, the rest held (POST /v1/sweep).",
+    cls=Command,
+    request="synth.analysis.sweep:SweepRequest",
+    apart=("mechanism", "params"),
 )
+@design_args
 @formats
-def sweep(
-    mechanism: str,
-    params: tuple[str, ...],
-    vary: str,
-    start: float,
-    stop: float,
-    points: int,
-    fmt: str,
-) -> None:
+def sweep(mechanism: str, params: tuple[str, ...], fmt: str, **args: Any) -> None:
     try:
         from ..analysis.sweep import sweep as _sweep
 
-        s = _sweep(mechanism, numbers(params, "--param"), vary, start, stop, points)
+        s = _sweep(mechanism, numbers(params, "--param"), **args)
     except SynthError as e:
         fail(e)
     cols = ("values", "time_ratio", "stroke", "min_transmission_angle_deg", "valid")
     rows = [
-        dict(zip((vary, *cols[1:]), r, strict=True))
+        dict(zip((args["vary"], *cols[1:]), r, strict=True))
         for r in zip(*(getattr(s, k) for k in cols), strict=True)
     ]
     emit(fmt, s.to_dict(), rows, _sweep_text(s, rows))

@@ -4,13 +4,13 @@ the crank, animated (animate)."""
 from __future__ import annotations
 
 import sys
+from typing import Any
 
 import click
 
-from ..drawing import FORMATS, FPS, FRAMES, TARGETS
+from ..drawing import FPS, FRAMES, TARGETS
 from ..errors import SynthError
-from ..load import LENGTH_UNITS
-from .base import design_args, fail, main, numbers, parse_load
+from .base import Command, design_args, fail, main, numbers, parse_load
 
 # -o/--out: where a command writes its file
 to_file = click.option(
@@ -21,58 +21,35 @@ to_file = click.option(
 )
 
 
-@main.command(help="A design's drawing for CAD or a document (POST /v1/export).")
+@main.command(
+    help="A design's drawing for CAD or a document (POST /v1/export).",
+    cls=Command,
+    request="synth.drawing.export:ExportRequest",
+    apart=("mechanism", "params"),
+)
 @design_args
-@click.option(
-    "--format",
-    "fmt",
-    type=click.Choice(FORMATS),
-    default="svg",
-    show_default=True,
-    help="svg: true size; dxf: each link on its own layer; gif: a turn, animated",
-)
-@click.option(
-    "--crank-angle", type=float, help="degrees (default: a third into the working stroke)"
-)
-@click.option(
-    "--length-unit",
-    type=click.Choice(list(LENGTH_UNITS)),
-    default="mm",
-    show_default=True,
-    help="the unit of the design's lengths",
-)
-@click.option("--paths", is_flag=True, help="each moving pin's path over a turn")
 @to_file
-def export(
-    mechanism: str,
-    params: tuple[str, ...],
-    fmt: str,
-    crank_angle: float | None,
-    length_unit: str,
-    paths: bool,
-    out: str | None,
-) -> None:
+def export(mechanism: str, params: tuple[str, ...], out: str | None, **args: Any) -> None:
     try:
         from ..drawing.export import export as _export  # the library on use: --help stays quick
 
-        doc = _export(mechanism, numbers(params, "--param"), fmt, crank_angle, length_unit, paths)
+        doc = _export(mechanism, numbers(params, "--param"), **args)
     except SynthError as e:
         fail(e)
     write(doc, out)
 
 
-@main.command(help="A design's report: one printable HTML page, standing alone (POST /v1/report).")
+@main.command(
+    help="A design's report: one printable HTML page, standing alone (POST /v1/report).",
+    cls=Command,
+    request="synth.drawing.report:ReportRequest",
+    apart=("mechanism", "params", "load", "targets"),
+)
 @design_args
 @click.option("--load", "load_json", metavar="JSON", help="the API's load object: adds the loads")
 @click.option("--time-ratio", type=float, help="a target to compare the design with")
 @click.option("--stroke", type=float, help="a target, in the design's length unit")
 @click.option("--bound", type=float, help="a target: the least transmission angle, degrees")
-@click.option("--crank-angle", type=float, help="the drawing's, degrees (default: where it opens)")
-@click.option(
-    "--length-unit",
-    type=click.Choice(list(LENGTH_UNITS)),
-    help="the design's (default: the load's, else mm)",
-)
 @to_file
 def report(
     mechanism: str,
@@ -81,9 +58,8 @@ def report(
     time_ratio: float | None,
     stroke: float | None,
     bound: float | None,
-    crank_angle: float | None,
-    length_unit: str | None,
     out: str | None,
+    **args: Any,
 ) -> None:
     given = dict(zip(TARGETS, (time_ratio, stroke, bound), strict=True))
     targets = {k: v for k, v in given.items() if v is not None}
@@ -95,8 +71,7 @@ def report(
             numbers(params, "--param"),
             load=parse_load(load_json),
             targets=targets,
-            crank_angle_deg=crank_angle,
-            length_unit=length_unit,
+            **args,
         )
     except SynthError as e:
         fail(e)

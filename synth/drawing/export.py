@@ -5,13 +5,13 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Annotated, Any
 
-from ..errors import InvalidParameters
-from ..requests import keyword
+from ..load import LENGTH_UNITS
+from ..requests import Help, OneOf, check, keyword
 from . import FORMATS
 from .gif import gif
-from .model import check_angle, drawing, drawn, sketch, unit_mm
+from .model import drawing, drawn, sketch
 from .svg import svg
 
 
@@ -19,22 +19,37 @@ from .svg import svg
 class ExportRequest:
     """``export``'s arguments (``run``), checked when built."""
 
-    mechanism: str
-    params: Mapping[str, float]
-    format: str = "svg"
-    crank_angle_deg: float | None = None
-    length_unit: str = "mm"
-    paths: bool = False
+    mechanism: Annotated[str, Help("the design's type")]
+    params: Annotated[Mapping[str, float], Help("its parameters, by name, in length_unit")]
+    format: Annotated[
+        str,
+        OneOf(FORMATS),
+        Help(
+            "svg: true size; dxf: each link on its own layer; json: the drawing and its "
+            "symbols' shapes, for a page that draws them; gif: a turn of the crank from "
+            "crank_angle_deg, animated"
+        ),
+    ] = "svg"
+    crank_angle_deg: Annotated[
+        float | None,
+        Help(
+            "where the crank is drawn, degrees; omitted: a third of the way through the "
+            "working stroke, where the mechanism stands open",
+            "crank-angle",
+        ),
+    ] = None
+    length_unit: Annotated[
+        str,
+        OneOf(tuple(LENGTH_UNITS)),
+        Help("the unit of the design's lengths: the SVG's size, the DXF's units"),
+    ] = "mm"
+    paths: Annotated[bool, Help("each moving pin's path over a turn")] = False
 
     def __post_init__(self) -> None:
+        check(self)
         m = drawn(self.mechanism)
         for k in self.params:
             m.parameter(k)
-        if self.format not in FORMATS:
-            msg = f"format must be one of {', '.join(FORMATS)}, got {self.format!r}"
-            raise InvalidParameters(msg, ("format",))
-        unit_mm(self.length_unit)
-        check_angle(self.crank_angle_deg)
 
 
 def run(r: ExportRequest) -> bytes:

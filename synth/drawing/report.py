@@ -12,19 +12,19 @@ import math
 import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import KW_ONLY, dataclass, field
-from typing import Any
+from typing import Annotated, Any
 from xml.sax.saxutils import escape
 
 import numpy as np
 
 from ..analysis.kinematics import analyze
 from ..errors import InvalidParameters
-from ..load import Load
-from ..requests import keyword
+from ..load import LENGTH_UNITS, Load
+from ..requests import Help, OneOf, check, keyword
 from ..results import Analysis, Loads
 from ..version import __version__
 from . import TARGETS
-from .model import check_angle, drawing, drawn, unit_mm
+from .model import drawing, drawn
 from .plot import Series, chart
 from .svg import svg
 
@@ -47,23 +47,38 @@ class ReportRequest:
     """``report``'s arguments (``run``), checked when built: ``load`` a ``Load`` or a mapping
     of its fields; ``unit`` the lengths' unit (``length_unit``, else the load's, else mm)."""
 
-    mechanism: str
-    params: Mapping[str, float]
+    mechanism: Annotated[str, Help("the design's type")]
+    params: Annotated[Mapping[str, float], Help("its parameters, by name, in length_unit")]
     _: KW_ONLY
-    load: Load | None = None
-    targets: Mapping[str, float] | None = None
-    crank_angle_deg: float | None = None
-    length_unit: str | None = None
+    load: Annotated[
+        Load | None,
+        Help(
+            "what the design drives: adds the loads, the torque diagram, the flywheel and the "
+            "joint forces"
+        ),
+    ] = None
+    targets: Annotated[
+        Mapping[str, float] | None, Help("compared with what the design achieves")
+    ] = None
+    crank_angle_deg: Annotated[
+        float | None,
+        Help("the drawing's, degrees; omitted: where the mechanism stands open", "crank-angle"),
+    ] = None
+    length_unit: Annotated[
+        str | None,
+        OneOf(tuple(LENGTH_UNITS)),
+        Help("the design's lengths; omitted: the load's, else mm"),
+    ] = None
     unit: str = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
+        check(self)
         m = drawn(self.mechanism)
         for k in self.params:
             m.parameter(k)
         q = Load.of(self.load)
         object.__setattr__(self, "load", q)
         unit = self.length_unit or (q.length_unit if q else "mm")
-        unit_mm(unit)
         if q is not None and unit != q.length_unit:
             msg = f"length_unit {unit!r} differs from the load's {q.length_unit!r}"
             raise InvalidParameters(msg, ("length_unit",))
@@ -73,7 +88,6 @@ class ReportRequest:
                 raise InvalidParameters(msg, ("targets", k))
             if not math.isfinite(v):
                 raise InvalidParameters(f"targets.{k} must be finite, got {v!r}", ("targets", k))
-        check_angle(self.crank_angle_deg)
         object.__setattr__(self, "unit", unit)
 
 

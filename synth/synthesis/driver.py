@@ -14,16 +14,19 @@ import math
 import time
 from collections.abc import Collection, Mapping, Sequence
 from dataclasses import KW_ONLY, dataclass, field, replace
-from typing import Any
+from typing import Annotated, Any
+
+from annotated_types import Ge, Gt, Le, Lt
 
 from .. import objectives
 from ..analysis.kinematics import analyze
-from ..analysis.request import check_drawn, check_include
+from ..analysis.quality import MIDDLE
+from ..analysis.request import check_drawn
 from ..errors import InvalidDesign, InvalidParameters
 from ..load import Load
 from ..mechanisms import all_types, get
 from ..objectives import FLUCTUATION, REGISTRY, TORQUE
-from ..requests import check_budget, keyword
+from ..requests import INCLUDE, TOLERANCE, Help, LibraryOnly, OneOf, check, included, keyword
 from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
 from ..targets import PARETO
 from .candidate import candidate, predicted_rank
@@ -58,38 +61,94 @@ class SynthesisRequest:
     located at the argument, e.g. ``("mechanisms", 0, "bounds", "crank")``. ``load`` takes a
     ``Load`` or a mapping of its fields; ``specs`` are the types to search, each checked."""
 
-    time_ratio: float
-    stroke: float
-    min_transmission_angle_deg: float = 0.0
-    mechanisms: Specs = None
-    objective: str = PARETO
-    max_candidates: int | None = None
-    time_budget_ms: float = 2000.0
+    time_ratio: Annotated[float, Ge(1.0), Help("slow stroke / quick stroke (crank angles), ≥ 1")]
+    stroke: Annotated[float, Ge(STROKES[0]), Le(STROKES[1]), Help("in your length unit")]
+    min_transmission_angle_deg: Annotated[
+        float, Ge(0.0), Lt(90.0), Help("the least transmission angle allowed, degrees", "bound")
+    ] = 0.0
+    mechanisms: Annotated[
+        Specs,
+        Help(
+            "the types to search, each with its parts fixed and bounded; by default every "
+            "quick-return type, nothing fixed"
+        ),
+    ] = None
+    objective: Annotated[
+        str,
+        OneOf(tuple(REGISTRY)),
+        Help(
+            "what the candidates are best at. pareto: per type, the trade-off front between "
+            "the smallest design that meets the bound (min_size) and the best-transmitting one "
+            "(max_transmission_angle), points spread evenly in angle, each the smallest design "
+            "with at least its angle (size: the sum of link lengths; each candidate's front "
+            "says where it sits); max_transmission_angle: the best minimum transmission angle, "
+            "ties to the smallest design; min_size: the smallest sum of link lengths meeting "
+            "the bound (which must then be > 0°); uniform_cutting_speed: the least speed "
+            f"fluctuation (largest speed over mean speed) over the {MIDDLE}, where a tool cuts; "
+            "min_peak_acceleration: the least peak acceleration over both strokes, in "
+            "ω²·stroke; min_peak_torque: the least peak crank torque under the request's load. "
+            "The last three are searched, each candidate carrying its motion, or its loads",
+        ),
+    ] = PARETO
+    max_candidates: Annotated[
+        int | None,
+        Ge(1),
+        Le(MAX_CANDIDATES),
+        Help(
+            f"in all; omitted: {PER_TYPE} (pareto: {PER_TYPE} per type of the request, at most "
+            f"{MAX_CANDIDATES}, a front of one point taking one)"
+        ),
+    ] = None
+    time_budget_ms: Annotated[
+        float, Gt(0.0), Help("the search's time; past it, what was done (reported incomplete)")
+    ] = 2000.0
     _: KW_ONLY
-    include: Collection[str] = ()
-    tolerance: Tolerance | None = None
-    max_working_speed_fluctuation: float | None = None
-    load: Load | None = None
-    max_peak_torque: float | None = None
-    solver: Solver = DEFAULT
+    include: Annotated[Collection[str], OneOf(INCLUDE), Help(included(INCLUDE))] = ()
+    tolerance: Annotated[Tolerance | None, Help(TOLERANCE)] = None
+    max_working_speed_fluctuation: Annotated[
+        float | None,
+        Ge(1.0),
+        Help(
+            f"a limit on the speed fluctuation over the {MIDDLE} (≥ 1: 1 is a uniform speed), "
+            "with the objectives uniform_cutting_speed and min_peak_acceleration"
+        ),
+    ] = None
+    load: Annotated[
+        Load | None,
+        Help(
+            "what the design drives: adds each candidate's loads; the objective "
+            "min_peak_torque minimises its peak crank torque"
+        ),
+    ] = None
+    max_peak_torque: Annotated[
+        float | None,
+        Gt(0.0),
+        Help("N·m: a limit on the peak crank torque, with the objective min_peak_torque"),
+    ] = None
+    solver: Annotated[Solver, LibraryOnly()] = DEFAULT
     specs: tuple[Spec, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         load = Load.of(self.load)
         object.__setattr__(self, "load", load)
         specs = _specs(self.mechanisms)
+        check(self)
         objective, bound = self.objective, self.min_transmission_angle_deg
-        _check_targets(self.time_ratio, self.stroke, bound, objective, self.max_candidates)
+        if REGISTRY[objective].needs_bound and bound == 0:
+            raise InvalidParameters(
+                f"min_transmission_angle_deg must be > 0 with the objective {objective}: "
+                "without a bound the smallest designs are linkages that lock (a 0° "
+                "transmission angle)",
+                ("min_transmission_angle_deg",),
+            )
         for i, s in enumerate(specs):
             _check_scale(s, i, self.stroke)
         _check_limit(self.max_working_speed_fluctuation, objective)
         _check_torque(objective, load, self.max_peak_torque)
-        check_include(self.include)
         for s in specs:
             check_drawn(s.type, self.include)
             if load is not None and get(s.type).frame is None:
                 raise InvalidParameters(f"load: {s.type} has no force model yet", ("load",))
-        check_budget(self.time_budget_ms)
         object.__setattr__(self, "specs", tuple(specs))
 
     @property
@@ -268,43 +327,6 @@ def _specs(mechanisms: Specs) -> list[Spec]:
     return [checked_spec(s, i) for i, s in enumerate(mechanisms)]
 
 
-def _check_targets(
-    tr: float, stroke: float, bound: float, objective: str, max_candidates: int | None
-) -> None:
-    checks = [
-        ("time_ratio", tr, math.isfinite(tr) and tr >= 1, "a finite number ≥ 1"),
-        (
-            "stroke",
-            stroke,
-            STROKES[0] <= stroke <= STROKES[1],
-            f"a length in [{STROKES[0]:g}, {STROKES[1]:g}]",
-        ),
-        (
-            "min_transmission_angle_deg",
-            bound,
-            math.isfinite(bound) and 0 <= bound < 90,
-            "an angle in [0°, 90°)",
-        ),
-        ("objective", objective, objective in REGISTRY, "one of " + ", ".join(REGISTRY)),
-        (
-            "max_candidates",
-            max_candidates,
-            max_candidates is None
-            or (isinstance(max_candidates, int) and 1 <= max_candidates <= MAX_CANDIDATES),
-            f"an integer from 1 to {MAX_CANDIDATES}",
-        ),
-    ]
-    for name, value, ok, what in checks:
-        if not ok:
-            raise InvalidParameters(f"{name} must be {what}, got {value!r}", (name,))
-    if REGISTRY[objective].needs_bound and bound == 0:
-        raise InvalidParameters(
-            f"min_transmission_angle_deg must be > 0 with the objective {objective}: without "
-            "a bound the smallest designs are linkages that lock (a 0° transmission angle)",
-            ("min_transmission_angle_deg",),
-        )
-
-
 def _check_scale(s: Spec, i: int, stroke: float) -> None:
     """Bounds within ``SCALE`` of the stroke either way (0 aside): the solvers work in the
     stroke's unit, where their ratios and squares must stay finite and non-zero."""
@@ -320,12 +342,6 @@ def _check_scale(s: Spec, i: int, stroke: float) -> None:
 def _check_limit(limit: float | None, objective: str) -> None:
     if limit is None:
         return
-    if not (math.isfinite(limit) and limit >= 1):
-        raise InvalidParameters(
-            f"max_working_speed_fluctuation must be a finite number ≥ 1 (the largest speed "
-            f"against the mean: 1 is a uniform speed), got {limit!r}",
-            ("max_working_speed_fluctuation",),
-        )
     if REGISTRY[objective].limit is not FLUCTUATION:
         takers = [o.name for o in objectives.all_objectives() if o.limit is FLUCTUATION]
         raise InvalidParameters(
@@ -342,9 +358,6 @@ def _check_torque(objective: str, load: Load | None, limit: float | None) -> Non
         raise InvalidParameters(msg, ("load",))
     if limit is None:
         return
-    if not (math.isfinite(limit) and limit > 0):
-        msg = f"max_peak_torque must be a finite torque > 0 (N·m), got {limit!r}"
-        raise InvalidParameters(msg, ("max_peak_torque",))
     if REGISTRY[objective].limit is not TORQUE:
         (taker,) = (o.name for o in objectives.all_objectives() if o.limit is TORQUE)
         msg = f"max_peak_torque is taken with the objective {taker}, not {objective}"
