@@ -27,6 +27,7 @@ import synth
 from synth import results
 from synth.analysis.quality import CUT
 from synth.analysis.request import MAX_CURVE_POINTS
+from synth.drawing.report import Goals
 from synth.load import GAP, Load
 from synth.mechanisms import Mechanism, Parameter, all_types, get
 from synth.objectives import all_objectives
@@ -341,18 +342,6 @@ BUDGET: Any = Field(
 ANGLE = (Ge(-1e6), Le(1e6))  # a crank angle's, degrees (any, in the library)
 
 
-class ReportTargets(Strict):
-    """What the report compares the design with (each optional)."""
-
-    time_ratio: float | None = Field(None, ge=1.0, le=1e3, description="slow/quick crank angle")
-    stroke: float | None = Field(
-        None, ge=LENGTH_MIN, le=LENGTH_MAX, description="in the design's length unit"
-    )
-    bound_deg: float | None = Field(
-        None, ge=0.0, le=90.0, description="the least transmission angle, degrees"
-    )
-
-
 def _wired(value: type, name: str, kind: Any, default: Any = None, **more: Any) -> Any:
     """A field the body takes as ``kind`` (a model of its own), with its words."""
     return (kind, Field(default, description=_help(value, name), **more))
@@ -393,6 +382,9 @@ if TYPE_CHECKING:
     class ExportRequest(Strict):
         mechanism: Design
         format: str
+
+    class ReportTargets(Strict):
+        pass
 
     class ReportRequest(Strict):
         mechanism: Design
@@ -463,6 +455,13 @@ else:
         _on_design(),
         {"crank_angle_deg": ANGLE},
     )
+    ReportTargets = _body(
+        Goals,
+        "ReportTargets",
+        {},
+        {"time_ratio": (Le(1e3),), "stroke": (Ge(LENGTH_MIN), Le(LENGTH_MAX))},
+        doc=Goals.__doc__,
+    )
     ReportRequest = _body(
         synth.ReportRequest,
         "ReportRequest",
@@ -488,14 +487,17 @@ class NotFound(BaseModel):
     detail: list[ErrorItem]
 
 
-Echoed = str | float | bool | None  # what a 422 echoes of a request's input (api.errors.safe)
+# what a 422 echoes of a request's input: JSON at most three levels deep (api.errors.safe)
+Echoed = str | float | bool | None
+_Echoed2 = Echoed | list[Echoed] | dict[str, Echoed]
+_Echoed1 = Echoed | list[_Echoed2] | dict[str, _Echoed2]
 
 
 class InvalidItem(ErrorItem):
     """One place of a request that is wrong: where (``loc``), why (``msg``, ``type``), what
     was given when short (``input``) and the rule's numbers (``ctx``)."""
 
-    input: Echoed | list[Echoed | dict[str, Any]] | dict[str, Any] = None
+    input: Echoed | list[_Echoed1] | dict[str, _Echoed1] = None
     ctx: dict[str, Any] | None = None
 
 

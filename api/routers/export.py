@@ -18,6 +18,19 @@ MEDIA = {
     "gif": "image/gif",
 }
 
+FILE = {"type": "string", "format": "binary"}
+# the json format's schema: the drawing and its symbols, objects (synth.drawing.model)
+_SCHEMA: dict[str, dict[str, object]] = {
+    "json": {
+        "type": "object",
+        "properties": {
+            "drawing": {"type": "object", "additionalProperties": True},
+            "sketch": {"type": "object", "additionalProperties": True},
+        },
+        "required": ["drawing", "sketch"],
+    }
+}
+
 
 @router.post(
     "/v1/export",
@@ -25,9 +38,7 @@ MEDIA = {
     responses={
         **REFUSALS,
         200: {
-            "content": {
-                m: {"schema": {"type": "string", "format": "binary"}} for m in MEDIA.values()
-            },
+            "content": {m: {"schema": _SCHEMA.get(f, FILE)} for f, m in MEDIA.items()},
             "description": "the drawing, as a file",
         },
     },

@@ -132,32 +132,47 @@ def formats(f: Callable[..., Any]) -> Callable[..., Any]:
 
 class Command(click.Command):
     """A command that also takes the fields of its ``request`` (``"module:Name"``, a request
-    value) that the edges take, but those it takes in a shape of its own or not at all
-    (``apart``): each ``--name`` (dashes for underscores; its ``Help.flag`` too), of its kind
-    and choices, with its default and words, a collection's repeated; the command passes
-    them on by their names. They are made when first asked for (its help, a run): the
-    request's module, and the library with it, is imported then, and the group's help
-    stays quick."""
+    value), and of the values ``also`` names (parts of it), that the edges take, but those it
+    takes in a shape of its own or not at all (``apart``): each ``--name`` (dashes for
+    underscores; its ``Help.flag`` too), of its kind and choices, with its default and words,
+    a collection's repeated; the command passes them on by their names. They are made when
+    first asked for (its help, a run): the request's module, and the library with it, is
+    imported then, and the group's help stays quick."""
 
     def __init__(
-        self, *args: Any, request: str, apart: tuple[str, ...] = (), **kwargs: Any
+        self,
+        *args: Any,
+        request: str,
+        apart: tuple[str, ...] = (),
+        also: tuple[str, ...] = (),
+        **kwargs: Any,
     ) -> None:
-        self._request, self._apart = request, apart
+        self._values, self._apart = (request, *also), apart
         self._made: list[click.Parameter] | None = None
         super().__init__(*args, **kwargs)
 
     @property
     def params(self) -> list[click.Parameter]:
         if self._made is None:
-            module, name = self._request.split(":")
-            value = getattr(importlib.import_module(module), name)
-            made = [_option(a) for a in arguments(value) if a.edge and a.name not in self._apart]
+            made = [
+                _option(a)
+                for value in map(value_of, self._values)
+                for a in arguments(value)
+                if a.edge and a.name not in self._apart
+            ]
             self._made = [*made, *self._declared]
         return self._made
 
     @params.setter
     def params(self, declared: list[click.Parameter]) -> None:
         self._declared, self._made = declared, None
+
+
+def value_of(where: str) -> type:
+    """The value ``"module:Name"`` names."""
+    module, name = where.split(":")
+    value: type = getattr(importlib.import_module(module), name)
+    return value
 
 
 def _option(a: Argument) -> click.Option:

@@ -4,14 +4,16 @@ the crank, animated (animate)."""
 from __future__ import annotations
 
 import sys
+from dataclasses import fields
 from typing import Any
 
 import click
 
-from ..drawing import FPS, FRAMES, TARGETS
+from ..drawing import FPS, FRAMES
 from ..errors import SynthError
-from .base import Command, design_args, fail, main, numbers, parse_load
+from .base import Command, design_args, fail, main, numbers, parse_load, value_of
 
+GOALS = "synth.drawing.report:Goals"  # what a report compares the design with
 # -o/--out: where a command writes its file
 to_file = click.option(
     "-o",
@@ -44,25 +46,16 @@ def export(mechanism: str, params: tuple[str, ...], out: str | None, **args: Any
     cls=Command,
     request="synth.drawing.report:ReportRequest",
     apart=("mechanism", "params", "load", "targets"),
+    also=(GOALS,),
 )
 @design_args
 @click.option("--load", "load_json", metavar="JSON", help="the API's load object: adds the loads")
-@click.option("--time-ratio", type=float, help="a target to compare the design with")
-@click.option("--stroke", type=float, help="a target, in the design's length unit")
-@click.option("--bound", type=float, help="a target: the least transmission angle, degrees")
 @to_file
 def report(
-    mechanism: str,
-    params: tuple[str, ...],
-    load_json: str | None,
-    time_ratio: float | None,
-    stroke: float | None,
-    bound: float | None,
-    out: str | None,
-    **args: Any,
+    mechanism: str, params: tuple[str, ...], load_json: str | None, out: str | None, **args: Any
 ) -> None:
-    given = dict(zip(TARGETS, (time_ratio, stroke, bound), strict=True))
-    targets = {k: v for k, v in given.items() if v is not None}
+    goals = [f.name for f in fields(value_of(GOALS))]
+    targets = {k: v for k in goals if (v := args.pop(k)) is not None}
     try:
         from ..drawing.report import report as _report
 

@@ -9,4 +9,3 @@ command line's choices, the API's schema) loads nothing else.
 
 FORMATS = ("svg", "dxf", "json", "gif")  # synth.export's
 FRAMES, FPS = 36, 12.0  # synth.animate's turn: its frames and their rate (3 s)
-TARGETS = ("time_ratio", "stroke", "bound_deg")  # what synth.report may compare a design with

@@ -11,11 +11,12 @@ import datetime
 import math
 import re
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import KW_ONLY, dataclass, field
+from dataclasses import KW_ONLY, dataclass, field, fields
 from typing import Annotated, Any
 from xml.sax.saxutils import escape
 
 import numpy as np
+from annotated_types import Ge, Gt, Le
 
 from ..analysis.kinematics import analyze
 from ..errors import InvalidParameters
@@ -23,7 +24,6 @@ from ..load import LENGTH_UNITS, Load
 from ..requests import Help, OneOf, check, keyword
 from ..results import Analysis, Loads
 from ..version import __version__
-from . import TARGETS
 from .model import drawing, drawn
 from .plot import Series, chart
 from .svg import svg
@@ -43,6 +43,46 @@ svg.chart{width:100%;height:auto;max-width:640px;display:block}
 
 
 @dataclass(frozen=True)
+class Goals:
+    """What a report compares the design with, each optional (``targets``)."""
+
+    time_ratio: Annotated[
+        float | None, Ge(1.0), Help("a target to compare the design with: slow/quick crank angle")
+    ] = None
+    stroke: Annotated[float | None, Gt(0.0), Help("a target, in the design's length unit")] = None
+    bound_deg: Annotated[
+        float | None,
+        Ge(0.0),
+        Le(90.0),
+        Help("a target: the least transmission angle, degrees", "bound"),
+    ] = None
+
+    @classmethod
+    def of(cls, targets: Goals | Mapping[str, float] | None) -> Goals | None:
+        """Targets as ``Goals``: one already, or a mapping of its fields; InvalidParameters
+        at ``targets`` naming what is wrong."""
+        if targets is None or isinstance(targets, Goals):
+            return targets
+        names = [f.name for f in fields(cls)]
+        for k in targets:
+            if k not in names:
+                msg = f"targets may name {', '.join(names)}, got {k!r}"
+                raise InvalidParameters(msg, ("targets", k))
+        try:
+            return cls(**targets)
+        except InvalidParameters as e:
+            raise InvalidParameters(f"targets.{e.msg}", ("targets", *e.loc)) from None
+
+    def __post_init__(self) -> None:
+        check(self)
+
+    @property
+    def given(self) -> dict[str, float]:
+        """The targets given, by name."""
+        return {k: v for k, v in vars(self).items() if v is not None}
+
+
+@dataclass(frozen=True)
 class ReportRequest:
     """``report``'s arguments (``run``), checked when built: ``load`` a ``Load`` or a mapping
     of its fields; ``unit`` the lengths' unit (``length_unit``, else the load's, else mm)."""
@@ -58,7 +98,7 @@ class ReportRequest:
         ),
     ] = None
     targets: Annotated[
-        Mapping[str, float] | None, Help("compared with what the design achieves")
+        Goals | Mapping[str, float] | None, Help("compared with what the design achieves")
     ] = None
     crank_angle_deg: Annotated[
         float | None,
@@ -82,18 +122,13 @@ class ReportRequest:
         if q is not None and unit != q.length_unit:
             msg = f"length_unit {unit!r} differs from the load's {q.length_unit!r}"
             raise InvalidParameters(msg, ("length_unit",))
-        for k, v in (self.targets or {}).items():
-            if k not in TARGETS:
-                msg = f"targets may name {', '.join(TARGETS)}, got {k!r}"
-                raise InvalidParameters(msg, ("targets", k))
-            if not math.isfinite(v):
-                raise InvalidParameters(f"targets.{k} must be finite, got {v!r}", ("targets", k))
+        object.__setattr__(self, "targets", Goals.of(self.targets))
         object.__setattr__(self, "unit", unit)
 
 
 def run(r: ReportRequest) -> str:
     """The design's report as an HTML document. Lengths are in ``length_unit`` (a load's,
-    where one is given; else mm), forces and the rest SI; ``targets`` (any of ``TARGETS``)
+    where one is given; else mm), forces and the rest SI; ``targets`` (``Goals``)
     are compared with what the design achieves; the drawing is at ``crank_angle_deg`` (None:
     where the mechanism stands open).
 
@@ -102,7 +137,7 @@ def run(r: ReportRequest) -> str:
     True
     """
     mechanism, params, q, unit = r.mechanism, r.params, r.load, r.unit
-    m, goals = drawn(mechanism), dict(r.targets or {})
+    m, goals = drawn(mechanism), (r.targets.given if isinstance(r.targets, Goals) else {})
     angles = np.linspace(0.0, 360.0, SAMPLES)
     include = ("motion", "sensitivities", "envelope", *(("forces",) if q else ()))
     a = analyze(mechanism, params, crank_angles_deg=angles.tolist(), include=include, load=q)
