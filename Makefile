@@ -15,7 +15,7 @@ export OPENBLAS_NUM_THREADS ?= 1
 # the project itself, editable, built by the setuptools the lock pinned
 INSTALL_SELF := $(BIN)/python -m pip install -qq --no-deps --no-build-isolation -e .
 
-.PHONY: serve test stress bench atlas lint lock lock-check notebook notebooks python clean
+.PHONY: serve test long stress bench atlas lint lock lock-check notebook notebooks python clean
 
 python:
 	@test -n "$(PYTHON)" || { echo "make: no Python 3.11, 3.12 or 3.13 found (tried python3.13," \
@@ -56,11 +56,17 @@ $(VENV)/.compiled: $(VENV)/.runtime $(shell find synth -name '*.py')
 serve: $(VENV)/.runtime $(VENV)/.compiled
 	$(BIN)/python -m api.serve
 
-# the suite: all but the serial tests on every core (pytest-xdist), then the serial ones alone
-# (they time a live service, or answer within a budget that sharing the cores would cut)
+# the suite: all but the serial and the long tests on every core (pytest-xdist), then the serial
+# ones alone (they time a live service, or answer within a budget that sharing the cores would
+# cut); the long ones (tens of seconds each: the image, a fresh checkout, the quick benchmarks,
+# the service under the heaviest loads) are `make long`'s, which CI runs after this
 test: $(VENV)/.dev $(VENV)/.compiled
-	$(BIN)/python -m pytest -q -n auto -m "not serial"; a=$$?; \
-	$(BIN)/python -m pytest -q -m serial; b=$$?; exit $$(( a || b ))
+	$(BIN)/python -m pytest -q -n auto -m "not serial and not long"; a=$$?; \
+	$(BIN)/python -m pytest -q -m "serial and not long"; b=$$?; exit $$(( a || b ))
+
+long: $(VENV)/.dev $(VENV)/.compiled
+	$(BIN)/python -m pytest -q -n auto -m "long and not serial"; a=$$?; \
+	$(BIN)/python -m pytest -q -m "long and serial"; b=$$?; exit $$(( a || b ))
 
 # the numerical-stability suite at full length (≥ 10 000 hypothesis cases per type and property)
 # and the full global-search cross-check of the synthesis optima (≥ 20 targets per type), and

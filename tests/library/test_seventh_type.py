@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[2]
 # the property tests that take any type (those against the brute-force simulation or the
 # independent global search know the six types' geometry only), and the toy's own checks
@@ -21,6 +23,7 @@ PROPERTY_TESTS = (
 TOYS = ("centred_slider_crank", "offset_slider_crank_generic")
 
 
+@pytest.mark.long  # tens of seconds: make long (CI runs it), not make test
 def test_a_seventh_type_reaches_everything():
     # fewer examples per property than the suite's own (the generic path's IPOPT is slower)
     env = {**os.environ, "SYNTH_TYPES": "tests.support.toy_type", "HYPOTHESIS_PROFILE": "few"}

@@ -3,8 +3,12 @@ what they report holds (ours solves every feasible target it is given and refuse
 infeasible one, to 1e-12, never worse than the generic multistart; the service answers every
 request). Timings are printed, never asserted."""
 
+import pytest
+
 from benchmarks import analysis, overload, searched, service, startup, synthesis
 from synth.mechanisms import all_types
+
+pytestmark = pytest.mark.long  # tens of seconds each: make long (CI runs it), not make test
 
 
 def test_synthesis_benchmark_quick():

@@ -143,6 +143,7 @@ def probe(port: int, until: float) -> list[float]:
     return out
 
 
+@pytest.mark.long  # tens of seconds: make long (CI runs it), not make test
 def test_health_answers_at_once_under_the_heaviest_mix_and_every_kind_of_work_is_admitted():
     with serving() as (port, _), ProcessPoolExecutor(1, mp_context=get_context("spawn")) as pool:
         pool.submit(clients, port, 4, 6.0).result()  # warm: every process's models and solvers

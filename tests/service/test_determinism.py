@@ -181,6 +181,7 @@ def label(kw: dict) -> str:
     )
 
 
+@pytest.mark.long  # tens of seconds: make long (CI runs it), not make test
 def test_20_searched_requests_give_the_same_reply_in_fresh_processes_quiet_and_loaded():
     requests = [arguments(c, ENOUGH_MS) for c in SEARCHED]
     assert len(requests) == 20

@@ -137,6 +137,7 @@ def test_a_killed_server_process_is_replaced_and_the_other_keeps_answering():
         assert statuses == [200] * 8
 
 
+@pytest.mark.long  # tens of seconds: make long (CI runs it), not make test
 def test_sigterm_under_load_leaves_no_process_after_10_s():
     # four sweeps per server process at once: ~20 s each (5 s alone), so a server that
     # waited for its solves would take twice as long as allowed

@@ -79,6 +79,7 @@ def run(port: int, work: list[tuple[str, dict[str, Any]]]) -> list[int]:
     return statuses
 
 
+@pytest.mark.long  # tens of seconds: make long (CI runs it), not make test
 def test_random_loaded_requests_do_not_grow_a_process() -> None:
     work = requests(seed=38)
     with serving() as (port, proc):

@@ -178,6 +178,7 @@ def stable(body: dict) -> dict:
     return {k: v for k, v in body.items() if k != "elapsed_ms"}
 
 
+@pytest.mark.long  # tens of seconds: make long (CI runs it), not make test
 def test_make_serve_on_a_fresh_checkout_answers_over_a_socket(server):
     status, out = call(server, "/v1/analyze", ANALYZE)
     assert status == 200 and out["time_ratio"] == pytest.approx(1.49995, abs=1e-5)
@@ -350,6 +351,7 @@ def dockerfile() -> dict[str, dict[str, list[str]]]:
     return dict(built) | {"": image}
 
 
+@pytest.mark.long  # tens of seconds: make long (CI runs it), not make test
 def test_the_dockerfile_runs_the_service_from_what_it_copies(served, tmp_path):
     """The image's stages played out on this machine: the base's files and install, the
     compiled analysis built in the native stage, then the image (no compiler) serving."""
