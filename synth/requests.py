@@ -1,11 +1,11 @@
 """Each operation's arguments as one value: a frozen dataclass beside the operation
 (``SynthesisRequest``, ``AnalysisRequest``, ``SweepRequest``, ``ExportRequest``,
 ``ReportRequest``), checked when it is built, as ``Load`` is. A field says once what it is
-(``Help``), its range (annotated_types' ``Ge``, ``Gt``, ``Le``, ``Lt``) and its choices
-(``OneOf``) in its annotation; the request checks them (``check``), the service's schema and
-the command line's options are made from them (``arguments``). The library's function takes
-its keyword form from the request (``keyword``): each argument list is written once, in the
-request's fields, and an argument nobody knows is an error everywhere."""
+(``Help``), its range (annotated_types' ``Ge``, ``Gt``, ``Le``, ``Lt``, ``Interval``) and its
+choices (``OneOf``) in its annotation; the request checks them (``check``), the service's
+schema and the command line's options are made from them (``arguments``). The library's
+function takes its keyword form from the request (``keyword``): each argument list is written
+once, in the request's fields, and an argument nobody knows is an error everywhere."""
 
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ _INCLUDED = {
     "forces": "forces (with a load and curves: curves.forces, each joint's and the guide's "
     "force at the curves' angles)",
 }
-TOLERANCE = (
+TOLERANCE_HELP = (
     "± on every parameter, absolute (the lengths' unit) or relative: adds the sensitivities "
     "and their worst-case first-order deviations"
 )
@@ -51,9 +51,7 @@ _WORDS = {
     Le: ("≤", "le", operator.le),
     Lt: ("<", "lt", operator.lt),
 }
-
-
-_ARGUMENTS: dict[type, tuple[Argument, ...]] = {}
+_ARGUMENTS: dict[type, tuple[Argument, ...]] = {}  # by request type (``arguments``)
 
 
 @dataclass(frozen=True)
@@ -79,14 +77,13 @@ class LibraryOnly:
 
 @dataclass(frozen=True)
 class Argument:
-    """A request's field as the edges read it: its ``name``, its full annotation (``hint``,
-    metadata kept), its plain ``kind`` (float, int, str or bool; None for a value of its own
-    such as a ``Load``), whether None is allowed (``optional``) and whether it is a collection
-    of its kind (``many``), its ``default`` (``MISSING``: required), its ``help``, ``limits``
-    and ``choices``, and whether the edges take it (``edge``)."""
+    """A request's field as the edges read it: its ``name``, its plain ``kind`` (float, int,
+    str or bool; None for a value of its own, such as a ``Load``), whether None is allowed
+    (``optional``) and whether it is a collection of its kind (``many``), its ``default``
+    (``MISSING``: required), its ``help``, ``limits`` and ``choices``, and whether the edges
+    take it (``edge``)."""
 
     name: str
-    hint: Any
     kind: type | None
     optional: bool
     many: bool
@@ -170,7 +167,6 @@ def _arguments(request: type) -> tuple[Argument, ...]:
         out.append(
             Argument(
                 name=f.name,
-                hint=hint,
                 kind=kind,
                 optional=optional,
                 many=many and kind is not None,

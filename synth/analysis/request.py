@@ -13,7 +13,7 @@ from annotated_types import Ge, Le
 from ..errors import InvalidParameters
 from ..load import Load
 from ..mechanisms import get
-from ..requests import ANALYSIS_INCLUDE, TOLERANCE, Help, OneOf, check, included
+from ..requests import ANALYSIS_INCLUDE, TOLERANCE_HELP, Help, OneOf, check, included
 from ..results import Curves, Tolerance
 from . import loads
 
@@ -45,7 +45,7 @@ class AnalysisRequest:
     include: Annotated[
         Collection[str], OneOf(ANALYSIS_INCLUDE), Help(included(ANALYSIS_INCLUDE))
     ] = ()
-    tolerance: Annotated[Tolerance | None, Help(TOLERANCE)] = None
+    tolerance: Annotated[Tolerance | None, Help(TOLERANCE_HELP)] = None
     load: Annotated[
         Load | None,
         Help("what the design drives: adds loads (its crank_rpm is the curves' speed)"),

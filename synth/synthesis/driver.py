@@ -26,7 +26,7 @@ from ..errors import InvalidDesign, InvalidParameters
 from ..load import Load
 from ..mechanisms import all_types, get
 from ..objectives import FLUCTUATION, REGISTRY, TORQUE
-from ..requests import INCLUDE, TOLERANCE, Help, LibraryOnly, OneOf, check, included, keyword
+from ..requests import INCLUDE, TOLERANCE_HELP, Help, LibraryOnly, OneOf, check, included, keyword
 from ..results import Candidate, Infeasible, SynthesisResult, Tolerance
 from ..targets import PARETO
 from .candidate import candidate, predicted_rank
@@ -104,7 +104,7 @@ class SynthesisRequest:
     ] = 2000.0
     _: KW_ONLY
     include: Annotated[Collection[str], OneOf(INCLUDE), Help(included(INCLUDE))] = ()
-    tolerance: Annotated[Tolerance | None, Help(TOLERANCE)] = None
+    tolerance: Annotated[Tolerance | None, Help(TOLERANCE_HELP)] = None
     max_working_speed_fluctuation: Annotated[
         float | None,
         Ge(1.0),
