@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Mapping, Sequence
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -20,7 +20,7 @@ from ..load import Load
 from ..mechanisms import Mechanism, get
 from ..mechanisms.fourbar.geometry import grashof_class
 from ..mechanisms.registry import GROUND, RAM
-from ..requests import keyword
+from ..requests import argument, keyword
 from ..results import (
     NEAR_DEAD_POINT_DEG,
     NEAR_LIMIT,
@@ -60,14 +60,8 @@ def run(r: AnalysisRequest) -> Analysis:
     >>> round(a.time_ratio, 5), round(a.stroke, 9)
     (2.73524, 300.0)
     """
-    m, p, variant, f, pv, found = _prepared(get(r.mechanism), r.design)
     return _analysis(
-        m,
-        p,
-        variant,
-        f,
-        pv,
-        found,
+        _prepared(get(r.mechanism), r.design),
         r.omega,
         r.crank_acceleration,
         r.angles,
@@ -91,6 +85,7 @@ def analyze_many(
     SynthError that refuses it. The same analyses to the bit, for less: the dead centres and
     transmission extremes of the designs of one variant are found in shared compiled calls
     (``roots.stationary_points_many``), which a front's verification and a sweep repeat."""
+    argument(AnalysisRequest, "include").check(include)
     asked(mechanism, include, None, None)
     m = get(mechanism)
     out: list[Any] = [None] * len(designs)
@@ -108,19 +103,15 @@ def analyze_many(
         for (i, p), pv, found in zip(members, pvs, stationary_points_many(f, pvs), strict=True):
             try:
                 found = stationary_points(f, pv) if found is None else found
-                out[i] = _analysis(m, p, variant, f, pv, found, 1.0, 0.0, None, include, tolerance)
+                d = Prepared(m, p, variant, f, pv, found)
+                out[i] = _analysis(d, 1.0, 0.0, None, include, tolerance)
             except SynthError as e:
                 out[i] = e
     return out
 
 
 def _analysis(
-    m: Mechanism,
-    p: dict[str, float],
-    variant: frozenset[str],
-    f: Model,
-    pv: np.ndarray,
-    found: Points,
+    d: Prepared,
     crank_speed: float,
     crank_acceleration: float,
     deg: np.ndarray | None,
@@ -128,8 +119,9 @@ def _analysis(
     tolerance: Tolerance | None,
     load: Load | None = None,
 ) -> Analysis:
-    """``analyze``'s answer from the stationary points ``found`` of the design's rows."""
-    rows, theta, values = found
+    """``analyze``'s answer for a prepared design."""
+    m, p, variant, f, pv = d.mechanism, d.params, d.variant, d.model, d.pv
+    rows, theta, values = d.points
     summary = _summary(m, p, f, rows, theta, values)
     loaded = None
     if load is not None:
@@ -160,22 +152,32 @@ def _analysis(
     return Analysis(**summary)
 
 
-def prepared(
-    mechanism: str, params: Mapping[str, float]
-) -> tuple[Mechanism, dict[str, float], frozenset[str], Model, np.ndarray, Points]:
-    """The completed design, its variant's compiled model, its parameter vector, and the
-    stationary points of its rows (the dead centres and transmission extremes)."""
+@dataclass(frozen=True)
+class Prepared:
+    """A design ready for its analysis: its type, completed parameters and variant, the
+    variant's compiled model, the parameter vector, and the stationary points of its rows
+    (the dead centres and transmission extremes)."""
+
+    mechanism: Mechanism
+    params: dict[str, float]
+    variant: frozenset[str]
+    model: Model
+    pv: np.ndarray
+    points: Points
+
+
+def prepared(mechanism: str, params: Mapping[str, float]) -> Prepared:
+    """The design ``params`` of type ``mechanism``, completed and prepared."""
     m = get(mechanism)
     return _prepared(m, m.complete(params))
 
 
-def _prepared(
-    m: Mechanism, p: dict[str, float]
-) -> tuple[Mechanism, dict[str, float], frozenset[str], Model, np.ndarray, Points]:
+def _prepared(m: Mechanism, p: dict[str, float]) -> Prepared:
+    """A completed design ``p`` prepared."""
     variant = m.variant(p)
     f = model(m, variant)
     pv = np.array([p[n] for n in m.names], dtype=float)
-    return m, p, variant, f, pv, stationary_points(f, pv)
+    return Prepared(m, p, variant, f, pv, stationary_points(f, pv))
 
 
 def slider_extremes(

@@ -10,10 +10,8 @@ import numpy as np
 
 from ..errors import InvalidDesign
 from ..load import Load
-from ..mechanisms import Mechanism
 from . import loads, quality
-from .kinematics import prepared, slider_extremes, upright
-from .model import Model
+from .kinematics import Prepared, prepared, slider_extremes, upright
 
 
 def motion_terms(
@@ -22,8 +20,8 @@ def motion_terms(
     """The values whose maxima are the motion measures (``quality.MotionTerms``), with their
     derivatives in the parameters when ``gradient``, for an optimiser that bounds each;
     raises SynthError for a design that does not run."""
-    m, variant, f, pv, st = _running(mechanism, params)
-    return quality.motion_terms(m, variant, f, pv, st, gradient)
+    d, st = _running(mechanism, params)
+    return quality.motion_terms(d.mechanism, d.variant, d.model, d.pv, st, gradient)
 
 
 def peak_torque_terms(
@@ -32,31 +30,32 @@ def peak_torque_terms(
     """The values whose largest is the peak crank torque under ``load`` (the lengths
     ``metres`` each), and their derivatives in the parameters (``loads.peak_terms``), for an
     optimiser that bounds each; raises SynthError for a design that does not run."""
-    m, variant, f, pv, st = _running(mechanism, params)
-    return loads.peak_terms(m, variant, f, pv, st, upright(m, variant, pv, st, load), metres)
+    d, st = _running(mechanism, params)
+    m, variant, pv = d.mechanism, d.variant, d.pv
+    return loads.peak_terms(m, variant, d.model, pv, st, upright(m, variant, pv, st, load), metres)
 
 
-def _running(
-    mechanism: str, params: Mapping[str, float]
-) -> tuple[Mechanism, frozenset[str], Model, np.ndarray, quality.Strokes]:
-    """A design's type, variant, model, parameters and strokes; raises InvalidDesign where its
-    slider does not run one working and one return stroke."""
-    m, _, variant, f, pv, (rows, theta, values) = prepared(mechanism, params)
+def _running(mechanism: str, params: Mapping[str, float]) -> tuple[Prepared, quality.Strokes]:
+    """A design prepared, and its strokes; raises InvalidDesign where its slider does not run
+    one working and one return stroke."""
+    d = prepared(mechanism, params)
+    rows, theta, values = d.points
     if np.count_nonzero(rows == 0) != 2:
         msg = "the slider does not run one working and one return stroke"
         raise InvalidDesign(msg, (), "stroke")
     st = quality.Strokes(*slider_extremes(rows, theta, values))
     if st.stroke == 0:  # a design at the edge of running: its extremes coincide
         raise InvalidDesign("the slider does not move: its stroke is 0", (), "stroke")
-    return m, variant, f, pv, st
+    return d, st
 
 
 def worst_transmission(mechanism: str, params: Mapping[str, float]) -> tuple[float, ...]:
     """Each transmission joint's crank angle (radians) where its |cos μ| is largest, in the
     type's order; raises SynthError for a design that does not run."""
-    _, _, _, f, _, (rows, theta, values) = prepared(mechanism, params)
+    d = prepared(mechanism, params)
+    rows, theta, values = d.points
     out = []
-    for j in range(1, len(f.names) + 1):
+    for j in range(1, len(d.model.names) + 1):
         k = np.nonzero(rows == j)[0]
         out.append(float(theta[k[np.argmax(np.abs(values[k]))]]) if k.size else 0.0)
     return tuple(out)

@@ -1,7 +1,7 @@
 """The mechanism types and what they share.
 
 - ``registry``: the record of a type (``Mechanism``, its ``Parameter``s and ``Condition``s) and
-  ``register``, which adds one.
+  ``register``, which adds one; ``facts``: a type's closed forms at a design (``Facts``).
 - ``types``: the six types, one module each; every module of that package registers one.
 - ``geometry``: polymorphic planar geometry (floats and CasADi symbols alike).
 - ``reduced``: the contract of a type's exact reduced solver (``Problem`` in, ``Reduced`` out)
@@ -16,6 +16,7 @@ import importlib
 import pkgutil
 
 from . import types
+from .facts import Facts
 from .registry import Condition, Mechanism, Parameter, Scale, all_types, get, register
 
 # the listing's order (and a default request's): these as the contract has them, then any
@@ -32,4 +33,4 @@ _modules = [m.name for m in pkgutil.iter_modules(types.__path__) if not m.name.s
 for _name in sorted(_modules, key=lambda n: (FIRST.index(n) if n in FIRST else len(FIRST), n)):
     importlib.import_module(f"{types.__name__}.{_name}")
 
-__all__ = ["Condition", "Mechanism", "Parameter", "Scale", "all_types", "get", "register"]
+__all__ = ["Condition", "Facts", "Mechanism", "Parameter", "Scale", "all_types", "get", "register"]

@@ -19,15 +19,18 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import Unreachable
 from ..numerics import ROUNDING
 from ..results import TOL
 from ..targets import time_ratio
 
+if TYPE_CHECKING:
+    from .facts import Facts
+
 STRICT = 1e-7  # the margin kept by a strict condition, in stroke units (the NLP's too)
-# the cos margin kept from the one-way limit (facts' "one_way"): at the limit the slider dwells
+# the cos margin kept from the one-way limit (``Facts.one_way``): at the limit the slider dwells
 # at its dead centre, a multiple root that the analysis locates only to ~1e-6 in the time
 # ratio; the error falls as 1/margin (worst of 300 designs: 3e-12 at 1e-4, 2e-13 at 1e-3)
 ONE_WAY = 1e-3
@@ -121,16 +124,14 @@ def unreachable(what: str) -> Unreachable:
     return Unreachable("FIXED_PARTS_CONTRADICT_TARGETS", what)
 
 
-def judge(
-    p: Problem, facts: Callable[[dict[str, Any]], dict[str, Any]], design: dict[str, float]
-) -> None:
+def judge(p: Problem, facts: Callable[[dict[str, Any]], Facts], design: dict[str, float]) -> None:
     """Raise when fixed parts that over-determine a design (more fixed than the targets leave
     free) miss the targets: by the type's closed forms, to the verification's tolerance."""
     f = facts(design)
-    beta = abs(float(f["beta"]))
+    beta = abs(float(f.beta))
     got = {
         "time ratio": (time_ratio(beta), p.ratio),
-        "stroke": (float(f["stroke"]) * p.stroke, p.stroke),
+        "stroke": (float(f.stroke) * p.stroke, p.stroke),
     }
     missed = [
         "{} {}, not {}".format(what, *differ(value, want))

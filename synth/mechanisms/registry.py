@@ -17,6 +17,7 @@ from ..errors import InvalidDesign, InvalidParameters, UnknownMechanism
 from ..numerics import ROUNDING
 
 if TYPE_CHECKING:
+    from .facts import Facts
     from .reduced import Problem, Reduced, Space
 
 Params = Mapping[str, Any]  # parameter name -> float, DM, SX or MX
@@ -131,13 +132,8 @@ class Mechanism:
     defaults: Callable[[Params], dict[str, Any]] = lambda p: {}  # derived defaults (polymorphic)
     # the four-bar's (ground, crank, coupler, rocker), for its Grashof class
     fourbar: Callable[[Params], tuple[Any, Any, Any, Any]] | None = None
-    # the closed forms: "beta", the crank angle by which the strokes differ from
-    # π (the slow one takes π + |β|, the quick one π − |β|: TR = (π + |β|)/(π − |β|); the sign
-    # follows the circuit's orientation), "stroke" and "transmission_cos" (the signed cos μ
-    # terms whose largest |·| is the worst transmission; empty for slot drives) and, where a
-    # rod follows a swinging pin, "one_way" (cos margins ≥ 0 for the slider to move one way
-    # over each swing: the closed forms hold only then; a design that breaks them still runs)
-    facts: Callable[[Params], dict[str, Any]] | None = None
+    # the closed forms (``Facts``: β, the stroke, the transmission cosines, the one-way margins)
+    facts: Callable[[Params], Facts] | None = None
     # the exact reduced solver (an accelerator, synth.mechanisms.reduced): Problem -> Reduced,
     # None where it cannot take the problem (IPOPT on the formulation then solves it); raises
     # Unreachable for fixed parts that contradict the targets

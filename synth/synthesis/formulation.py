@@ -119,8 +119,8 @@ def formulate(
     dead: list[ca.SX] = []  # the dead centres' second-order rows (kinematics alone), ≥ 0
     if m.facts is not None:
         facts = m.facts(p)
-        beta, stroke, cosines = facts["beta"], facts["stroke"], list(facts["transmission_cos"])
-        one_way = facts.get("one_way", ())
+        beta, stroke, cosines = facts.beta, facts.stroke, list(facts.transmission_cos)
+        one_way = facts.one_way
     else:
         th, ta, delta = ca.SX.sym("th"), ca.SX.sym("theta_a"), ca.SX.sym("delta")
         extra, extra_lb, extra_ub = [ta, delta], [-ca.inf, 0.0], [ca.inf, 2 * ca.pi]

@@ -224,13 +224,13 @@ def predict(m: Mechanism, params: dict[str, float]) -> tuple[float, float, float
             return None
         return a.time_ratio, a.stroke, a.transmission.min_deg, m.size(p)
     f = m.facts(p)
-    if any(float(t) < -ROUNDING for t in f.get("one_way", ())):
+    if any(float(t) < -ROUNDING for t in f.one_way):
         return None  # the slider turns back within a swing: the closed forms do not hold
-    beta = abs(float(f["beta"]))
-    cos = [abs(float(c)) for c in f["transmission_cos"]]
+    beta = abs(float(f.beta))
+    cos = [abs(float(c)) for c in f.transmission_cos]
     angle = targets.transmission_deg(max(cos)) if cos else 90.0
     size = m.size(p)
-    return targets.time_ratio(beta), float(f["stroke"]), angle, size
+    return targets.time_ratio(beta), float(f.stroke), angle, size
 
 
 def proposal(

@@ -54,8 +54,8 @@ def test_same_code_on_floats_sx_and_mx(mtype):
         if m.facts is None:  # closed forms are optional
             continue
         facts = m.facts(full)
-        assert all(math.isfinite(float(v)) for v in facts["transmission_cos"])
-        assert abs(float(facts["beta"])) < math.pi and float(facts["stroke"]) > 0
+        assert all(math.isfinite(float(v)) for v in facts.transmission_cos)
+        assert abs(float(facts.beta)) < math.pi and float(facts.stroke) > 0
 
 
 def test_curves_only_where_asked():

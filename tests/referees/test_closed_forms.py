@@ -23,12 +23,12 @@ def test_closed_forms_match_root_found_extremes(mtype):
     for p in random_designs(mtype, N, seed=1):
         a = synth.analyze(mtype, p)
         facts = m.facts(a.params)
-        beta = abs(float(facts["beta"]))
+        beta = abs(float(facts.beta))
         assert a.time_ratio == pytest.approx((math.pi + beta) / (math.pi - beta), rel=1e-9), p
-        assert a.stroke == pytest.approx(float(facts["stroke"]), rel=1e-9), p
-        worst = max((abs(float(c)) for c in facts["transmission_cos"]), default=0.0)
+        assert a.stroke == pytest.approx(float(facts.stroke), rel=1e-9), p
+        worst = max((abs(float(c)) for c in facts.transmission_cos), default=0.0)
         assert a.transmission.min_deg == pytest.approx(math.degrees(math.acos(worst)), abs=1e-7), p
-        if "theta2a" in facts:  # Podhorodeski et al. (2005) eq. (3a): TDC, the piston farthest out
+        if facts.crank_at_max is not None:  # Podhorodeski et al. (2005) eq. (3a): TDC, θ2a
             assert math.radians(a.extremes["max"].crank_angle_deg) == pytest.approx(
-                float(facts["theta2a"]), abs=1e-9
+                float(facts.crank_at_max), abs=1e-9
             )

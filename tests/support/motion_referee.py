@@ -98,7 +98,7 @@ def search(
                 params, violation = design(z)
                 if not np.isfinite(violation) or violation > 0:
                     return PENALTY + min(violation, 1e6) if np.isfinite(violation) else 2 * PENALTY
-                one_way = m.facts(m.complete(params)).get("one_way", ())
+                one_way = m.facts(m.complete(params)).one_way
                 short = sum(max(ONE_WAY - float(x), 0.0) for x in one_way)
                 if short > 0:
                     return PENALTY + short

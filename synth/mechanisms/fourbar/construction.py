@@ -40,7 +40,7 @@ import math
 import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import Any, NamedTuple, cast
 
 import casadi as ca
 import numpy as np
@@ -97,6 +97,50 @@ class Roles:
     rod: str
     height: str | None  # the slider path's placement (crank-rocker), None: on the ground line
     swings: bool  # the arm swings with the rocker (stroke 2 r5 sin(ψ/2)); else stroke 2 r5
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """The designs at points (ψ, λ) of sheet ``sigma``, the rows (``ROWS``) by name: arrays
+    (``Construction.evaluate``; a point that is no design is NaN or False) or one point's
+    numbers (``Construction.design``; valid and feasible 1 or 0). ``valid``: a design;
+    ``feasible``: within the bounds; ``f``: the coupler's worst cos; ``k``: the four-bar's
+    scale; ``rho``: its links at scale 1, the crank-rocker's order; ``r5``: the arm; the rod's
+    length, its path's placement and its worst cos; ``slack``: the log distance from a link's
+    bound; ``at``: the point (ψ, u) a search found the design at (None: none did)."""
+
+    valid: Any
+    feasible: Any
+    f: Any
+    size: Any
+    k: Any
+    rho: tuple[Any, Any, Any, Any]
+    r5: Any
+    rod_length: Any
+    height: Any
+    rod_cos: Any
+    slack: Any
+    sigma: int
+    at: Any = None
+
+    def measure(self, key: str) -> Any:
+        """What a search minimises, by its name: "f" (the coupler's worst cos) or "size"."""
+        return self.f if key == "f" else self.size
+
+
+class Design(NamedTuple):
+    """A design's parameters and its evaluation."""
+
+    params: dict[str, float]
+    evaluation: Evaluation
+
+
+def _evaluation(rows: Sequence[Any], sigma: int, at: Any = None) -> Evaluation:
+    """The record of ``ROWS``' values."""
+    valid, feasible, f, size, k, a2, a3, a4, r5, l, h, rod_cos, slack = rows
+    return Evaluation(
+        valid, feasible, f, size, k, (1.0, a2, a3, a4), r5, l, h, rod_cos, slack, sigma, at
+    )
 
 
 def rows(psi: Any, lam: Any, p: Any, ops: Ops = CASADI) -> tuple[Any, ...]:
@@ -213,7 +257,11 @@ class Construction:
         # the ratios the fixed links impose, log(ρ_i/ρ_j) = c: each after the first against it
         first = self.fixed_links[0] if self.fixed_links else None
         self.ratios = [
-            (roles.links.index(n), self.set_by, math.log(p.fixed[n] / p.fixed[cast(str, first)]))
+            (
+                roles.links.index(n),
+                cast(int, self.set_by),
+                math.log(p.fixed[n] / p.fixed[cast(str, first)]),
+            )
             for n in self.fixed_links[1:]
         ]
         lo, hi = p.box(roles.arm)
@@ -229,29 +277,22 @@ class Construction:
             self.empty = roles.arm not in p.fixed and not lo <= 0.5 <= hi
             self.psi = (1e-9, math.pi - 1e-9)
 
-    def evaluate(self, sigma: int, psi: Any, lam: Any) -> dict[str, Any]:
-        """The designs at (ψ, λ), arrays broadcast together: valid, feasible (within the
-        bounds), f (the coupler's worst cos), size, k (the four-bar's scale), ρ (its links at
-        scale 1, the crank-rocker's order), r5, l, h and the rod's worst cos; a point that is
-        no design is NaN or False."""
+    def evaluate(self, sigma: int, psi: Any, lam: Any) -> Evaluation:
+        """The designs at (ψ, λ), arrays broadcast together."""
         psi, lam = np.asarray(psi, dtype=float), np.asarray(lam, dtype=float)
         shape = np.broadcast_shapes(psi.shape, lam.shape)
-        e: dict[str, Any]
+        e: list[Any]
         if math.prod(shape) >= WHOLE:
             with np.errstate(all="ignore"):
                 grid = rows(psi, lam, self._params(sigma), NUMPY)
-            e = {
-                n: r if np.shape(r) == shape else np.broadcast_to(r, shape)
-                for n, r in zip(ROWS, grid, strict=True)
-            }
+            e = [r if np.shape(r) == shape else np.broadcast_to(r, shape) for r in grid]
         else:
             if psi.shape != shape or lam.shape != shape or psi.ndim != 1:
                 psi, lam = (np.broadcast_to(a, shape).ravel() for a in (psi, lam))
             values = construction().points((psi, lam), self._params(sigma))
-            e = dict(zip(ROWS, values.reshape(len(ROWS), *shape), strict=True))
-        e["valid"], e["feasible"] = e["valid"] > 0, e["feasible"] > 0
-        e["rho"] = (1.0, e.pop("a2"), e.pop("a3"), e.pop("a4"))
-        return e
+            e = list(values.reshape(len(ROWS), *shape))
+        e[0], e[1] = e[0] > 0, e[1] > 0  # valid, feasible
+        return _evaluation(e, sigma)
 
     def _params(self, sigma: int) -> list[float]:
         """The compiled function's parameters (``PARAMS``) for sheet σ, kept per sheet, bounds
@@ -282,20 +323,24 @@ class Construction:
             *the_rod,
         ]
 
-    def design(self, sigma: int, psi: float, lam: float) -> tuple[dict[str, float], dict[str, Any]]:
-        """The design at one point, and its evaluation (numbers; valid and feasible 1 or 0)."""
+    def design(self, sigma: int, psi: float, lam: float, at: Any = None) -> Design:
+        """The design at one point, and its evaluation; ``at``: the point (ψ, u) a search
+        found it at."""
         values = construction().points.one((psi, lam), self._params(sigma))
-        one: dict[str, Any] = dict(zip(ROWS, values, strict=True))
-        one["rho"] = [1.0, one.pop("a2"), one.pop("a3"), one.pop("a4")]
+        one = _evaluation(values, sigma, at)
         r = self.r
-        out = {n: one["k"] * x for n, x in zip(r.links, one["rho"], strict=True)}
-        out[r.arm] = one["r5"]
+        out = {n: one.k * x for n, x in zip(r.links, one.rho, strict=True)}
+        out[r.arm] = one.r5
         if self.rod:
-            out[r.rod] = one["l"]
+            out[r.rod] = one.rod_length
             if r.height:
-                out[r.height] = one["h"]
-        return {**out, **self.p.fixed}, one
+                out[r.height] = one.height
+        return Design({**out, **self.p.fixed}, one)
 
-    def residuals(self, e: dict[str, Any]) -> list[np.ndarray]:
+    def found(self, sigma: int, x: Any) -> Design:
+        """The design a search found at x = (ψ, u), λ = 1 + e^u."""
+        return self.design(sigma, x[0], 1 + math.exp(x[1]), x)
+
+    def residuals(self, e: Evaluation) -> list[np.ndarray]:
         """log(ρ_i/ρ_j) − c for each ratio held."""
-        return [np.log(e["rho"][i] / e["rho"][j]) - c for i, j, c in self.ratios]
+        return [np.log(e.rho[i] / e.rho[j]) - c for i, j, c in self.ratios]

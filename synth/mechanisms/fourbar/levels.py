@@ -21,7 +21,7 @@ import numpy as np
 
 from ...numerics import ROUNDING
 from .. import rod
-from .construction import AT, BOUND_TOL, TAYLOR
+from .construction import AT, BOUND_TOL, TAYLOR, Evaluation
 from .search import GRID, Search
 
 NEAR_BETA = 13  # swings added about a small β
@@ -109,10 +109,10 @@ def _logs(*links: tuple[int, float]) -> tuple[tuple[int, float], ...]:
     return tuple((ROW["log_a2"] + m - 1, w) for m, w in links if m > 0)
 
 
-def rows_of(e: dict[str, Any]) -> list[Any]:
+def rows_of(e: Evaluation) -> list[Any]:
     """``TAYLOR``'s rows from an evaluation (``Construction.evaluate`` or ``design``)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        return [e["f"], e["size"], *(np.log(np.asarray(r, dtype=float)) for r in e["rho"][1:])]
+        return [e.f, e.size, *(np.log(np.asarray(r, dtype=float)) for r in e.rho[1:])]
 
 
 def walls(s: Search) -> list[float]:

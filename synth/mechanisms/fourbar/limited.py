@@ -30,8 +30,9 @@ import numpy as np
 from ...numerics.ops import NUMPY
 from .. import rod
 from ..reduced import Reduced
+from .construction import Design
 from .levels import levels, swings
-from .search import GRID, U_HI, U_LO, Design, Search
+from .search import GRID, U_HI, U_LO, Search
 from .strata import Strata, minima
 
 # a solver's least f or size over every stratum (``FourBar.stratified``)
@@ -55,14 +56,15 @@ def limited(fb: Search, stratified: Stratified, coupler: Design, exact: bool) ->
 
     def line(psi: float) -> tuple[float, Design | None, bool]:
         found, ok = stratified("f", psi=psi)
-        return (found[0][1]["f"], found[0], ok) if found else (math.inf, None, ok)
+        return (found[0].evaluation.f, found[0], ok) if found else (math.inf, None, ok)
 
     found, sure = stratified("f")
     sure = sure and exact
     options: list[tuple[float, float, Design | None]] = []  # (T, ψ, design or None: R's)
-    for d, e in found:  # the coupler's optima where the rod keeps up
-        if best_rod(e["at"][0]) <= e["f"]:
-            options.append((float(e["f"]), float(e["at"][0]), (d, e)))
+    for de in found:  # the coupler's optima where the rod keeps up
+        e = de.evaluation
+        if best_rod(e.at[0]) <= e.f:
+            options.append((float(e.f), float(e.at[0]), de))
             break
     rows = swings(lo, hi, fb.p.beta) if lo < hi else np.array([lo])
     r_rows = best_rod(rows)
@@ -94,14 +96,14 @@ def limited(fb: Search, stratified: Stratified, coupler: Design, exact: bool) ->
             sure = sure and ok
             options.append((max(f_e, float(best_rod(edge))), edge, at))
     if not options:
-        return Reduced([coupler[0]], exact=False)
+        return Reduced([coupler.params], exact=False)
     t, psi, best = min(options, key=lambda o: (o[0], o[2] is not None))
     if best is None:  # R decides and every coupler with f ≤ R ties: the smallest
         got, ok = stratified("size", cos_bound=t, psi=psi)
         if not got:
-            return Reduced([coupler[0]], exact=False)
+            return Reduced([coupler.params], exact=False)
         best, sure = got[0], sure and ok
-    return Reduced([best[0]], exact=sure)
+    return Reduced([best.params], exact=sure)
 
 
 def _coupler_rows(fb: Search, rows: np.ndarray) -> np.ndarray:
@@ -113,7 +115,7 @@ def _coupler_rows(fb: Search, rows: np.ndarray) -> np.ndarray:
         st = Strata(fb, sigma, "f", bounds)
         e = fb.evaluate(sigma, rows[:, None], 1 + np.exp(u))
         ok = st.feasible_grid(e)
-        out = np.minimum(out, np.min(np.where(ok, e["f"], np.inf), axis=1))
+        out = np.minimum(out, np.min(np.where(ok, e.f, np.inf), axis=1))
     return out
 
 

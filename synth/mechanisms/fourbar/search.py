@@ -13,7 +13,7 @@ import numpy as np
 
 from ...numerics import ROUNDING
 from ...numerics.dense import Taylor, differences, newton
-from .construction import AT, Construction, construction
+from .construction import AT, Construction, Design, Evaluation, construction
 
 U_LO, U_HI = -9.0, 6.0  # λ = 1 + e^u: couplers from 1.0001 to 400 cranks
 GRID = 48
@@ -27,14 +27,11 @@ SHORTCUT = 6
 SLACK = 1e-6  # a design closer to a link's bound than this (log of the scale's range) may be
 # held by that bound, which the Newton steps do not model: IPOPT polishes it
 
-# a design and its evaluation (``Construction.design``)
-Design = tuple[dict[str, float], dict[str, Any]]
-
 
 class Search(Construction):
     """The local optima of one variant of a four-bar type on its construction."""
 
-    missed: dict[str, Any] | None = None  # where Newton last ended beyond, or near, a link's bound
+    missed: Evaluation | None = None  # where Newton last ended beyond, or near, a link's bound
 
     def optimum(
         self,
@@ -60,10 +57,8 @@ class Search(Construction):
         if hinted is not None:
             return [hinted], True
         starts = self._starts(sigma, psi, u, objective, cos_bound, limits)
-        ok = "feasible" if limits else "valid"
         found: list[Design]
         found, exact = [], bool(starts)  # no start is no proof: a link's bound may cut it off
-        key = "f" if objective == "f" else "size"
         points = len(self.ratios) >= (1 if psi_fixed is not None else 2)  # roots, not optima
         roots, least, doubts = 0, math.inf, []
         for x0, value, optional, floor in starts:
@@ -71,32 +66,32 @@ class Search(Construction):
             if x is None and optional:
                 continue  # a near-crossing of two curves that is no intersection
             roots += x is not None
-            at = x0 if x is None else x
-            d, e = self.design(sigma, at[0], 1 + math.exp(at[1]))
-            e["at"] = at
-            within = objective == "f" or e["f"] <= cos_bound * (1 + ROUNDING)
+            de = self.found(sigma, x0 if x is None else x)
+            e = de.evaluation
+            ok = e.feasible if limits else e.valid
+            within = objective == "f" or e.f <= cos_bound * (1 + ROUNDING)
             if optional:
-                same = any(np.allclose(at, f[1]["at"], atol=1e-8) for f in found)
-                if e[ok] and within and not same:
-                    found.append((d, e))
+                same = any(np.allclose(e.at, f.evaluation.at, atol=1e-8) for f in found)
+                if ok and within and not same:
+                    found.append(de)
                 continue
-            if x is None or not (e[ok] and within) or (limits and e["slack"] <= SLACK):
+            if x is None or not (ok and within) or (limits and e.slack <= SLACK):
                 doubts.append(floor)  # the start is a warm start for IPOPT, if it is a design
-                self.missed = e if e["valid"] else None
-                d, e = self.design(sigma, x0[0], 1 + math.exp(x0[1]))
-                e["at"] = x0
-                if e[ok]:
-                    found.append((d, e))
+                self.missed = e if e.valid else None
+                de = self.found(sigma, x0)
+                if de.evaluation.feasible if limits else de.evaluation.valid:
+                    found.append(de)
                 continue
-            if not self.ratios and e[key] > value + 1e-9 * abs(value):
-                exact = False  # Newton found a worse stationary point than its start: its
-                self.missed = self.design(sigma, x0[0], 1 + math.exp(x0[1]))[1]  # best is held?
-            least = min(least, e[key])
-            found.append((d, e))
+            if not self.ratios and e.measure(objective) > value + 1e-9 * abs(value):
+                # Newton found a worse stationary point than its start: its best is held?
+                exact = False
+                self.missed = self.design(sigma, x0[0], 1 + math.exp(x0[1])).evaluation
+            least = min(least, e.measure(objective))
+            found.append(de)
         # a start Newton failed from is no doubt if nothing near it can beat the best found
         if any(floor <= least + 1e-9 * abs(least) for floor in doubts):
             exact = False
-        found.sort(key=lambda de: de[1][key])
+        found.sort(key=lambda de: de.evaluation.measure(objective))
         if points and starts and not roots:
             exact = False  # crossings, but no intersection found: perhaps a tangency
         return (found if points else found[:1]), exact
@@ -115,10 +110,10 @@ class Search(Construction):
         x = self._newton(sigma, x0, objective, self.p.cos_bound, psi_fixed, shortcut=True)
         if x is None:
             return None
-        d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
-        e["at"] = x
-        ok = e["feasible"] and e["f"] <= self.p.cos_bound * (1 + ROUNDING) and e["slack"] > SLACK
-        return (d, e) if ok else None
+        de = self.found(sigma, x)
+        e = de.evaluation
+        ok = e.feasible and e.f <= self.p.cos_bound * (1 + ROUNDING) and e.slack > SLACK
+        return de if ok else None
 
     def _starts(
         self,
@@ -137,11 +132,11 @@ class Search(Construction):
         and, for the size, every place the curve crosses the bound (the bound may bind at
         any of them); with two ratios, or one and ψ held, every crossing of both."""
         e = self.evaluate(sigma, psi, 1 + np.exp(u))
-        value = e["f"] if objective == "f" else e["size"]
-        ok = e["feasible" if limits else "valid"] & ((objective == "f") | (e["f"] <= cos_bound))
+        value = e.measure(objective)
+        ok = (e.feasible if limits else e.valid) & ((objective == "f") | (e.f <= cos_bound))
         if not self.ratios:
             if objective == "size" and psi.size > 1:  # a front's later bounds may use it
-                floor = np.min(np.where(e["valid"], e["f"], np.inf))
+                floor = np.min(np.where(e.valid, e.f, np.inf))
                 self.__dict__.setdefault("floors", {})[sigma] = float(floor)
             if not np.any(ok):
                 return []
@@ -150,22 +145,22 @@ class Search(Construction):
             return [(start, float(value[i, j]), False, -math.inf)]
         pts = np.stack(np.broadcast_arrays(psi, u), axis=-1)  # (rows, cols, 2)
         res = self.residuals(e)
-        x = _crossings(res[0], e["valid"], pts)
+        x = _crossings(res[0], e.valid, pts)
         if len(x) == 0:
             return []
         if psi.size == 1:
             return [(y, math.nan, True, -math.inf) for y in x]
         if len(self.ratios) == 2:
-            meet = _meet(x, _crossings(res[1], e["valid"], pts))
+            meet = _meet(x, _crossings(res[1], e.valid, pts))
             return [(y, math.nan, True, -math.inf) for y in meet]
         ev = self.evaluate(sigma, x[:, 0], 1 + np.exp(x[:, 1]))
-        v = ev["f"] if objective == "f" else ev["size"]
-        good = ev["feasible"] & ((objective == "f") | (ev["f"] <= cos_bound))
+        v = ev.measure(objective)
+        good = ev.feasible & ((objective == "f") | (ev.f <= cos_bound))
         cell = np.array([np.ptp(psi) / (GRID - 1), STEP])
         least, floors = _least(x, v, good, cell)
         out = [(x[k], float(v[k]), False, fl) for k, fl in zip(least, floors, strict=True)]
         if objective == "size":
-            bound = _crossings(e["f"] - cos_bound, e["valid"], pts)
+            bound = _crossings(e.f - cos_bound, e.valid, pts)
             out += [(y, math.nan, True, -math.inf) for y in _meet(x, bound)]
         return out
 
@@ -222,9 +217,9 @@ class Search(Construction):
             x = y if psi is None else np.array([psi, y[0]])
             if not both:
                 return x
-            _, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
-            if e["f"] <= cos_bound * (1 + ROUNDING) and (best is None or e["size"] < best[0]):
-                best = e["size"], x
+            e = self.design(sigma, x[0], 1 + math.exp(x[1])).evaluation
+            if e.f <= cos_bound * (1 + ROUNDING) and (best is None or e.size < best[0]):
+                best = e.size, x
         return None if best is None else best[1]
 
     def _rows(
@@ -244,11 +239,11 @@ class Search(Construction):
         def rows(x: np.ndarray) -> np.ndarray:
             ps = x[:, 0] if psi_fixed is None else np.full(len(x), psi_fixed)
             e = self.evaluate(sigma, ps, 1 + np.exp(np.minimum(x[:, -1], 50.0)))
-            out = [e["f"] if objective == "f" else e["size"], *self.residuals(e)]
+            out = [e.measure(objective), *self.residuals(e)]
             if bound_active:
-                out.append(e["f"] - cos_bound)
+                out.append(e.f - cos_bound)
             # Newton may cross a bound on its way: only a design that cannot run stops it
-            return np.where(e["valid"] & np.isfinite(e["size"]), np.array(out), np.nan)
+            return np.where(e.valid & np.isfinite(e.size), np.array(out), np.nan)
 
         return differences(rows, 1 if psi_fixed is not None else 2)
 

@@ -34,10 +34,10 @@ from ...numerics.dense import Taylor, newton, solve
 from ...targets import MAX_TRANSMISSION, MIN_SIZE
 from ..reduced import Reduced, clip
 from . import strata
-from .construction import Roles
+from .construction import Design, Evaluation, Roles
 from .levels import levels
 from .limited import limited
-from .search import CONTINUE, GRID, NEAR, SHORTCUT, SLACK, U_HI, U_LO, Design, Search
+from .search import CONTINUE, GRID, NEAR, SHORTCUT, SLACK, U_HI, U_LO, Search
 from .strata import Strata
 
 __all__ = ["FourBar", "Roles"]
@@ -78,10 +78,10 @@ class FourBar(Search):
         if not found:
             return Reduced([], exact=exact)
         d, e = found
-        if e["rod_cos"] > e["f"] * (1 + ROUNDING):
+        if e.rod_cos > e.f * (1 + ROUNDING):
             if self.r.swings:  # the rod's angle depends on the swing
                 return limited(self, self.stratified, found, exact)
-            return self.smallest(e["rod_cos"], d)
+            return self.smallest(e.rod_cos, d)
         return Reduced([d], exact=exact)
 
     def coupler_optimum(self) -> tuple[Design | None, bool]:
@@ -91,10 +91,9 @@ class FourBar(Search):
         if self.set_by is not None or self.every:
             if psi == beta and beta > 0 and not self.ratios:  # the best of all, if it is allowed
                 lam = math.sqrt(1 + 1 / math.sin(beta / 2))
-                d, e = self.design(1, psi, lam)
-                if e["feasible"]:
-                    e["at"], e["sigma"] = np.array([psi, math.log(lam - 1)]), 1
-                    return (d, e), True
+                de = self.design(1, psi, lam, np.array([psi, math.log(lam - 1)]))
+                if de.evaluation.feasible:
+                    return de, True
             found, exact = self.stratified("f")
             return (found[0] if found else None), exact
         if self.ratios or psi != beta or beta == 0:
@@ -102,17 +101,18 @@ class FourBar(Search):
             found, exact = self.optimum(1, "f", psi_fixed=None if ratios else psi, limits=ratios)
             if not found:
                 return None, False
-            d, e = found[0]
-            exact = exact and bool(e["feasible"]) and e["slack"] > SLACK
+            de = found[0]
+            exact = exact and bool(de.evaluation.feasible) and de.evaluation.slack > SLACK
         else:
-            d, e = self.design(1, psi, math.sqrt(1 + 1 / math.sin(beta / 2)))
-            exact = bool(e["feasible"]) and e["slack"] > SLACK
-        if not e["feasible"] and e["valid"] and not self.ratios:
+            de = self.design(1, psi, math.sqrt(1 + 1 / math.sin(beta / 2)))
+            exact = bool(de.evaluation.feasible) and de.evaluation.slack > SLACK
+        e = de.evaluation
+        if not e.feasible and e.valid and not self.ratios:
             return self.bounded(e)
-        return (d, e), exact
+        return de, exact
 
     def bounded(
-        self, e: dict[str, Any], objective: str = "f", cos_bound: float = 1.0
+        self, e: Evaluation, objective: str = "f", cos_bound: float = 1.0
     ) -> tuple[Design | None, bool]:
         """The optimum where the links' bounds cut it off (``e``: the design beyond them): the
         best of the curves where one pair of links beyond them is held at their bounds'
@@ -122,8 +122,8 @@ class FourBar(Search):
         feasible point of the grid beats it."""
         pairs = self._beyond(e)[:3]
         queue = [[ij] for ij in pairs] + ([pairs[:2]] if len(pairs) > 1 else [])
-        key = "f" if objective == "f" else "size"
-        best, exact = None, False
+        best: Design | None = None
+        exact = False
         for held in queue:
             if len(held) > 1 and best is not None and exact:
                 break  # one pair's optimum within every bound: no corner is needed
@@ -131,24 +131,27 @@ class FourBar(Search):
             found, ok = holding.optimum(1, objective, cos_bound)
             if not found:
                 continue
-            psi, u = found[0][1]["at"]
-            d, e = self.design(1, psi, 1 + math.exp(u))  # judged by every bound again
-            within = objective == "f" or e["f"] <= cos_bound * (1 + ROUNDING)
-            if e["feasible"] and within and (best is None or e[key] < best[1][key]):
-                best = d, e
+            psi, u = found[0].evaluation.at
+            de = self.design(1, psi, 1 + math.exp(u))  # judged by every bound again
+            e = de.evaluation
+            within = objective == "f" or e.f <= cos_bound * (1 + ROUNDING)
+            value = e.measure(objective)
+            better = best is None or value < best.evaluation.measure(objective)
+            if e.feasible and within and better:
+                best = de
                 corner = len(held) > 1
-                beaten = corner and e[key] > self.grid_best(key, cos_bound) + 1e-12
+                beaten = corner and value > self.grid_best(objective, cos_bound) + 1e-12
                 exact = ok and not beaten
-            beyond = e if not e["feasible"] else holding.missed if not ok else None
-            if len(held) == 1 and beyond is not None and beyond["valid"]:
+            beyond = e if not e.feasible else holding.missed if not ok else None
+            if len(held) == 1 and beyond is not None and beyond.valid:
                 more = [[*held, ij] for ij in self._beyond(beyond) if ij != held[0]][:1]
                 queue += [c for c in more if c not in queue]
         return best, exact
 
-    def _beyond(self, e: dict[str, Any]) -> list[tuple[int, int]]:
+    def _beyond(self, e: Evaluation) -> list[tuple[int, int]]:
         """The pairs (i, j) of links of ``e``'s design, i too long against j by their bounds
         (or nearly), the worst first."""
-        rho = np.array(e["rho"])
+        rho = np.array(e.rho)
         with np.errstate(divide="ignore"):  # a held pair's links: no bound (0, ∞)
             long, short = np.log(rho / self.hi), np.log(rho / self.lo)
         excess = long[:, None] - short[None, :]
@@ -170,11 +173,12 @@ class FourBar(Search):
         return held
 
     def grid_best(self, key: str, cos_bound: float = 1.0) -> float:
-        """The least ``key`` over the feasible points of the grid (cos μ ≤ ``cos_bound``)."""
+        """The least ``key`` ("f" or "size") over the feasible points of the grid (cos μ ≤
+        ``cos_bound``)."""
         psi = np.linspace(*self.psi, GRID)[:, None]
         e = self.evaluate(1, psi, 1 + np.exp(np.linspace(U_LO, U_HI, GRID))[None, :])
-        ok = e["feasible"] & (e["f"] <= cos_bound)
-        return float(np.min(np.where(ok, e[key], np.inf)))
+        ok = e.feasible & (e.f <= cos_bound)
+        return float(np.min(np.where(ok, e.measure(key), np.inf)))
 
     def smallest(self, cos_bound: float, start: dict[str, float] | None = None) -> Reduced:
         """The smallest design with the coupler's worst cos ≤ ``cos_bound``, the better of
@@ -197,11 +201,11 @@ class FourBar(Search):
             alone = copy.copy(self)
             alone.rod = False
             coupler, exact = alone.coupler_optimum()
-            if exact and coupler and coupler[1]["f"] > cos_bound * (1 + ROUNDING):
+            if exact and coupler and coupler.evaluation.f > cos_bound * (1 + ROUNDING):
                 return Reduced([])
             if self.rod:  # the start IPOPT gets has the rod
                 coupler, _ = self.coupler_optimum()
-            best = [coupler[0]] if coupler else []
+            best = [coupler.params] if coupler else []
         # a rod from an arm that turns fully on the path's line (the drag-link's) is as long
         # for every design (arm / cos bound): only a swinging arm's rod can favour σ = −1
         both = (self.rod and self.r.swings) or bool(self.p.fixed) or bool(self.p.explicit)
@@ -217,13 +221,13 @@ class FourBar(Search):
             sheets.append((sigma, found, exact))
             if found and not both:
                 break
-        found = sorted((de for _, f, _ in sheets for de in f), key=lambda de: de[1]["size"])
+        found = sorted((de for _, f, _ in sheets for de in f), key=lambda de: de.evaluation.size)
         if found:
             exact = all(exact for _, f, exact in sheets if f)  # then the best alone is the answer
             at: tuple[Any, ...] = ()
             if exact and not self.ratios and self.p.objective == MIN_SIZE:
                 at = tuple(
-                    self._onward(s, f[0][1]["at"], cos_bound, floor=self._floor(s))
+                    self._onward(s, f[0].evaluation.at, cos_bound, floor=self._floor(s))
                     for s, f, _ in sheets
                     if f
                 )
@@ -245,8 +249,8 @@ class FourBar(Search):
         bounds = levels(self, key, cos_bound)
         lo, hi = self.psi
         held = psi if psi is not None else lo if lo == hi else None
-        at = [] if seed is None else [seed[1]["at"]]
-        sheet = seed[1].get("sigma", 1) if seed is not None else 0
+        at = [] if seed is None else [seed.evaluation.at]
+        sheet = seed.evaluation.sigma if seed is not None else 0
         return strata.solve(
             [Strata(self, s, key, bounds, held, at if s == sheet else []) for s in (1, -1)]
         )
@@ -261,7 +265,7 @@ class FourBar(Search):
             alone = copy.copy(self)
             alone.rod = False
             coupler, proof = alone.coupler_optimum()
-            if proof and (coupler is None or coupler[1]["f"] > cos_bound * (1 + ROUNDING)):
+            if proof and (coupler is None or coupler.evaluation.f > cos_bound * (1 + ROUNDING)):
                 return Reduced([])
             if coupler is None:
                 return Reduced([], exact=False)
@@ -270,7 +274,7 @@ class FourBar(Search):
             found, exact = self.stratified("size", cos_bound, seed=coupler)
             exact = exact and proof
             if not found:
-                return Reduced([coupler[0]], exact=False)
+                return Reduced([coupler.params], exact=False)
         if found:
             return Reduced([d for d, _ in found[: 1 if exact else None]], exact)
         return Reduced([start] if start else [], exact=False)
@@ -299,8 +303,8 @@ class FourBar(Search):
             if onward is not None:
                 assert x is not None  # inside
                 d, e = self.design(sigma, x[0], 1 + math.exp(x[1]))
-                if e["feasible"] and abs(e["f"] - cos_bound) <= 1e-9 and e["slack"] > SLACK:
-                    found.append((e["size"], onward, d))
+                if e.feasible and abs(e.f - cos_bound) <= 1e-9 and e.slack > SLACK:
+                    found.append((e.size, onward, d))
                     continue
             # this sheet's optimum moved off its branch (out of the swing's range, onto a
             # link's bound): its full search, as ``smallest`` runs it. Where no point of its
@@ -314,10 +318,10 @@ class FourBar(Search):
             if got and not (exact and self.missed is None):
                 return None
             for d, e in got[:1]:
-                onward = self._onward(sigma, e["at"], cos_bound, floor=self._floor(sigma))
+                onward = self._onward(sigma, e.at, cos_bound, floor=self._floor(sigma))
                 if onward is None:
                     return None
-                found.append((e["size"], onward, d))
+                found.append((e.size, onward, d))
         if not found:
             return None
         found.sort(key=lambda f: f[0])

@@ -30,9 +30,9 @@ from typing import Any
 import numpy as np
 
 from .active import ActiveSet, Found, Start
-from .construction import TAYLOR
+from .construction import TAYLOR, Design, Evaluation
 from .levels import ROW, Level, rows_of, swings, walls
-from .search import GRID, STEP, U_HI, U_LO, Design, Search
+from .search import GRID, STEP, U_HI, U_LO, Search
 
 LINE = 4 * GRID  # samples along a line ψ = const
 REFINE = 6  # Illinois steps that move a crossing onto its curve
@@ -101,7 +101,7 @@ class Strata(ActiveSet):
         psi = self.rows[:, None]
         u = np.linspace(U_LO, U_HI, GRID)[None, :]
         e = self.s.evaluate(self.sigma, psi, 1 + np.exp(u))
-        rows, valid = rows_of(e), e["valid"] & np.isfinite(e["l"])
+        rows, valid = rows_of(e), e.valid & np.isfinite(e.rod_length)
         g = list(np.tensordot(self.weights, np.array(rows), axes=1) + self.offsets[:, None, None])
         value = self.obj.at(rows)
         pts = np.stack(np.broadcast_arrays(psi, u), axis=-1)
@@ -154,7 +154,7 @@ class Strata(ActiveSet):
         """The starts on the line ψ = const: local minima along it, each curve's crossings."""
         u = np.linspace(U_LO, U_HI, LINE)
         e = self.s.evaluate(self.sigma, np.full(LINE, psi), 1 + np.exp(u))
-        rows, valid = rows_of(e), e["valid"] & np.isfinite(e["l"])
+        rows, valid = rows_of(e), e.valid & np.isfinite(e.rod_length)
         g = [lv.at(rows) for lv in self.levels]
         value = self.obj.at(rows)
         ok = valid & self._within(g, ())
@@ -222,7 +222,7 @@ class Strata(ActiveSet):
             r = rows_of(e)
             for q, v in zip(rows, r, strict=True):
                 q[todo] = v
-            fine[todo] = e["valid"] & np.isfinite(e["l"])
+            fine[todo] = e.valid & np.isfinite(e.rod_length)
             if step == REFINE:
                 break
             gx = np.einsum("ij,ji->i", self.weights[owner[todo]], np.array(r))
@@ -247,12 +247,12 @@ class Strata(ActiveSet):
         i = int(np.clip(np.searchsorted(rows, psi), 1, len(rows) - 1))
         return np.array([max(rows[i] - rows[i - 1], 1e-6), STEP])
 
-    def feasible_grid(self, e: dict[str, Any]) -> Any:
+    def feasible_grid(self, e: Evaluation) -> Any:
         """Which points of an evaluation are designs within every bound."""
         rows = np.array(rows_of(e))
         shape = (-1, *[1] * (rows.ndim - 1))
         g = np.tensordot(self.weights, rows, axes=1) + self.offsets.reshape(shape)
-        return e["valid"] & np.isfinite(e["l"]) & self._within(list(g), ())
+        return e.valid & np.isfinite(e.rod_length) & self._within(list(g), ())
 
     def _within(self, g: list[Any], active: tuple[int, ...]) -> Any:
         ok: Any = True
@@ -273,9 +273,8 @@ def solve(sheets: Sequence[Strata]) -> tuple[list[Design], bool]:
         floors += found.floors
         samples = min(samples, found.samples)
         for _, x in found.points:
-            d, e = st.s.design(st.sigma, x[0], 1 + math.exp(x[1]))
-            e["at"], e["sigma"] = x, st.sigma
-            out.append((float(e[st.key]), (d, e)))
+            de = st.s.found(st.sigma, x)
+            out.append((float(de.evaluation.measure(st.key)), de))
     out.sort(key=lambda ve: ve[0])
     best = out[0][0] if out else math.inf
     slack = 1e-9 * abs(best) if out else 0.0

@@ -36,6 +36,7 @@ from typing import Any
 
 import casadi as ca
 
+from ..facts import Facts
 from ..fourbar.geometry import fourbar_scale, grashof_conditions, output_pin
 from ..fourbar.solver import FourBar, Roles
 from ..geometry import cos_law, leg, triangle_angle
@@ -122,7 +123,7 @@ def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     }
 
 
-def facts(p: Params) -> dict[str, Any]:
+def facts(p: Params) -> Facts:
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     r5, r6 = p["rocker_arm"], p["connecting_rod"]
     # the folded toggle's O2D is shorter, so its angle to the ground line is the larger one
@@ -130,13 +131,13 @@ def facts(p: Params) -> dict[str, Any]:
     ge, gf = _swing(p)
     offsets = _offsets(p)
     rod = () if absent(r6) else tuple(t / r6 for t in offsets)
-    return {
-        "beta": dphi,
-        "stroke": 2 * r5 * ca.sin((ge - gf) / 2),
+    return Facts(
+        beta=dphi,
+        stroke=2 * r5 * ca.sin((ge - gf) / 2),
         # coupler–rocker with the crank on the ground line; rod at mid-swing and swing ends
-        "transmission_cos": (cos_law(r3, r4, r1 - r2), cos_law(r3, r4, r1 + r2), *rod),
-        "one_way": () if absent(r6) else one_way(r6, ca.cos((ge - gf) / 2), offsets[1]),
-    }
+        transmission_cos=(cos_law(r3, r4, r1 - r2), cos_law(r3, r4, r1 + r2), *rod),
+        one_way=() if absent(r6) else one_way(r6, ca.cos((ge - gf) / 2), offsets[1]),
+    )
 
 
 # the crank-rocker's ground, crank, coupler and rocker (a drag-link is its inversion)

@@ -36,6 +36,7 @@ import numpy as np
 
 from ... import targets
 from ...errors import Unreachable
+from ..facts import Facts
 from ..geometry import leg, lever
 from ..reduced import Problem, Reduced
 from ..registry import (
@@ -108,15 +109,15 @@ def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     }
 
 
-def facts(p: Params) -> dict[str, Any]:
+def facts(p: Params) -> Facts:
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["ram_link"]
     half = ca.atan2(r2, leg(d, r2))  # ψmax = asin(r2/d)
-    return {
-        "beta": 2 * half,  # TR = (π + 2ψmax)/(π − 2ψmax)
-        "stroke": 2 * L * r2 / d,
-        "transmission_cos": () if absent(l) else tuple(t / l for t in _offsets(p)),
-        "one_way": () if absent(l) else one_way(l, _cos_psi_max(p), _offsets(p)[1]),
-    }
+    return Facts(
+        beta=2 * half,  # TR = (π + 2ψmax)/(π − 2ψmax)
+        stroke=2 * L * r2 / d,
+        transmission_cos=() if absent(l) else tuple(t / l for t in _offsets(p)),
+        one_way=() if absent(l) else one_way(l, _cos_psi_max(p), _offsets(p)[1]),
+    )
 
 
 def reduced(p: Problem) -> Reduced:

@@ -36,6 +36,7 @@ import casadi as ca
 import numpy as np
 
 from ...numerics import ROUNDING
+from ..facts import Facts
 from ..fourbar.geometry import (
     fourbar_scale,
     grashof_conditions,
@@ -94,19 +95,18 @@ def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     }
 
 
-def facts(p: Params) -> dict[str, Any]:
+def facts(p: Params) -> Facts:
     r1, r2, r3, r4 = (p[n] for n in LINKS)
     r5, r6 = p["follower_arm"], p["connecting_rod"]
     t2a = triangle_angle(r2, r4 + r1, r3)  # eq. (3a)
     t2b = triangle_angle(r2, r4 - r1, r3)  # eq. (3b)
-    return {
-        "beta": t2b - t2a,  # eq. (5): TR = (π − θ2a + θ2b)/(π + θ2a − θ2b)
-        "stroke": 2 * r5,
+    return Facts(
+        beta=t2b - t2a,  # eq. (5): TR = (π − θ2a + θ2b)/(π + θ2a − θ2b)
+        stroke=2 * r5,
         # coupler–follower with the crank on the ground line; rod with the follower upright
-        "transmission_cos": (cos_law(r3, r4, r2 - r1), cos_law(r3, r4, r2 + r1), r5 / r6),
-        "theta2a": t2a,
-        "theta2b": t2b,
-    }
+        transmission_cos=(cos_law(r3, r4, r2 - r1), cos_law(r3, r4, r2 + r1), r5 / r6),
+        crank_at_max=t2a,
+    )
 
 
 def reduced(p: Problem) -> Reduced | None:

@@ -29,6 +29,7 @@ import casadi as ca
 from ...numerics import ROUNDING
 from ...results import TOL
 from ...targets import MAX_TRANSMISSION
+from ..facts import Facts
 from ..geometry import leg, sqrt, where
 from ..reduced import (
     Problem,
@@ -73,15 +74,15 @@ def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     }
 
 
-def facts(p: Params) -> dict[str, Any]:
+def facts(p: Params) -> Facts:
     r2, r3, e = p["crank"], p["coupler"], p["offset"]
     # β = asin(e/(r3−r2)) − asin(e/(r3+r2)) with atan2; odd in e: TR < 1 is the mirror's 1/TR
     beta = ca.atan2(e, leg(r3 - r2, e)) - ca.atan2(e, leg(r3 + r2, e))
-    return {
-        "beta": beta,
-        "stroke": leg(r3 + r2, e) - leg(r3 - r2, e),
-        "transmission_cos": ((e + r2) / r3, (e - r2) / r3),  # B_y = ∓r2
-    }
+    return Facts(
+        beta=beta,
+        stroke=leg(r3 + r2, e) - leg(r3 - r2, e),
+        transmission_cos=((e + r2) / r3, (e - r2) / r3),  # B_y = ∓r2
+    )
 
 
 def reduced(p: Problem) -> Reduced:

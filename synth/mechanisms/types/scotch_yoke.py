@@ -23,6 +23,7 @@ import casadi as ca
 
 from ...errors import Unreachable
 from ...results import TOL
+from ..facts import Facts
 from ..reduced import Problem, Reduced, judge
 from ..registry import GROUND, RAM, Frame, Mechanism, Parameter, Params, register
 
@@ -40,8 +41,8 @@ def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     return {"O2": (0.0, 0.0), "B": (r * ca.cos(th), r * ca.sin(th)), "yoke": (position(p, th), 0.0)}
 
 
-def facts(p: Params) -> dict[str, Any]:
-    return {"beta": 0.0, "stroke": 2 * p["crank"], "transmission_cos": ()}
+def facts(p: Params) -> Facts:
+    return Facts(beta=0.0, stroke=2 * p["crank"], transmission_cos=())
 
 
 def reduced(p: Problem) -> Reduced:

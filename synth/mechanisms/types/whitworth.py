@@ -30,6 +30,7 @@ import casadi as ca
 
 from ...errors import Unreachable
 from ...targets import MIN_SIZE
+from ..facts import Facts
 from ..geometry import ahead, leg, lever, sqrt, where
 from ..reduced import STRICT, Problem, Reduced, Space
 from ..registry import (
@@ -84,14 +85,14 @@ def joints(p: Params, th: Any) -> dict[str, tuple[Any, Any]]:
     }
 
 
-def facts(p: Params) -> dict[str, Any]:
+def facts(p: Params) -> Facts:
     r2, d, L, l = p["crank"], p["pivot_distance"], p["lever"], p["connecting_rod"]
     q = ca.atan2(leg(r2, d), d)  # acos(d/r2)
-    return {
-        "beta": ca.pi - 2 * q,  # TR = (π − q)/q
-        "stroke": 2 * L,
-        "transmission_cos": (L / l,),
-    }
+    return Facts(
+        beta=ca.pi - 2 * q,  # TR = (π − q)/q
+        stroke=2 * L,
+        transmission_cos=(L / l,),
+    )
 
 
 def reduced(p: Problem) -> Reduced:
