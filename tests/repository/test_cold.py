@@ -15,7 +15,7 @@ RECORD_VARIABLE = cold.SUITE_VARIABLE  # the one tests/conftest.py reads
 
 ROOT = Path(__file__).resolve().parents[2]
 MIB = 2**20 / 1e6  # MB in a MiB
-# a tiny suite: one test holds 64 MiB in its worker, one starts a subprocess that holds 160
+# a tiny suite: one test holds 64 MiB in its worker, one starts a subprocess that holds 400
 # MiB, one fails, and none sees the variable that asked for the record
 TINY = f"""
 import os
@@ -29,7 +29,7 @@ def test_holds_memory():
 
 
 def test_a_subprocess_holds_more():
-    subprocess.run([sys.executable, "-c", "b = b'x' * (160 * 2**20)"], check=True)
+    subprocess.run([sys.executable, "-c", "b = b'x' * (400 * 2**20)"], check=True)
 
 
 def test_the_variable_is_not_passed_on():
@@ -78,8 +78,8 @@ def test_the_suite_records_itself_when_asked(tmp_path):
         assert (r["passed"], r["failed"], r["errors"]) == (3, 1, 0), (r, said)
         assert r["exit_status"] == 1 and r["paths"] == ["test_tiny.py"], r
         assert r["wall_s"] > 0 and r["code"]["commit"] == commit, r
-        # the largest process: the subprocess with its 160 MiB (of a worker, when in parallel)
-        assert r["peak_mb"] >= 160 * MIB, r
+        # the largest process: the subprocess with its 400 MiB (of a worker, when in parallel)
+        assert r["peak_mb"] >= 400 * MIB, r
         assert r["controller_mb"] > 0 and r["controller_mb"] <= r["peak_mb"], r
     assert first["peak_process"] in ("a subprocess of gw0", "a subprocess of gw1"), first
     assert second["peak_process"] == "a subprocess", second
