@@ -81,8 +81,11 @@ def test_the_suite_records_itself_when_asked(tmp_path):
         # the largest process: the subprocess with its 400 MiB (of a worker, when in parallel)
         assert r["peak_mb"] >= 400 * MIB, r
         assert r["controller_mb"] > 0 and r["controller_mb"] <= r["peak_mb"], r
-    assert first["peak_process"] in ("a subprocess of gw0", "a subprocess of gw1"), first
-    assert second["peak_process"] == "a subprocess", second
+    # which process: a subprocess, unless the tiny suite's controller was forked from a larger
+    # process (a worker of this suite), whose high-water mark Linux counts as the child's own
+    largest = ("a subprocess of gw0", "a subprocess of gw1", "controller")
+    assert first["peak_process"] in largest, first
+    assert second["peak_process"] in ("a subprocess", "controller"), second
     # the worker that ran the 64 MiB test held it, and the sum holds both workers
     assert set(first["workers_mb"]) == {"gw0", "gw1"}, first
     assert max(first["workers_mb"].values()) >= 64 * MIB, first
