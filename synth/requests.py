@@ -186,10 +186,16 @@ def argument(request: type, name: str) -> Argument:
     return a
 
 
-def check(request: object) -> None:
-    """Each field of ``request`` of its kind, within its limits, one of its choices."""
-    for a in arguments(type(request)):
-        a.check(getattr(request, a.name))
+def check(value: object, at: str | None = None) -> None:
+    """Each field of ``value`` (a request, or a value one holds in its field ``at``, where its
+    errors are then located) of its kind, within its limits, one of its choices."""
+    try:
+        for a in arguments(type(value)):
+            a.check(getattr(value, a.name))
+    except InvalidParameters as e:
+        if at is None:
+            raise
+        raise InvalidParameters(f"{at}.{e.msg}", (at, *e.loc)) from None
 
 
 def included(names: tuple[str, ...]) -> str:

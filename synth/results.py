@@ -169,10 +169,7 @@ class Tolerance:
         if len(given) != 1:
             msg = "tolerance: give absolute or relative, one of them"
             raise InvalidParameters(msg, ("tolerance",))
-        try:
-            check(self)
-        except InvalidParameters as e:
-            raise InvalidParameters(f"tolerance.{e.msg}", ("tolerance", *e.loc)) from None
+        check(self, at="tolerance")
 
     def of(self, value: float) -> float:
         return self.absolute if self.absolute is not None else (self.relative or 0.0) * abs(value)

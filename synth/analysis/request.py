@@ -79,8 +79,8 @@ def asked(
     load: Load | None = None,
 ) -> np.ndarray | None:
     """The curves' angles (``curve_angles``), once ``include`` (of what an analysis may
-    include) is checked against them: pins
-    need angles to be at, and a drawing; a ``load`` adds the torque curve."""
+    include) is checked against them: pins need angles to be at, and a drawing; a ``load``
+    adds the torque curve."""
     deg = curve_angles(crank_angles_deg, samples)
     if "pins" in include and deg is None:
         msg = "include 'pins' needs crank_angles_deg or samples (the angles the pins are wanted at)"

@@ -68,13 +68,10 @@ class Goals:
             if k not in names:
                 msg = f"targets may name {', '.join(names)}, got {k!r}"
                 raise InvalidParameters(msg, ("targets", k))
-        try:
-            return cls(**targets)
-        except InvalidParameters as e:
-            raise InvalidParameters(f"targets.{e.msg}", ("targets", *e.loc)) from None
+        return cls(**targets)
 
     def __post_init__(self) -> None:
-        check(self)
+        check(self, at="targets")
 
     @property
     def given(self) -> dict[str, float]:
