@@ -210,13 +210,14 @@ def _body(
     caps: dict[str, tuple[Any, ...]] | None = None,
     base: type[BaseModel] = Strict,
     doc: str | None = None,
+    extra: dict[str, dict[str, Any]] | None = None,
 ) -> type[BaseModel]:
     """The body of an operation whose request value is ``value``: its fields that the edges
     take (``synth.requests.arguments``), in order, with their words, defaults, limits and
     choices; ``wire``: the fields the body takes in a shape of its own (a model), as (type,
     ``Field``), and those it leaves out (None, folded into another); ``caps``: the service's
     narrower limits on a field; ``base``: the model it extends (with rules of its own);
-    ``doc``: its words."""
+    ``doc``: its words; ``extra``: what a field's schema adds for a client (``x-`` keys)."""
     fields: dict[str, Any] = {}
     for a in arguments(value):
         if not a.edge or (a.name in wire and wire[a.name] is None):
@@ -227,7 +228,12 @@ def _body(
         default = ... if a.default is MISSING else list(a.default) if a.many else a.default
         # a collection of choices names each once at most
         most = len(a.choices) if a.many and a.choices is not None else None
-        info = Field(default, max_length=most, description=a.help.text if a.help else None)
+        info = Field(
+            default,
+            max_length=most,
+            description=a.help.text if a.help else None,
+            json_schema_extra=(extra or {}).get(a.name),
+        )
         fields[a.name] = (_annotation(a, (caps or {}).get(a.name, ())), info)
     return create_model(name, __base__=base, __doc__=doc, **fields)
 
@@ -347,11 +353,6 @@ def _wired(value: type, name: str, kind: Any, default: Any = None, **more: Any) 
     return (kind, Field(default, description=_help(value, name), **more))
 
 
-def _on_design() -> dict[str, Any]:
-    """The design of a request on one: ``mechanism`` a ``Design``, holding its ``params``."""
-    return {"mechanism": (Design, ...), "params": None}
-
-
 def _extras(value: type) -> dict[str, Any]:
     """What an analysis adds when asked, as the body takes it."""
     return {
@@ -392,6 +393,8 @@ if TYPE_CHECKING:
         targets: ReportTargets | None
 
 else:
+    # the design of a request on one: ``mechanism`` a ``Design``, holding its ``params``
+    ON_DESIGN = {"mechanism": (Design, ...), "params": None}
     SynthesizeRequest = _body(
         synth.SynthesisRequest,
         "SynthesizeRequest",
@@ -404,19 +407,6 @@ else:
                 min_length=1,
                 max_length=24,
             ),
-            "objective": (
-                Literal[tuple(o.name for o in all_objectives())],
-                Field(
-                    argument(synth.SynthesisRequest, "objective").default,
-                    # the playground's words for each, and those whose value it shows beside
-                    # each design
-                    json_schema_extra={
-                        "x-titles": {o.name: o.words for o in all_objectives()},
-                        "x-searched": [o.name for o in all_objectives() if o.searched],
-                    },
-                    description=_help(synth.SynthesisRequest, "objective"),
-                ),
-            ),
             "time_budget_ms": (float | None, BUDGET),
         },
         {
@@ -426,12 +416,20 @@ else:
             "max_working_speed_fluctuation": (Le(1e3),),
             "max_peak_torque": (Le(1e15),),
         },
+        # the playground's words for each objective, and those whose value it shows beside
+        # each design
+        extra={
+            "objective": {
+                "x-titles": {o.name: o.words for o in all_objectives()},
+                "x-searched": [o.name for o in all_objectives() if o.searched],
+            }
+        },
     )
     AnalyzeRequest = _body(
         synth.AnalysisRequest,
         "AnalyzeRequest",
         {
-            **_on_design(),
+            **ON_DESIGN,
             **_extras(synth.AnalysisRequest),
             "crank_angles_deg": _wired(
                 synth.AnalysisRequest,
@@ -446,13 +444,13 @@ else:
     SweepRequest = _body(
         synth.SweepRequest,
         "SweepRequest",
-        {**_on_design(), "time_budget_ms": (float | None, BUDGET)},
+        {**ON_DESIGN, "time_budget_ms": (float | None, BUDGET)},
         {"start": (Ge(-LENGTH_MAX), Le(LENGTH_MAX)), "stop": (Ge(-LENGTH_MAX), Le(LENGTH_MAX))},
     )
     ExportRequest = _body(
         synth.ExportRequest,
         "ExportRequest",
-        _on_design(),
+        ON_DESIGN,
         {"crank_angle_deg": ANGLE},
     )
     ReportTargets = _body(
@@ -466,7 +464,7 @@ else:
         synth.ReportRequest,
         "ReportRequest",
         {
-            **_on_design(),
+            **ON_DESIGN,
             "load": _wired(synth.ReportRequest, "load", LoadSpec | None),
             "targets": _wired(synth.ReportRequest, "targets", ReportTargets | None),
         },
