@@ -52,6 +52,7 @@ _WORDS = {
     Lt: ("<", "lt", operator.lt),
 }
 _ARGUMENTS: dict[type, tuple[Argument, ...]] = {}  # by request type (``arguments``)
+_NAMED: dict[type, dict[str, Argument]] = {}  # the same, by name (``argument``)
 
 
 @dataclass(frozen=True)
@@ -145,6 +146,7 @@ def arguments(request: type) -> tuple[Argument, ...]:
     """The fields a request is built from, in order."""
     if request not in _ARGUMENTS:
         _ARGUMENTS[request] = _arguments(request)
+        _NAMED[request] = {a.name: a for a in _ARGUMENTS[request]}
     return _ARGUMENTS[request]
 
 
@@ -182,8 +184,8 @@ def _arguments(request: type) -> tuple[Argument, ...]:
 
 def argument(request: type, name: str) -> Argument:
     """The field ``name`` of a request."""
-    (a,) = (a for a in arguments(request) if a.name == name)
-    return a
+    arguments(request)
+    return _NAMED[request][name]
 
 
 def check(value: object, at: str | None = None) -> None:
