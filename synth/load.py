@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import MISSING, dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Annotated, Any
 
 from annotated_types import Ge, Interval, Le
 
 from .errors import InvalidParameters
-from .requests import Help, OneOf, arguments
+from .requests import Help, OneOf, arguments, held
 
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "in": 0.0254}  # metres per length unit
 GRAVITY = 9.80665  # m/s², standard
@@ -143,20 +143,7 @@ class Load:
     def of(cls, load: Load | Mapping[str, Any] | None) -> Load | None:
         """A load as a ``Load``: one already, or the API's load object (a mapping of its
         fields); InvalidParameters naming a field that is not one of them or is missing."""
-        if load is None or isinstance(load, Load):
-            return load
-        if not isinstance(load, Mapping):
-            msg = f"load must be a Load or a mapping of its fields, got {type(load).__name__}"
-            raise InvalidParameters(msg, ("load",))
-        known = {f.name: f for f in fields(cls)}
-        for k in load:
-            if k not in known:
-                msg = f"load has no field {k!r}; its fields are {', '.join(known)}"
-                raise InvalidParameters(msg, ("load", str(k)))
-        for k, f in known.items():
-            if k not in load and f.default is MISSING:
-                raise InvalidParameters(f"load needs {k}", ("load", k))
-        return cls(**load)
+        return held(cls, load, "load")
 
     def __post_init__(self) -> None:
         if self.length_unit not in LENGTH_UNITS:

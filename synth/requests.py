@@ -44,6 +44,7 @@ TOLERANCE_HELP = (
 P = ParamSpec("P")
 R = TypeVar("R")
 T = TypeVar("T")
+V = TypeVar("V")
 # a limit's words, as the service's refusals say them too
 _WORDS = {
     Ge: ("≥", "ge", operator.ge),
@@ -198,6 +199,27 @@ def check(value: object, at: str | None = None) -> None:
         if at is None:
             raise
         raise InvalidParameters(f"{at}.{e.msg}", (at, *e.loc)) from None
+
+
+def held(kind: type[V], value: V | Mapping[str, Any] | None, at: str) -> V | None:
+    """A value a request holds in its field ``at`` (a ``Load``, the report's targets): None,
+    one already, or a mapping of its fields; InvalidParameters at ``at`` naming a key that is
+    not one of them, or one it needs that is missing."""
+    if value is None or isinstance(value, kind):
+        return value
+    if not isinstance(value, Mapping):
+        name = kind.__name__
+        msg = f"{at} must be a {name} or a mapping of its fields, got {type(value).__name__}"
+        raise InvalidParameters(msg, (at,))
+    known = {f.name: f for f in fields(kind)}  # type: ignore[arg-type]
+    for k in value:
+        if k not in known:
+            msg = f"{at} has no field {k!r}; its fields are {', '.join(known)}"
+            raise InvalidParameters(msg, (at, str(k)))
+    for k, f in known.items():
+        if k not in value and f.default is MISSING:
+            raise InvalidParameters(f"{at} needs {k}", (at, k))
+    return kind(**value)
 
 
 def included(names: tuple[str, ...]) -> str:

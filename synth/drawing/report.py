@@ -11,7 +11,7 @@ import datetime
 import math
 import re
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import KW_ONLY, dataclass, field, fields
+from dataclasses import KW_ONLY, dataclass, field
 from typing import Annotated, Any
 from xml.sax.saxutils import escape
 
@@ -21,7 +21,7 @@ from annotated_types import Ge, Gt, Le
 from ..analysis.kinematics import analyze
 from ..errors import InvalidParameters
 from ..load import LENGTH_UNITS, Load
-from ..requests import Help, OneOf, check, keyword
+from ..requests import Help, OneOf, check, held, keyword
 from ..results import Analysis, Loads
 from ..version import __version__
 from .model import drawing, drawn
@@ -56,19 +56,6 @@ class Goals:
         Le(90.0),
         Help("a target: the least transmission angle, degrees", "bound"),
     ] = None
-
-    @classmethod
-    def of(cls, targets: Goals | Mapping[str, float] | None) -> Goals | None:
-        """Targets as ``Goals``: one already, or a mapping of its fields; InvalidParameters
-        at ``targets`` naming what is wrong."""
-        if targets is None or isinstance(targets, Goals):
-            return targets
-        names = [f.name for f in fields(cls)]
-        for k in targets:
-            if k not in names:
-                msg = f"targets may name {', '.join(names)}, got {k!r}"
-                raise InvalidParameters(msg, ("targets", k))
-        return cls(**targets)
 
     def __post_init__(self) -> None:
         check(self, at="targets")
@@ -119,7 +106,7 @@ class ReportRequest:
         if q is not None and unit != q.length_unit:
             msg = f"length_unit {unit!r} differs from the load's {q.length_unit!r}"
             raise InvalidParameters(msg, ("length_unit",))
-        object.__setattr__(self, "targets", Goals.of(self.targets))
+        object.__setattr__(self, "targets", held(Goals, self.targets, "targets"))
         object.__setattr__(self, "unit", unit)
 
 
