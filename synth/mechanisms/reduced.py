@@ -102,14 +102,20 @@ class Reduced:
 class Space:
     """Every design of a variant that meets the time ratio and stroke, as a function of a few
     free numbers u over the box [``lo``, ``hi``]: ``design(u, c)`` (CasADi symbols: u, and
-    ``constants`` the request sets, such as β) gives each relevant parameter in stroke units.
+    ``constants`` the request sets, such as β) gives each relevant parameter in stroke units;
+    its form is the same for every space of a variant with as many free numbers and
+    constants (what is built from it is kept and reused by them).
     The designs of the box that meet the other constraints (transmission, validity, the
     request's bounds) are then all the variant's feasible designs, up to a free scale and a
     mirror that leave the motion as it is: a global search over the box is one over the
     variant (``synth.synthesis.certify``). The loads a design carries may tell the mirror
     image from the design, and one scale from another: ``mirror`` gives the constants of the
     mirror image's space (None: the mirror is not free), ``scaled`` says that the crank's
-    scale is free and pinned (its weight loads a longer crank more)."""
+    scale is free and pinned (its weight loads a longer crank more). ``dead`` gives the
+    crank angles of the slider's dead centres from the constants where they are the same for
+    every design of the space that meets its conditions (None: they move with u).
+    ``measures`` names the searched measures whose certified search over it finishes in good
+    time (None: all it takes); the others are left to the local search."""
 
     lo: tuple[float, ...]
     hi: tuple[float, ...]
@@ -117,6 +123,8 @@ class Space:
     design: Callable[[Any, Any], dict[str, Any]]
     mirror: tuple[float, ...] | None = None
     scaled: bool = False
+    dead: Callable[[Any], tuple[float, float]] | None = None
+    measures: frozenset[str] | None = None
 
 
 def unreachable(what: str) -> Unreachable:

@@ -10,7 +10,7 @@ terms). At each level, over the boxes alive:
 - **incumbent**: the least measured centre that meets every constraint (and first the
   least corner of the box: an optimum at a bound), if it is the least so far;
 - a box whose bound is within ``CLOSE`` of the incumbent goes (its bound kept); the others
-  are cut into ``SPLIT`` parts across their widest side.
+  are cut into parts (``SPLITS``, by the number of free numbers) across their widest side.
 
 The search is done when no box is left: then every design of the variant measures at least
 the least bound kept, and a bounded Brent search over where a better one may lie polishes the
@@ -43,8 +43,9 @@ from ..numerics.native import Mapped
 from ..results import Candidate
 from ..targets import MAX_TRANSMISSION
 from .formulation import formulation, relevant
-from .measures import Acceleration, Kinematics, Speed, design
+from .measures import Acceleration, Speed
 from .search import Spec, Targets, Variant, build_problem
+from .stroke import Kinematics, design
 from .torque import Model, Torque, supports
 
 METHOD = "branch_and_bound"  # its candidates' method
@@ -58,7 +59,8 @@ TOL = 1e-9  # the relative gap certified
 CLOSE = 1e-10
 EPS = float(np.finfo(float).eps)
 POLISHED = 1e-12  # relative: an incumbent this close to the bound is not polished
-SPLIT = 8  # the parts a box is cut into (fewer levels: each costs a few calls)
+SPLITS = {1: 8}  # the parts a box is cut into, by its dimension (fewer levels: each costs a
+SPLIT = 4  # few calls; a box of two or more free numbers: this many)
 LEVELS = 30  # levels at most (1-D: 8^-30 of the box)
 LIVE = 4096  # boxes alive at most
 CHUNK = 256  # the boxes measured and bounded between two looks at the deadline
@@ -92,7 +94,7 @@ def mark(c: Candidate, bound: float) -> Candidate:
 
 class Built:
     """What a search over one variant's space needs, built once per thread and structure: its
-    kinematics (``measures.Kinematics``), the constraint rows with the free parameters
+    kinematics (``stroke.Kinematics``), the constraint rows with the free parameters
     enclosed (``rows``) and at many points (``at``), the design's parameters at a point, and
     its crank torque (``torque``, built on first use; any space of the structure: the
     constants are inputs)."""
@@ -123,27 +125,35 @@ class Built:
 
 def built(m: Mechanism, variant: frozenset[str], sp: Space) -> Built:
     cache: dict[Any, Built] = _local.__dict__.setdefault("built", {})
-    key = (m.type, variant)
+    key = (m.type, variant, len(sp.lo), len(sp.constants))  # a space's form (``Space``)
     if key not in cache:
         cache[key] = Built(m, variant, sp)
     return cache[key]
 
 
-def prepared(m: Mechanism, variant: frozenset[str]) -> Built | None:
-    """What a search over the variant with nothing fixed builds, the peak torque's model with
-    it where the type has a force model (a service's warm-up; the disk cache's libraries),
-    None for a type without a space."""
+def prepared(m: Mechanism, variant: frozenset[str]) -> list[Built]:
+    """What a search over the variant builds, for each form its spaces take (``Space``: with
+    nothing fixed, and with each relevant part fixed, at the reduced solver's design), the
+    peak torque's model with it where the type has a force model (a service's warm-up; the
+    disk cache's libraries); none for a type without a space."""
     if m.space is None:
-        return None
+        return []
     names = relevant(m, variant)
     t = Targets(1.6, 1.0, 0.0, MAX_TRANSMISSION, math.inf)
-    sp = m.space(build_problem(m, variant, names, {}, Spec(m.type), t))
-    if sp is None:
-        return None
-    b = built(m, variant, sp)
+    free = build_problem(m, variant, names, {}, Spec(m.type), t)
+    solved = m.reduced(free) if m.reduced is not None else None
+    designs = solved.designs if solved is not None else []
+    fixes = [{q: designs[0][q]} for q in names if designs and q in designs[0]]
+    found: dict[int, Built] = {}
+    for fixed in [{}, *fixes]:
+        sp = m.space(build_problem(m, variant, names, fixed, Spec(m.type), t))
+        if sp is not None:
+            b = built(m, variant, sp)
+            found[id(b)] = b
     if m.frame is not None:  # the peak torque's too
-        b.torque.libraries()
-    return b
+        for b in found.values():
+            b.torque.libraries()
+    return list(found.values())
 
 
 def search(
@@ -154,13 +164,17 @@ def search(
     deadline: float,
     load: Load | None = None,
     metres: float = 1.0,
+    cutoff: float = math.inf,
 ) -> Certificate | None:
     """The certified least of the ``terms``' peak over the variant ``v`` (``targets``: the
     time ratio and cos of the transmission bound; the peak torque's under ``load``, the
     space's lengths ``metres`` each), or None where this search cannot take it (another
-    measure, no space, a load ``torque`` does not bound) or finds no design."""
+    measure, no space, a load ``torque`` does not bound) or finds no design. A design known
+    to measure ``cutoff`` (another variant's) starts it as the incumbent: boxes bounded above
+    it go at once, and where none of the variant's designs is better the certificate has no
+    design, and its bound says so."""
     sp = m.space(v.problem) if m.space is not None else None
-    if sp is None or terms is None:
+    if sp is None or terms is None or (sp.measures is not None and terms not in sp.measures):
         return None
     b = built(m, v.parts, sp)
     if terms in MEASURES:
@@ -170,9 +184,9 @@ def search(
         spaces = [sp] if sp.mirror is None else [sp, replace(sp, constants=sp.mirror)]
     else:
         return None
-    found = [_search(b, s, measure, v, targets, deadline) for s in spaces]
+    found = [_search(b, s, measure, v, targets, deadline, cutoff) for s in spaces]
     best = min(found, key=lambda c: c.value)
-    if not best.design:
+    if not best.design and math.isinf(cutoff):
         return None
     return replace(
         best,
@@ -190,9 +204,11 @@ def _search(
     v: Variant,
     targets: tuple[float, float],
     deadline: float,
+    cutoff: float,
 ) -> Certificate:
-    """The branch-and-bound over one space (the module's docstring): its best design (empty:
-    none found) and the least bound over its designs (∞: it has none)."""
+    """The branch-and-bound over one space (the module's docstring), ``cutoff`` the
+    incumbent's measure at its start: its best design (empty: none better found) and the
+    least bound over its designs (∞: it has none)."""
     measure, lower_bound = meas.measure, meas.lower
     k = np.array(sp.constants)
     pv = np.array(targets, dtype=float)
@@ -201,8 +217,8 @@ def _search(
     lb = np.concatenate([b.form.lbg[b.inequality], [x[0] for x in box]])
     ub = np.concatenate([b.form.ubg[b.inequality], [x[1] for x in box]])
     lo, hi = np.array([sp.lo]), np.array([sp.hi])
-    width = hi[0] - lo[0]
-    top, best = math.inf, None
+    width, parts = hi[0] - lo[0], SPLITS.get(len(sp.lo), SPLIT)
+    top, best = cutoff, None
     least, levels, boxes, stopped = math.inf, 0, 0, False
     near = lo[0], hi[0]
 
@@ -250,14 +266,14 @@ def _search(
         keep &= ~point
         if (lower <= top).any():  # where a design as good as the incumbent may be
             near = lo[lower <= top].min(axis=0), hi[lower <= top].max(axis=0)
-        lo, hi = _split(lo[keep], hi[keep], width)
-        parent = np.tile(lower[keep], SPLIT)  # part j of box i: row j n + i (``_split``)
-    if best is None:
-        return Certificate({}, math.inf, least, not stopped, levels, boxes)
-    if len(sp.lo) == 1 and not stopped and top - least > POLISHED * top:
-        top, best = _polish(b, measure, k, pv, (lb, ub), near, top, best)
+        lo, hi = _split(lo[keep], hi[keep], width, parts)
+        parent = np.tile(lower[keep], parts)  # part j of box i: row j n + i (``_split``)
     if len(lo):  # stopped with boxes alive: their parents' bounds count (no work past it)
         least = min([least, *parent])
+    if best is None:
+        return Certificate({}, math.inf, least, not stopped, levels, boxes)
+    if np.count_nonzero(width) == 1 and not stopped and top - least > POLISHED * top:
+        top, best = _polish(b, measure, k, pv, (lb, ub), near, top, best)
     design = dict(
         zip(b.mechanism.names, np.asarray(b.design(best, k)).ravel().tolist(), strict=True)
     )
@@ -274,35 +290,45 @@ def _polish(
     top: float,
     best: np.ndarray,
 ) -> tuple[float, np.ndarray]:
-    """The incumbent moved to the least of the measure over ``near`` (one free number), where
-    every design as good lies: Brent's bounded minimiser to the last few ulps of u, a point
-    that is no design counting as twice the incumbent's measure."""
+    """The incumbent moved to the least of the measure over ``near`` (one free number: the
+    others' sides are points), where every design as good lies: Brent's bounded minimiser to
+    the last few ulps of u, a point that is no design counting as twice the incumbent's
+    measure."""
     from scipy.optimize import minimize_scalar
 
+    j = int(np.argmax(near[1] - near[0]))
+
+    def point(x: float) -> np.ndarray:
+        u = np.array(near[0], dtype=float)
+        u[j] = x
+        return u
+
     def at(x: float) -> float:
-        u = np.array([x])
+        u = point(x)
         g = b.at(u[None], k, pv)[:, 0]
         if not np.all((g >= limits[0]) & (g <= limits[1])):
             return 2 * top
         return float(measure(b.kin, u[None], k)[0][0])
 
-    lo, hi = float(near[0][0]), float(near[1][0])
+    lo, hi = float(near[0][j]), float(near[1][j])
     xatol = 4 * EPS * max(abs(lo), abs(hi))
     res = minimize_scalar(at, bounds=(lo, hi), method="bounded", options={"xatol": xatol})
     value = at(float(res.x))
-    return (value, np.array([res.x])) if value < top else (top, best)
+    return (value, point(float(res.x))) if value < top else (top, best)
 
 
-def _split(lo: np.ndarray, hi: np.ndarray, width: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each box cut into ``SPLIT`` equal parts across its widest side (relative to the
-    first box's)."""
+def _split(
+    lo: np.ndarray, hi: np.ndarray, width: np.ndarray, parts: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each box cut into ``parts`` equal parts across its widest side (relative to the first
+    box's; a side the first box does not span is never cut)."""
     if not len(lo):
         return lo, hi
-    side = np.argmax((hi - lo) / width, axis=1)
+    side = np.argmax((hi - lo) / np.where(width > 0, width, math.inf), axis=1)
     ix = np.arange(len(lo))
-    cuts = lo[ix, side] + (hi[ix, side] - lo[ix, side]) * np.arange(SPLIT + 1)[:, None] / SPLIT
+    cuts = lo[ix, side] + (hi[ix, side] - lo[ix, side]) * np.arange(parts + 1)[:, None] / parts
     cuts[-1] = hi[ix, side]
-    los, his = np.tile(lo, (SPLIT, 1)), np.tile(hi, (SPLIT, 1))  # part j of box i: row j n + i
-    at = (np.arange(SPLIT * len(lo)), np.tile(side, SPLIT))
+    los, his = np.tile(lo, (parts, 1)), np.tile(hi, (parts, 1))  # part j of box i: row j n + i
+    at = (np.arange(parts * len(lo)), np.tile(side, parts))
     los[at], his[at] = cuts[:-1].ravel(), cuts[1:].ravel()
     return los, his

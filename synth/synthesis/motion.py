@@ -345,17 +345,21 @@ def motion(
             targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
             load = extras.get("load")
             metres = 1.0 if load is None else load.metres * t.stroke  # the space's in strokes
-            cert = certify.search(m, v, o.terms, targets, t.deadline, load, metres)
+            known = min(mine, key=lambda c: c.objective_value)  # the incumbent: a cutoff
+            cert = certify.search(
+                m, v, o.terms, targets, t.deadline, load, metres, known.objective_value
+            )
             if cert is None or not cert.complete:
                 bounds = None
             elif bounds is not None:
                 bounds.append(cert.bound)
             if cert is not None:  # the optimum without the limit: with it too, if it meets it
-                q = proposal(
-                    m, i, whole(spec, scaled(cert.design, t.stroke), v.parts), certify.METHOD, t
-                )
-                c = None if q is None else candidate(m, q, t, s.variants, extras, mine)
-                mine += [c] if c is not None and c not in mine else []
+                c = known  # where the variant has none better
+                if cert.design:
+                    d = whole(spec, scaled(cert.design, t.stroke), v.parts)
+                    q = proposal(m, i, d, certify.METHOD, t)
+                    c = None if q is None else candidate(m, q, t, s.variants, extras, mine)
+                    mine += [c] if c is not None and c not in mine else []
                 if c is not None and o.allows(c, limit):
                     continue
             aim, capped = aims.aim(m, v.parts, o, t, extras, limit, mine)

@@ -11,7 +11,7 @@ there).
 
 For any angles θⱼ and a box U, every u in U has max_θ T ≥ maxⱼ inf_U T(θⱼ, ·), where T(θⱼ,
 ·) is the torque with the force u's design has at θⱼ. Over a box, the cut's ends are enclosed
-in intervals proved to hold them for every u (``measures.prove``, with the zone's fractions);
+in intervals proved to hold them for every u (``stroke.prove``, with the zone's fractions);
 an angle between the start's interval and the end's is cut for every u, one outside both is
 not, and one inside an interval takes the lesser of the two (T is one of them). The angles
 are the two of the centre's peaks and the cut's ends (an end moved to its interval's side)
@@ -40,7 +40,8 @@ from ..mechanisms import Mechanism, kinetics
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred, CompiledInterval
 from ..numerics.native import WIDEST, Mapped
-from .measures import PEAKS, TAU, Kinematics, design, local_peaks, newton, prove, strokes
+from .measures import local_peaks
+from .stroke import PEAKS, TAU, Kinematics, design, newton, prove, strokes
 
 BOUNDED = 2  # the angles a box's bound is taken at
 

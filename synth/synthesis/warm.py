@@ -157,10 +157,10 @@ def compile_all(part: int = 0, parts: int = 1) -> int:
     if part == 0:  # the certified search's enclosures (synth.numerics.compiled_interval)
         for m in map(get, all_types()):
             for v in variants(m):
-                b = certify.prepared(m, v)
-                torque = b.torque.libraries() if b is not None and m.frame is not None else []
-                if b is not None and None in (*b.kin.libraries(), b.rows.library, *torque):
-                    raise RuntimeError(f"{m.type}: the certified search's enclosures not built")
+                for b in certify.prepared(m, v):
+                    torque = b.torque.libraries() if m.frame is not None else []
+                    if None in (*b.kin.libraries(), b.rows.library, *torque):
+                        raise RuntimeError(f"{m.type}: the certified search's enclosures not built")
     return n
 
 

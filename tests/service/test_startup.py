@@ -28,7 +28,7 @@ import pytest
 import synth
 from benchmarks.startup import FIRST, FIRST_SEARCHED, SEARCHED, SLACK_MS, TYPES
 from synth.analysis import model
-from synth.synthesis import certify, formulation, measures, motion, screen, solve, torque, warm
+from synth.synthesis import certify, formulation, motion, screen, solve, stroke, torque, warm
 
 from ..support.server import ROOT, call, serving
 
@@ -105,7 +105,7 @@ def test_after_the_warm_up_a_searched_request_with_nothing_fixed_builds_nothing(
         for module, name in [
             (model, "Mapped"),
             (screen, "Mapped"),
-            (measures, "Mapped"),
+            (stroke, "Mapped"),
             (torque, "Mapped"),
             (formulation, "formulate"),
             (solve, "formulate"),

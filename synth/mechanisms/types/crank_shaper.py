@@ -38,7 +38,7 @@ from ... import targets
 from ...errors import Unreachable
 from ..facts import Facts
 from ..geometry import leg, lever
-from ..reduced import Problem, Reduced
+from ..reduced import ONE_WAY, Problem, Reduced, Space
 from ..registry import (
     GROUND,
     RAM,
@@ -147,6 +147,70 @@ def reduced(p: Problem) -> Reduced:
     return Reduced([{**design, **p.fixed}])
 
 
+# what the certified search takes over both free numbers in good time: the least peak
+# acceleration (the peak torque's and the speed's bounds are too loose on wide boxes: 12 000
+# boxes, 3 s, for a torque at time ratio 1.6; the speed not within 4 096 boxes)
+TWO_FREE = frozenset({"acceleration"})
+
+
+def space(p: Problem) -> Space | None:
+    """As ``reduced`` states it (the crank a free scale, the smallest allowed; the pivot
+    distance set by it and the time ratio; the lever by the stroke), and with a ram link two
+    free numbers: b = (h − L cos ψmax)/l, the link's cos μ at the swing's ends (signed), and
+    log l. The bounds on b are the transmission's and the one-way condition's, |b| ≤ cos ψmax
+    − ``ONE_WAY``, and log l's the link's (fixed: a point), so that where the optimum is held
+    by one of them it lies on a face of the box; the link's cos μ at mid-swing, b − L(1 −
+    cos ψmax)/l, is bounded by the search's constraints. A fixed ram height leaves log l
+    alone. The slot drive is one design (its box a point)."""
+    if p.beta <= 0:
+        return None
+    f, k = p.fixed, ratio(p, "crank", "pivot_distance")
+    lever = f.get("lever", 0.5 / k)
+    crank = _scale(p, 1 / k, reach=lever * k / (1 + k))
+    if crank is None:
+        return None
+    constants = (crank, crank / k, lever)
+    if "ram_link" in p.variant:
+        return Space((0.0,), (0.0,), constants, _slotted, scaled=True, dead=_dead)
+    lo, hi = (f["ram_link"],) * 2 if "ram_link" in f else p.box("ram_link")
+    span = math.log(lo), math.log(hi)
+    if "ram_height" in f:
+
+        def along(u: Any, k: Any) -> dict[str, Any]:
+            return {**_slotted(u, k), "ram_link": ca.exp(u[0]), "ram_height": k[3]}
+
+        height = (*constants, f["ram_height"])
+        return Space(span[:1], span[1:], height, along, scaled=True, dead=_dead)
+
+    def design(u: Any, k: Any) -> dict[str, Any]:
+        link = ca.exp(u[1])
+        height = k[2] * _cos_max(k) + u[0] * link
+        return {**_slotted(u, k), "ram_link": link, "ram_height": height}
+
+    b = min(p.cos_bound, math.sqrt(1 - k * k) - ONE_WAY)
+    box = (-b, span[0]), (b, span[1])
+    if span[0] == span[1]:  # a fixed link: b alone
+        return Space(*box, constants, design, scaled=True, dead=_dead)
+    return Space(*box, constants, design, scaled=True, dead=_dead, measures=TWO_FREE)
+
+
+def _cos_max(k: Any) -> Any:
+    """cos ψmax of the space's constants (crank, pivot distance, lever)."""
+    return leg(k[1], k[0]) / k[1]
+
+
+def _dead(k: Any) -> tuple[float, float]:
+    """The lever's swing ends, cos θ = −crank/pivot_distance: the slider's dead centres
+    wherever it moves one way over each swing (``one_way``)."""
+    theta = math.acos(-k[0] / k[1])
+    return theta, 2 * math.pi - theta
+
+
+def _slotted(u: Any, k: Any) -> dict[str, Any]:
+    """The slot drive's design: its constants alone."""
+    return {"crank": k[0], "pivot_distance": k[1], "lever": k[2]}
+
+
 def frame(variant: frozenset[str]) -> Frame:
     """The crank pin's block slides in the lever's slot (on O4P); the tip P drives the ram
     through the ram link, or through a block in the ram's slot across its path."""
@@ -235,6 +299,7 @@ register(
         defaults=defaults,
         facts=facts,
         reduced=reduced,
+        space=space,
         scale=Scale(
             "crank",
             ("pivot_distance",),
