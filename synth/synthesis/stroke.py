@@ -44,8 +44,10 @@ EPS = float(np.finfo(float).eps)
 class Kinematics:
     """A variant's space compiled: s and its first four θ-derivatives, and the u-derivatives
     of s and s′, at many (angle, point) pairs (``rows``, ``du``); s, s′ and s″ enclosed over
-    boxes of (θ, u) (``position``, ``velocity``, ``acceleration``: centred in θ and u), and
-    the speed window's gradient (``window``: naive)."""
+    boxes of (θ, u) (``position``, ``velocity``, ``acceleration``: centred in θ and u), s −
+    level with the dead centres' angles as inputs (``past``, centred), the speed window's
+    gradient (``window``: naive), and the space's dead centres where u does not move them
+    (``dead``, ``Space.dead``)."""
 
     def __init__(self, m: Mechanism, variant: frozenset[str], sp: Space, name: str) -> None:
         th = ca.SX.sym("theta")

@@ -12,8 +12,8 @@ are never shared between threads):
   solves, the two diagnostics);
 - the motion search's formulation and its compiled constraints (``formulation.formulation``,
   ``screen``): per type, variant and free set;
-- the certified search's enclosures (``certify``): per type with a space and variant, the
-  peak torque's with them.
+- the certified search's enclosures (``certify``): per type with a space, variant and form
+  of its spaces (nothing fixed, one part fixed), the peak torque's with them.
 
 ``compile_all`` puts every native library in the disk cache (an image's build step, ``make``'s
 install step; ``python -m synth.synthesis.warm``). ``warm`` builds in the calling thread the
