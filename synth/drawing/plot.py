@@ -39,7 +39,8 @@ def ticks(lo: float, hi: float, most: int = 6) -> list[float]:
     base = 10.0 ** math.floor(math.log10(raw))
     step = next(k * base for k in (1, 2, 5, 10) if k * base >= raw * (1 - 1e-12))
     first, last = math.floor(lo / step + 1e-9), math.ceil(hi / step - 1e-9)
-    return [round(k * step, 12) for k in range(first, last + 1)]
+    out = [float(f"{k * step:.12g}") for k in range(first, last + 1)]  # 12 digits, any scale
+    return out if out[-1] > out[0] else [lo, hi]  # a span below the digits: its ends
 
 
 def label(x: float) -> str:

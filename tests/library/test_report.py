@@ -119,3 +119,15 @@ def test_bad_input_is_refused_naming_the_field(kwargs, loc):
     with pytest.raises(synth.InvalidParameters) as e:
         synth.report("crank_shaper", SHAPER, **kwargs)
     assert e.value.loc == loc
+
+
+def test_a_report_of_tiny_numbers_draws_its_charts():
+    """A 1 mm crank at 1e-6 rpm: accelerations near 1e-17 m/s², below a fixed number of
+    decimals, still get distinct axis ticks (schemathesis found the charts dividing by 0)."""
+    load = {"crank_rpm": 1.0000000000000002e-06, "length_unit": "m"}
+    html = synth.report("scotch_yoke", {"crank": 0.001}, load=load)
+    charts = html.split('<svg class="chart"')[1:]
+    assert charts
+    for chart in charts:  # each chart's value axis: ticks that differ
+        ticks = re.findall(r'text-anchor="end"[^>]*>([^<]+)<', chart)
+        assert len(ticks) >= 2 and len(set(ticks)) == len(ticks), ticks
