@@ -129,10 +129,10 @@ class Speed:
         travel = ends_c[0][:, 1:] - ends_c[1][:, :1]
         with np.errstate(all="ignore"):
             g = speed * travel / ((1 - 2 * CUT) * stroke_c[:, None]) * (1 - 1e-14)
-        s_lo, s_hi = (x[0].reshape(n, per, -1) for x in (slope.lo, slope.hi))
+        steep = np.maximum(np.abs(slope.lo[0]), np.abs(slope.hi[0])).reshape(n, per, -1)
         with np.errstate(all="ignore"):
-            out = g - np.sum(np.fmax(np.abs(s_lo), np.abs(s_hi)) * half[:, None, :], axis=2)
-            out = np.where(np.isfinite(out), out, 0.0).max(axis=1)
+            out = g - np.sum(steep * half[:, None, :], axis=2)
+        out = np.where(np.isfinite(out), out, 0.0).max(axis=1)
         # on a wide box the gradient's enclosure is loose: each factor's own bound may do
         # better (the least speed, the least travel, the greatest stroke; first order)
         least = least_abs(enclose(kin.velocity, (angles, angles), lo, hi, k)).max(axis=1)

@@ -65,15 +65,20 @@ class Kinematics:
         self.du = Mapped(fn("du", ca.vec(du.T)), (False, False, True))
         self.dead = sp.dead  # the dead centres' angles, where u does not move them
         self.window = CompiledInterval(window(m, p, th, u, k, name, sp.dead is None))
-        # s − level: s(θ) − (1 − f) s(θ0) − f s(θ1), the level f of the way from s(θ0) to s(θ1)
+        # s − level: s(θ) − (1 − f) s(θ0) − f s(θ1), the level f of the way from s(θ0) to
+        # s(θ1); where the dead centres are the space's own (else s and the levels apart)
         ends, f = ca.SX.sym("ends", 2), ca.SX.sym("f")
         past = (
             d[0] - (1 - f) * ca.substitute(d[0], th, ends[0]) - f * ca.substitute(d[0], th, ends[1])
         )
-        self.past = CompiledCentred(
-            ca.Function(f"{name}_past", [th, ends, f, u, k], [past], {"cse": True}),
-            wrt=[0, 1, 3],
-            continuous=True,
+        self.past = (
+            None
+            if sp.dead is None
+            else CompiledCentred(
+                ca.Function(f"{name}_past", [th, ends, f, u, k], [past], {"cse": True}),
+                wrt=[0, 1, 3],
+                continuous=True,
+            )
         )
         self.position, self.velocity, self.acceleration = (
             CompiledCentred(fn(what, d[i]), wrt=[0, 1], continuous=True)
@@ -83,7 +88,7 @@ class Kinematics:
     def libraries(self) -> list[Any]:
         """Each enclosure's compiled library (None: not built)."""
         kept = (self.position, self.velocity, self.acceleration, self.window, self.past)
-        return [f.library for f in kept]
+        return [f.library for f in kept if f is not None]
 
     def at(self, theta: np.ndarray, points: np.ndarray, k: np.ndarray) -> np.ndarray:
         """The rows (s, s′, s″, s‴, s⁗) at each angle of ``theta`` (n, m), each row of
@@ -214,6 +219,7 @@ def past(
     upper: (n, 2), start and end); the enclosures' lower and upper bounds, (n, m) each."""
     n, per = theta.shape
     f = np.tile(np.array(fractions, dtype=float)[:per], n)[:, None]
+    assert kin.past is not None  # built where the space has its dead centres
     e = kin.past(
         [theta.reshape(-1, 1), np.repeat(dead[0], per, 0), f, np.repeat(lo, per, 0), k],
         [theta.reshape(-1, 1), np.repeat(dead[1], per, 0), f, np.repeat(hi, per, 0), k],
@@ -242,11 +248,12 @@ def strokes(
     guess = np.stack([grid[0, np.argmax(up, axis=1)], grid[0, np.argmax(down, axis=1)]], 1)
     if kin.dead is None:
         dead = kin.newton(guess + half, points, k, 1)
+        sd = kin.at(dead, points, k)[0]
     else:  # the space's, the least s first
         dead = np.tile(np.asarray(kin.dead(k), dtype=float), (n, 1))
-        s_at = kin.at(dead, points, k)[0]
-        dead = np.where(s_at[:, :1] <= s_at[:, 1:], dead, dead[:, ::-1])
-    sd = kin.at(dead, points, k)[0]
+        sd = kin.at(dead, points, k)[0]
+        first = sd[:, :1] <= sd[:, 1:]
+        dead, sd = np.where(first, dead, dead[:, ::-1]), np.where(first, sd, sd[:, ::-1])
     travel = (dead[:, 1] - dead[:, 0]) % TAU  # the crank's, while s goes up
     slow_up = travel >= math.pi
     start = np.where(slow_up, dead[:, 0], dead[:, 1])
@@ -297,13 +304,13 @@ def prove(kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> tuple[
     c, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
     dead, ends, slow_up = info["dead"], info["ends"], info["slow_up"]
     sign = np.where(slow_up, 1.0, -1.0)[:, None]
-    at = kin.at(dead, c, k)
     du = kin.du(dead.reshape(-1, 1), np.repeat(c, 2, axis=0), k).reshape(2 * d, n, 2)
     ds, dv = du[:d], du[d:]
     if kin.dead is not None:  # the space's own: a few ulps about them
         wide = np.full((n, 2), 8 * EPS * TAU)
         proved = np.ones(n, dtype=bool)
     else:
+        at = kin.at(dead, c, k)
         with np.errstate(all="ignore"):
             move = np.sum(np.abs(dv / at[2]) * half.T[:, :, None], axis=0)
             # s is stationary there: a wider interval costs its enclosure only ~ s″ wide²,

@@ -184,7 +184,7 @@ def space(p: Problem) -> Space | None:
 
     def design(u: Any, k: Any) -> dict[str, Any]:
         link = ca.exp(u[1])
-        height = k[2] * _cos_max(k) + u[0] * link
+        height = k[2] * _cos_psi_max(_slotted(u, k)) + u[0] * link
         return {**_slotted(u, k), "ram_link": link, "ram_height": height}
 
     b = min(p.cos_bound, math.sqrt(1 - k * k) - ONE_WAY)
@@ -192,11 +192,6 @@ def space(p: Problem) -> Space | None:
     if span[0] == span[1]:  # a fixed link: b alone
         return Space(*box, constants, design, scaled=True, dead=_dead)
     return Space(*box, constants, design, scaled=True, dead=_dead, measures=TWO_FREE)
-
-
-def _cos_max(k: Any) -> Any:
-    """cos ψmax of the space's constants (crank, pivot distance, lever)."""
-    return leg(k[1], k[0]) / k[1]
 
 
 def _dead(k: Any) -> tuple[float, float]:
