@@ -25,6 +25,7 @@ of it in floating point (each of its operations is within the rounding its step 
 Naive interval arithmetic overestimates where a variable repeats (the dependency problem), by
 O(h) on boxes of width h. ``Centred`` intersects it with the mean-value form
 f(P) ⊆ f(c) + J(P)(P − c), J the Jacobian's enclosure by the same evaluator: excess O(h²).
+J is built by forward differentiation (``forward``), which keeps each if_else whole.
 For a continuous f that is piecewise smooth on the box (Lipschitz there where J is finite),
 Lebourg's mean-value theorem gives f(p) − f(c) ∈ ∂f([c, p])(p − c), and the generalised
 gradient ∂f lies in J(P): the hull of the derivatives of the branches the box may take.
@@ -333,7 +334,7 @@ class Centred:
         y = fn.call(x)
         rows = ca.vertcat(*(e.nz[:] for e in y))
         cols = ca.vertcat(*(x[i].nz[:] for i in self.wrt))
-        jac = ca.densify(ca.jacobian(rows, cols))
+        jac = ca.densify(forward(rows, cols))
         self.naive = Interval(fn)
         self.joint = Interval(ca.Function(f"{fn.name()}_centred", x, [*y, jac], {"cse": True}))
         self.m, self.k = rows.numel(), cols.numel()
@@ -369,6 +370,16 @@ class Centred:
         high = np.where(bad, naive[1], np.minimum(naive[1], form[1]))
         cuts = np.cumsum(self.naive.nnz_out)[:-1]
         return Enclosure(np.split(low, cuts, axis=1), np.split(high, cuts, axis=1), *flags)
+
+
+def forward(y: Any, x: Any) -> Any:
+    """The Jacobian of y in x by forward differentiation, a column per nonzero of x: what an
+    enclosure of derivatives is built from. Reverse mode (``ca.jacobian``'s choice for few
+    outputs) sends an if_else's seed down each branch as an if_else_zero of its own, which an
+    undecided box hulls with 0 apart (c ? 1 : 0 plus !c ? 1 : 0 gives [0, 2]); forward mode
+    keeps each if_else of the derivative a pair (``_rewrite``), its branches' hull."""
+    seeds = ca.DM.eye(x.numel())
+    return ca.horzcat(*(ca.jtimes(y, x, seeds[:, i]) for i in range(x.numel())))
 
 
 def sx_function(fn: ca.Function) -> ca.Function:

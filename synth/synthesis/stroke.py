@@ -26,6 +26,7 @@ from ..analysis.quality import CUT
 from ..mechanisms import Mechanism
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred, CompiledInterval
+from ..numerics.interval import forward
 from ..numerics.native import WIDEST, Mapped
 
 GRID = 128  # angles that bracket a design's dead centres, window ends and peaks
@@ -55,7 +56,7 @@ class Kinematics:
         p = design(m, variant, sp, u, k)
         d = [m.position(p, th)]
         for _ in range(4):
-            d.append(ca.jacobian(d[-1], th))
+            d.append(forward(d[-1], th))
 
         def fn(what: str, out: Any) -> ca.Function:
             return ca.Function(f"{name}_{what}", [th, u, k], [out], {"cse": True})
@@ -135,9 +136,9 @@ def window(
     own), θa and θb as the window's ends (s = its levels), by the implicit function theorem
     (∂s0/∂u at a dead centre is ∂s/∂u there)."""
     s = m.position(p, th)
-    v = ca.jacobian(s, th)
-    rows = ca.vertcat(s, v, ca.jacobian(v, th))
-    grad = ca.jacobian(ca.vertcat(s, v), u)
+    v = forward(s, th)
+    rows = ca.vertcat(s, v, forward(v, th))
+    grad = forward(ca.vertcat(s, v), u)
     angles = ca.SX.sym("angles", 5)  # θⱼ, θa, θb, θ0, θ1
     at = [ca.substitute(ca.vertcat(rows, ca.vec(grad)), th, angles[i]) for i in range(5)]
     d = u.numel()
@@ -155,7 +156,7 @@ def window(
     for i, (e, f) in ((1, (a, CUT)), (2, (b, 1 - CUT))):
         dlevel = s0[3] + f * (s1[3] - s0[3])
         moves[i] = -(e[3] - dlevel) / e[1]
-    total = ca.jacobian(g, u) + ca.jacobian(g, angles) @ ca.vertcat(*moves)
+    total = forward(g, u) + forward(g, angles) @ ca.vertcat(*moves)
     inputs = [ca.SX.sym(x) for x in ("j", "a", "b", "t0", "t1")]
     out = ca.substitute(total, angles, ca.vertcat(*inputs))
     return ca.Function(f"{name}_window", [*inputs, u, k], [out], {"cse": True})

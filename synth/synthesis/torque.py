@@ -39,6 +39,7 @@ from ..load import Load
 from ..mechanisms import Mechanism, kinetics
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred, CompiledInterval
+from ..numerics.interval import forward
 from ..numerics.native import WIDEST, Mapped
 from .measures import local_peaks
 from .stroke import PEAKS, TAU, Kinematics, design, newton, prove, strokes
@@ -69,14 +70,14 @@ class Model:
         w = ca.SX.sym("w", len(kinetics.LOAD))
         numbers = {n: w[i] for i, n in enumerate(kinetics.LOAD)} | {"force": force}
         t = kinetics.torque(m, variant, design(m, variant, sp, u, k), th, numbers)
-        t1 = ca.jacobian(t, th)
+        t1 = forward(t, th)
         args, shared = [th, u, k, w, force], (False, False, True, True, False)
         value = ca.Function(f"{name}_torque", args, [t], {"cse": True})
-        rows = ca.Function(f"{name}_torque_rows", args, [ca.vertcat(t, t1, ca.jacobian(t1, th))])
+        rows = ca.Function(f"{name}_torque_rows", args, [ca.vertcat(t, t1, forward(t1, th))])
         self.value = Mapped(value, shared, looped=(WIDEST,))
         self.rows = Mapped(rows, shared)
         self.enclosure = CompiledCentred(value, wrt=[0, 1])
-        slope = ca.densify(ca.jacobian(t, u))
+        slope = ca.densify(forward(t, u))
         self.slope = CompiledInterval(
             ca.Function(f"{name}_torque_du", args, [slope], {"cse": True})
         )

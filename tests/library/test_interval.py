@@ -360,3 +360,23 @@ def test_the_checks_catch_a_mutant(mutant: str, monkeypatch: pytest.MonkeyPatch)
         found += violations(fn, Interval(fn), lo, hi, rng)
         found += inexact(fn, Interval(fn), lo[:50], hi[:50], rng)
     assert found
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+def test_a_branch_undecided_over_the_box_keeps_the_centred_form_tight(compiled: bool) -> None:
+    """f = (1 − w)(x > 0 ? u (1 + x) : u + u x) − u (1 − x), two formulas of one quantity
+    weighed, less a third (as s − level is): over x ∈ ±1e-9 (the branch undecided), u ∈ [1,
+    2] and w = 0, f = 2 u x is within ±4e-9. The naive enclosure is [−1, 1] (u repeats); the
+    centred form is as tight as f where the Jacobian's branches stay paired (reverse mode
+    sends the weight down each branch over [0, 1] apart: ∂f/∂u ∈ [−1, 1], f within ±0.5)."""
+    x, u, w = ca.SX.sym("x"), ca.SX.sym("u"), ca.SX.sym("w")
+    f = (1 - w) * ca.if_else(x > 0, u * (1 + x), u + u * x) - u * (1 - x)
+    fn = ca.Function("branched", [x, u, w], [f])
+    if compiled:
+        from synth.numerics.compiled_interval import CompiledCentred
+
+        e = CompiledCentred(fn, continuous=True)([-1e-9, 1.0, 0.0], [1e-9, 2.0, 0.0])
+    else:
+        e = Centred(fn, continuous=True)([-1e-9, 1.0, 0.0], [1e-9, 2.0, 0.0])
+    assert e.lo[0][0, 0] <= -2e-9 and e.hi[0][0, 0] >= 2e-9  # it holds f (x = ±1e-9, u = 1)
+    assert e.hi[0][0, 0] - e.lo[0][0, 0] < 1e-7
