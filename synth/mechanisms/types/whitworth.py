@@ -144,7 +144,15 @@ def space(p: Problem) -> Space | None:
         return {"crank": k[0], "pivot_distance": k[1], "lever": k[2], "connecting_rod": u[0]}
 
     lo, hi = (f["connecting_rod"],) * 2 if "connecting_rod" in f else p.box("connecting_rod")
-    return Space((lo,), (hi,), (crank, crank * per_crank, f.get("lever", 0.5)), design, scaled=True)
+    constants = (crank, crank * per_crank, f.get("lever", 0.5))
+    return Space((lo,), (hi,), constants, design, scaled=True, dead=_dead)
+
+
+def _dead(k: Any) -> tuple[float, float]:
+    """Where the crank pin is over the lever's pivot, cos θ = −pivot_distance/crank: the
+    arm is across the ram's path, the slider's dead centres for every rod (l > L)."""
+    theta = math.acos(-k[1] / k[0])
+    return theta, 2 * math.pi - theta
 
 
 # the crank pin's block slides in the lever's slot, on the line from O4 through B; the lever's
