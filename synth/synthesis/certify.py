@@ -61,6 +61,8 @@ EPS = float(np.finfo(float).eps)
 POLISHED = 1e-12  # relative: an incumbent this close to the bound is not polished
 SPLITS = {1: 8}  # the parts a box is cut into, by its dimension (fewer levels: each costs a
 SPLIT = 4  # few calls; a box of two or more free numbers: this many)
+FIRST = {1: 2}  # a box's cuts before the first level, by its free numbers (a wider box's bound
+# proves nothing: the speed's window ends move too far over it)
 LEVELS = 30  # levels at most (1-D: 8^-30 of the box)
 LIVE = 4096  # boxes alive at most
 CHUNK = 256  # the boxes measured and bounded between two looks at the deadline
@@ -234,7 +236,9 @@ def _search(
 
     corners = np.array(list(itertools.product(*zip(sp.lo, sp.hi, strict=True))))
     probe(corners, measure(b.kin, corners, k)[0])  # an optimum at a bound
-    parent = np.array([-math.inf])  # each box's parent's bound, which holds for it too
+    for _ in range(FIRST.get(int(np.count_nonzero(width)), 0)):  # too wide to bound: cut first
+        lo, hi = _split(lo, hi, width, parts)
+    parent = np.full(len(lo), -math.inf)  # each box's parent's bound, which holds for it too
     while len(lo) and levels < LEVELS and len(lo) <= LIVE:
         if time.monotonic() >= deadline:
             stopped = True

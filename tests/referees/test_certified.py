@@ -95,9 +95,9 @@ def test_a_search_stopped_short_is_not_certified(monkeypatch):
 
 def test_a_deadline_inside_a_level_stops_the_search_there(monkeypatch):
     """The clock passes the deadline after the certified search's fifth look, one box a
-    chunk: the search stops inside its second level, measures nothing more, and says so (the
-    answer is not certified); the bound it gives (the boxes bounded so far, the others their
-    parents') holds."""
+    chunk (and the box not cut before the first level): the search stops inside its second
+    level, measures nothing more, and says so (the answer is not certified); the bound it
+    gives (the boxes bounded so far, the others their parents') holds."""
     looks, real = [], time.monotonic
 
     class Clock:
@@ -123,6 +123,7 @@ def test_a_deadline_inside_a_level_stops_the_search_there(monkeypatch):
 
     monkeypatch.setattr(certify, "time", Clock)
     monkeypatch.setattr(certify, "CHUNK", 1)
+    monkeypatch.setattr(certify, "FIRST", {})
     monkeypatch.setattr(certify, "MEASURES", {**certify.MEASURES, "acceleration": Counted})
     monkeypatch.setattr(certify, "search", recorded)
     r = synth.synthesize(1.6, 300.0, 20.0, [{"type": "offset_slider_crank"}], objective=PEAK)
