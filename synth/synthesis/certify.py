@@ -59,6 +59,7 @@ TOL = 1e-9  # the relative gap certified
 CLOSE = 1e-10
 EPS = float(np.finfo(float).eps)
 POLISHED = 1e-12  # relative: an incumbent this close to the bound is not polished
+INSIDE = 1e-12  # how far inside the box its corners are measured again (of its width, /2)
 SPLITS = {1: 8}  # the parts a box is cut into, by its dimension (fewer levels: each costs a
 SPLIT = 4  # few calls; a box of two or more free numbers: this many)
 FIRST = {1: 2}  # a box's cuts before the first level, by its free numbers (a wider box's bound
@@ -175,7 +176,9 @@ def search(
     to measure ``cutoff`` (another variant's) starts it as the incumbent: boxes bounded above
     it go at once, and where none of the variant's designs is better the certificate has no
     design, and its bound says so."""
-    sp = m.space(v.problem) if m.space is not None else None
+    # the box of the problem as searched: its transmission bound the search's own
+    problem = replace(v.problem, cos_bound=targets[1])
+    sp = m.space(problem) if m.space is not None else None
     if sp is None or terms is None or (sp.measures is not None and terms not in sp.measures):
         return None
     b = built(m, v.parts, sp)
@@ -234,8 +237,12 @@ def _search(
         if value[j] < top:
             top, best = value[j], points[j]
 
+    # an optimum at a bound: the corners, and the corners moved inside by 1e-12 of the box
+    # (a face where a constraint holds with equality is a design to rounding only)
     corners = np.array(list(itertools.product(*zip(sp.lo, sp.hi, strict=True))))
-    probe(corners, measure(b.kin, corners, k)[0])  # an optimum at a bound
+    inside = corners + INSIDE * (np.array(sp.lo) + np.array(sp.hi) - 2 * corners)
+    corners = np.vstack([corners, inside])
+    probe(corners, measure(b.kin, corners, k)[0])
     for _ in range(FIRST.get(int(np.count_nonzero(width)), 0)):  # too wide to bound: cut first
         lo, hi = _split(lo, hi, width, parts)
     parent = np.full(len(lo), -math.inf)  # each box's parent's bound, which holds for it too

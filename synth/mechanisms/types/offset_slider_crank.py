@@ -137,15 +137,25 @@ def reduced(p: Problem) -> Reduced:
 def space(p: Problem) -> Space | None:
     """The dead-centre construction as ``reduced`` states it: every design is one q in
     (0, cos β) = (0, c² − s²), up to the offset's sign (a mirror: the same motion), β the
-    constant; a fixed part sets q (the box a point), and the offset's sign is the fixed
-    offset's, else the one its bounds allow (the other the mirror's, where they
-    allow both)."""
+    constant. The box is the q whose cos μ is within the bound (``reduced``: cos μ is 1 at
+    both ends and has one minimum between), so that an optimum the bound holds lies on its
+    face; None where no q meets it. A fixed part sets q (the box a point), and the offset's
+    sign is the fixed offset's, else the one its bounds allow (the other the mirror's, where
+    they allow both)."""
     if p.beta <= math.pi / 2 * TOL:
         return None
     s, c = p.half
     fixed = _fixed_q(p, s, c)
     sign = fixed[1] if fixed else (1.0 if p.box("offset")[1] > 0 else -1.0)
-    lo, hi = (fixed[0], fixed[0]) if fixed else (0.0, math.cos(p.beta))
+    if fixed:
+        lo, hi = fixed[0], fixed[0]
+    elif p.cos_bound < 1:
+        star, cb = s * (math.sqrt(s * s + 4) - 3 * s) / 2, p.cos_bound
+        if _cos_mu(star, s, c) > cb:
+            return None
+        lo, hi = _bound_root(s, c, cb, 0.0, star), _bound_root(s, c, cb, math.cos(p.beta), star)
+    else:
+        lo, hi = 0.0, math.cos(p.beta)
 
     def design(u: Any, k: Any) -> dict[str, Any]:
         beta, q = k[0], u[0]
@@ -190,12 +200,13 @@ def _optimum(p: Problem, s: float, c: float, lo: float, hi: float) -> float | No
     return _bound_root(s, c, cb, lo, star)
 
 
-def _bound_root(s: float, c: float, cb: float, lo: float, hi: float) -> float:
-    """The q in [lo, hi] where cos μ = cb (cos μ falls through it, once: above cb at lo, at
-    most cb at hi), to machine precision: Newton's method on the closed form's derivative,
-    kept within the bracket (bisection where a step would leave it or stall), in Python
-    floats (scipy's brentq cost ~10 µs of call overhead here, most of a min_size search)."""
-    a, b = lo, hi
+def _bound_root(s: float, c: float, cb: float, out: float, star: float) -> float:
+    """The q between ``out`` and ``star`` where cos μ = cb (above cb at ``out``, at most cb at
+    ``star``; ``out`` on either side), to machine precision: Newton's method on the closed
+    form's derivative, kept within the bracket (bisection where a step would leave it or
+    stall), in Python floats (scipy's brentq cost ~10 µs of call overhead here, most of a
+    min_size search)."""
+    a, b = out, star  # cos μ > cb at a, ≤ cb at b
     q = 0.5 * (a + b)
     for _ in range(100):
         r, w = math.sqrt(c * c - q), math.sqrt(s * s + q)
@@ -210,9 +221,9 @@ def _bound_root(s: float, c: float, cb: float, lo: float, hi: float) -> float:
         d = ((1 - s / (2 * r)) * w - num / (2 * w)) / (c * w * w)  # d cos μ / dq
         step = f / d if d else math.nan
         nxt = q - step
-        if not (a < nxt < b) or not math.isfinite(nxt):
+        if not (min(a, b) < nxt < max(a, b)) or not math.isfinite(nxt):
             nxt = 0.5 * (a + b)
-        if abs(nxt - q) <= 2 * EPS * max(q, 1e-300) or b - a <= 2 * EPS * b:
+        if abs(nxt - q) <= 2 * EPS * max(q, 1e-300) or abs(b - a) <= 2 * EPS * max(a, b):
             return nxt
         q = nxt
     return q
