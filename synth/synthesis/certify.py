@@ -59,6 +59,7 @@ TOL = 1e-9  # the relative gap certified
 CLOSE = 1e-10
 EPS = float(np.finfo(float).eps)
 POLISHED = 1e-12  # relative: an incumbent this close to the bound is not polished
+GRADE, GRADES = 8, 8  # the box of an incumbent on a face: cut at x ± its width / 8, … / 8⁸
 INSIDE = 1e-12  # how far inside the box its corners are measured again (of its width, /2)
 SPLITS = {1: 8}  # the parts a box is cut into, by its dimension (fewer levels: each costs a
 SPLIT = 4  # few calls; a box of two or more free numbers: this many)
@@ -277,8 +278,7 @@ def _search(
         keep &= ~point
         if (lower <= top).any():  # where a design as good as the incumbent may be
             near = lo[lower <= top].min(axis=0), hi[lower <= top].max(axis=0)
-        lo, hi = _split(lo[keep], hi[keep], width, parts)
-        parent = np.tile(lower[keep], parts)  # part j of box i: row j n + i (``_split``)
+        lo, hi, parent = _cut(lo[keep], hi[keep], lower[keep], width, parts, _on_face(best, sp))
     if len(lo):  # stopped with boxes alive: their parents' bounds count (no work past it)
         least = min([least, *parent])
     if best is None:
@@ -326,6 +326,45 @@ def _polish(
     res = minimize_scalar(at, bounds=(lo, hi), method="bounded", options={"xatol": xatol})
     value = at(float(res.x))
     return (value, point(float(res.x))) if value < top else (top, best)
+
+
+def _on_face(x: np.ndarray | None, sp: Space) -> np.ndarray | None:
+    """The incumbent x where it is on a face of a space of one free number (an optimum a bound
+    holds: the corners' probe finds it to 1e-12 of the box), else None."""
+    width = np.array(sp.hi) - np.array(sp.lo)
+    if x is None or np.count_nonzero(width) != 1:
+        return None
+    j = int(np.argmax(width > 0))
+    return x if min(x[j] - sp.lo[j], sp.hi[j] - x[j]) <= 2 * INSIDE * width[j] else None
+
+
+def _cut(
+    lo: np.ndarray,
+    hi: np.ndarray,
+    bound: np.ndarray,
+    width: np.ndarray,
+    parts: int,
+    x: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every box cut in ``parts`` (``_split``), but the one holding the point x (None: none),
+    whose one free side j is cut at x ± its width / ``GRADE``^k, k = 1 … ``GRADES``: parts
+    that shrink geometrically towards x. Each part with its box's ``bound``."""
+    rest = np.ones(len(lo), dtype=bool)
+    if x is not None:
+        rest[np.flatnonzero(np.all((lo <= x) & (x <= hi), axis=1))[:1]] = False
+    los, his = _split(lo[rest], hi[rest], width, parts)
+    bounds = np.tile(bound[rest], parts)  # part j of box i: row j n + i (``_split``)
+    for i in np.flatnonzero(~rest):
+        assert x is not None
+        j = int(np.argmax(width > 0))
+        steps = (hi[i, j] - lo[i, j]) * float(GRADE) ** -np.arange(1, GRADES + 1)
+        cuts = np.concatenate([[lo[i, j], hi[i, j], x[j]], x[j] - steps, x[j] + steps])
+        cuts = np.unique(cuts[(cuts >= lo[i, j]) & (cuts <= hi[i, j])])
+        graded_lo, graded_hi = (np.tile(e[i], (len(cuts) - 1, 1)) for e in (lo, hi))
+        graded_lo[:, j], graded_hi[:, j] = cuts[:-1], cuts[1:]
+        los, his = np.vstack([los, graded_lo]), np.vstack([his, graded_hi])
+        bounds = np.concatenate([bounds, np.full(len(cuts) - 1, bound[i])])
+    return los, his, bounds
 
 
 def _split(
