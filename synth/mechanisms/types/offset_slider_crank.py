@@ -138,24 +138,35 @@ def space(p: Problem) -> Space | None:
     """The dead-centre construction as ``reduced`` states it: every design is one q in
     (0, cos β) = (0, c² − s²), up to the offset's sign (a mirror: the same motion), β the
     constant. The box is the q whose cos μ is within the bound (``reduced``: cos μ is 1 at
-    both ends and has one minimum between), so that an optimum the bound holds lies on its
-    face; None where no q meets it. A fixed part sets q (the box a point), and the offset's
-    sign is the fixed offset's, else the one its bounds allow (the other the mirror's, where
-    they allow both)."""
+    both ends and has one minimum between) and whose parts are within theirs (``_q_box``;
+    the hull of both signs' where the mirror is searched too), so that an optimum a bound
+    holds lies on its face; None where no q meets them. A fixed part sets q (the box a point),
+    and the offset's sign is the fixed offset's, else the one its bounds allow (the other the
+    mirror's, where they allow both)."""
     if p.beta <= math.pi / 2 * TOL:
         return None
     s, c = p.half
     fixed = _fixed_q(p, s, c)
     sign = fixed[1] if fixed else (1.0 if p.box("offset")[1] > 0 else -1.0)
+    e = p.box("offset")
+    mirror = (p.beta, -sign) if "offset" not in p.fixed and e[0] < 0 < e[1] else None
     if fixed:
         lo, hi = fixed[0], fixed[0]
-    elif p.cos_bound < 1:
-        star, cb = s * (math.sqrt(s * s + 4) - 3 * s) / 2, p.cos_bound
-        if _cos_mu(star, s, c) > cb:
-            return None
-        lo, hi = _bound_root(s, c, cb, 0.0, star), _bound_root(s, c, cb, math.cos(p.beta), star)
     else:
-        lo, hi = 0.0, math.cos(p.beta)
+        signs = (sign, -sign) if mirror else (sign,)
+        parts = [b for b in (_q_box(p, s, c, int(x)) for x in signs) if b]
+        cb, star = p.cos_bound, s * (math.sqrt(s * s + 4) - 3 * s) / 2
+        if not parts or _cos_mu(star, s, c) > cb:
+            return None
+        if cb < 1:
+            bound = _bound_root(s, c, cb, 0.0, star), _bound_root(s, c, cb, math.cos(p.beta), star)
+        else:
+            bound = 0.0, math.cos(p.beta)
+        hull = min(b[0] for b in parts), max(b[1] for b in parts)
+        box = intersect(bound, hull)
+        if box is None:
+            return None
+        lo, hi = box
 
     def design(u: Any, k: Any) -> dict[str, Any]:
         beta, q = k[0], u[0]
@@ -163,8 +174,6 @@ def space(p: Problem) -> Space | None:
         crank, coupler = ca.sqrt(c * c - q) / (2 * c), ca.sqrt(s * s + q) / (2 * s)
         return {"crank": crank, "coupler": coupler, "offset": k[1] * q / ca.sin(beta)}
 
-    e = p.box("offset")
-    mirror = (p.beta, -sign) if "offset" not in p.fixed and e[0] < 0 < e[1] else None
     return Space((lo,), (hi,), (p.beta, sign), design, mirror)
 
 
