@@ -7,8 +7,9 @@ design of a box (``prove``).
 A dead centre's interval is proved by the sign of s′ at its ends, or is the space's own angle
 where no design of the space moves it (``Space.dead``). A window end's is proved by the sign
 of s − level at its ends (the level a fraction of the way from s at the stroke's start to s
-at its end): enclosed as s and the levels apart where the dead centres move, as one function
-of the angle, the dead centres' angles and u where they do not. Its first width is twice the
+at its end), enclosed as one function of the angle, u and the dead centres' angles over their
+intervals: s and the level move alike with u, and s at a dead centre hardly moves with its
+angle (s′ = 0 there), so the enclosure is as tight as s − level is. Its first width is twice the
 first-order estimate of how far the end moves over the box; where that is not proved it is
 widened ``GROW``-fold, up to ``REACHES`` times (a wider interval is still one that holds the
 end, and the measures' bounds only lose some tightness)."""
@@ -66,20 +67,15 @@ class Kinematics:
         self.du = Mapped(fn("du", ca.vec(du.T)), (False, False, True))
         self.dead = sp.dead  # the dead centres' angles, where u does not move them
         self.window = CompiledInterval(window(m, p, th, u, k, name, sp.dead is None))
-        # s − level: s(θ) − (1 − f) s(θ0) − f s(θ1), the level f of the way from s(θ0) to
-        # s(θ1); where the dead centres are the space's own (else s and the levels apart)
+        # s − level: s(θ) − (1 − f) s(θ0) − f s(θ1), the level f of the way from s(θ0) to s(θ1)
         ends, f = ca.SX.sym("ends", 2), ca.SX.sym("f")
         past = (
             d[0] - (1 - f) * ca.substitute(d[0], th, ends[0]) - f * ca.substitute(d[0], th, ends[1])
         )
-        self.past = (
-            None
-            if sp.dead is None
-            else CompiledCentred(
-                ca.Function(f"{name}_past", [th, ends, f, u, k], [past], {"cse": True}),
-                wrt=[0, 1, 3],
-                continuous=True,
-            )
+        self.past = CompiledCentred(
+            ca.Function(f"{name}_past", [th, ends, f, u, k], [past], {"cse": True}),
+            wrt=[0, 1, 3],
+            continuous=True,
         )
         self.position, self.velocity, self.acceleration = (
             CompiledCentred(fn(what, d[i]), wrt=[0, 1], continuous=True)
@@ -89,7 +85,7 @@ class Kinematics:
     def libraries(self) -> list[Any]:
         """Each enclosure's compiled library (None: not built)."""
         kept = (self.position, self.velocity, self.acceleration, self.window, self.past)
-        return [f.library for f in kept if f is not None]
+        return [f.library for f in kept]
 
     def at(self, theta: np.ndarray, points: np.ndarray, k: np.ndarray) -> np.ndarray:
         """The rows (s, s′, s″, s‴, s⁗) at each angle of ``theta`` (n, m), each row of
@@ -220,7 +216,6 @@ def past(
     upper: (n, 2), start and end); the enclosures' lower and upper bounds, (n, m) each."""
     n, per = theta.shape
     f = np.tile(np.array(fractions, dtype=float)[:per], n)[:, None]
-    assert kin.past is not None  # built where the space has its dead centres
     e = kin.past(
         [theta.reshape(-1, 1), np.repeat(dead[0], per, 0), f, np.repeat(lo, per, 0), k],
         [theta.reshape(-1, 1), np.repeat(dead[1], per, 0), f, np.repeat(hi, per, 0), k],
@@ -297,8 +292,7 @@ def prove(kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> tuple[
     box's own for every u in it, and whether each box's are proved: the dead centres' where
     s′ has opposite signs at their ends (its half-width ``SLACK`` times the first-order
     estimate |dθ/du|·half-width, plus ``DEAD`` and the box's half-widths), the window ends'
-    where s − level does, the levels enclosed from s over the dead centres' intervals (at
-    least ``CROSSING``).
+    where s − level does (``past``, at least ``CROSSING``).
     Returns (proved, (dead lower, dead upper), (ends lower, ends upper)), (n, 2) each, and
     the stroke's greatest (n)."""
     n, d = lo.shape
@@ -333,25 +327,10 @@ def prove(kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> tuple[
     with np.errstate(all="ignore"):
         slope = np.abs(ae[1])
         move = np.sum(np.abs(de - dlevel) * half.T[:, :, None], axis=0) / slope
-    if kin.dead is None:  # the levels enclosed from s over the dead centres' intervals
-        s0 = np.take_along_axis(s_lo, pick, 1)[:, 0], np.take_along_axis(s_hi, pick, 1)[:, 0]
-        s1 = np.take_along_axis(s_lo, pick, 1)[:, 1], np.take_along_axis(s_hi, pick, 1)[:, 1]
-        with np.errstate(invalid="ignore"):  # 0 × an unbounded end's ∞, at a fraction 0 or 1
-            low = [(1 - f) * s0[0] + f * s1[0] for f in fractions]
-            high = [(1 - f) * s0[1] + f * s1[1] for f in fractions]
-        level = np.nextafter(np.stack(low, 1), -np.inf), np.nextafter(np.stack(high, 1), np.inf)
-        with np.errstate(all="ignore"):  # and their width moves the ends too
-            move += (level[1] - level[0]) / slope
 
-        def enclosed(rows: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            p = enclose(kin.position, (theta, theta), lo[rows], hi[rows], k)
-            return p[0] - level[1][rows], p[1] - level[0][rows]  # the signs exact
-
-    else:  # s − level as one function, its dead centres' angles the space's own
-
-        def enclosed(rows: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-            at = tuple(np.take_along_axis(x, pick, 1)[rows] for x in (dead - wide, dead + wide))
-            return past(kin, theta, at, fractions, lo[rows], hi[rows], k)
+    def enclosed(rows: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        at = tuple(np.take_along_axis(x, pick, 1)[rows] for x in (dead - wide, dead + wide))
+        return past(kin, theta, at, fractions, lo[rows], hi[rows], k)
 
     reach = SLACK * move + CROSSING
     # an end at a fraction 0 or 1 is that dead centre: its interval is the dead centre's
