@@ -60,7 +60,7 @@ CLOSE = 1e-10
 EPS = float(np.finfo(float).eps)
 POLISHED = 1e-12  # relative: an incumbent this close to the bound is not polished
 GRADE, GRADES = 8, 8  # the box of an incumbent on a face: cut at x ± its width / 8, … / 8⁸
-INSIDE = 1e-12  # how far inside the box its corners are measured again (of its width, /2)
+INSIDE = 1e-12  # how far inside the box its corners are measured again, of its width
 SPLITS = {1: 8}  # the parts a box is cut into, by its dimension (fewer levels: each costs a
 SPLIT = 4  # few calls; a box of two or more free numbers: this many)
 FIRST = {1: 2}  # a box's cuts before the first level, by its free numbers (a wider box's bound
@@ -242,7 +242,7 @@ def _search(
     # (a face where a constraint holds with equality is a design to rounding only)
     corners = np.array(list(itertools.product(*zip(sp.lo, sp.hi, strict=True))))
     inside = corners + INSIDE * (np.array(sp.lo) + np.array(sp.hi) - 2 * corners)
-    corners = np.vstack([corners, inside])
+    corners = np.unique(np.vstack([corners, inside]), axis=0)  # a point box's are one
     probe(corners, measure(b.kin, corners, k)[0])
     for _ in range(FIRST.get(int(np.count_nonzero(width)), 0)):  # too wide to bound: cut first
         lo, hi = _split(lo, hi, width, parts)
@@ -354,9 +354,9 @@ def _cut(
         rest[np.flatnonzero(np.all((lo <= x) & (x <= hi), axis=1))[:1]] = False
     los, his = _split(lo[rest], hi[rest], width, parts)
     bounds = np.tile(bound[rest], parts)  # part j of box i: row j n + i (``_split``)
+    j = int(np.argmax(width > 0))
     for i in np.flatnonzero(~rest):
         assert x is not None
-        j = int(np.argmax(width > 0))
         steps = (hi[i, j] - lo[i, j]) * float(GRADE) ** -np.arange(1, GRADES + 1)
         cuts = np.concatenate([[lo[i, j], hi[i, j], x[j]], x[j] - steps, x[j] + steps])
         cuts = np.unique(cuts[(cuts >= lo[i, j]) & (cuts <= hi[i, j])])
