@@ -25,7 +25,7 @@ of it in floating point (each of its operations is within the rounding its step 
 Naive interval arithmetic overestimates where a variable repeats (the dependency problem), by
 O(h) on boxes of width h. ``Centred`` intersects it with the mean-value form
 f(P) ⊆ f(c) + J(P)(P − c), J the Jacobian's enclosure by the same evaluator: excess O(h²).
-J is built by forward differentiation (``forward``), which keeps each if_else whole.
+J is built by forward differentiation (``symbolic.forward``), which keeps each if_else whole.
 For a continuous f that is piecewise smooth on the box (Lipschitz there where J is finite),
 Lebourg's mean-value theorem gives f(p) − f(c) ∈ ∂f([c, p])(p − c), and the generalised
 gradient ∂f lies in J(P): the hull of the derivatives of the branches the box may take.
@@ -42,6 +42,8 @@ from typing import Any, cast
 import casadi as ca
 import numpy as np
 import numpy.typing as npt
+
+from .symbolic import forward, sx_function
 
 REL = 2.0**-46  # a libm result's relative margin: ≥ 64 ulp (numpy's measured: ≤ 1.2 ulp)
 TINY = 64 * 2.0**-1074  # and its absolute margin: 64 subnormal steps, for |y| near 0
@@ -370,29 +372,6 @@ class Centred:
         high = np.where(bad, naive[1], np.minimum(naive[1], form[1]))
         cuts = np.cumsum(self.naive.nnz_out)[:-1]
         return Enclosure(np.split(low, cuts, axis=1), np.split(high, cuts, axis=1), *flags)
-
-
-def forward(y: Any, x: Any) -> Any:
-    """The Jacobian of y in x by forward differentiation, a column per nonzero of x: what an
-    enclosure of derivatives is built from. Reverse mode (``ca.jacobian``'s choice for few
-    outputs) sends an if_else's seed down each branch as an if_else_zero of its own, which an
-    undecided box hulls with 0 apart (c ? 1 : 0 plus !c ? 1 : 0 gives [0, 2]); forward mode
-    keeps each if_else of the derivative a pair (``_rewrite``), its branches' hull."""
-    seeds = ca.DM.eye(x.numel())
-    return ca.horzcat(*(ca.jtimes(y, x, seeds[:, i]) for i in range(x.numel())))
-
-
-def sx_function(fn: ca.Function) -> ca.Function:
-    """``fn`` as an SX function (an MX one expanded), or a ``TypeError`` saying why not."""
-    if fn.is_a("SXFunction"):
-        return fn
-    try:
-        return fn.expand()
-    except RuntimeError as e:
-        raise TypeError(
-            f"interval: {fn.name()} is neither SX nor MX that expands to SX (a compiled or "
-            "external function has no instructions to read): build it from its expressions"
-        ) from e
 
 
 def graph(fn: ca.Function) -> tuple[list[Node], dict[tuple[int, int], int]]:

@@ -27,8 +27,8 @@ from ..analysis.quality import CUT
 from ..mechanisms import Mechanism
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred, CompiledInterval
-from ..numerics.interval import forward
 from ..numerics.native import WIDEST, Mapped
+from ..numerics.symbolic import forward
 
 GRID = 128  # angles that bracket a design's dead centres, window ends and peaks
 PEAKS = 3  # the largest local peaks at a box's centre at which its bound is taken

@@ -39,8 +39,8 @@ from ..load import Load
 from ..mechanisms import Mechanism, kinetics
 from ..mechanisms.reduced import Space
 from ..numerics.compiled_interval import CompiledCentred, CompiledInterval
-from ..numerics.interval import forward
 from ..numerics.native import WIDEST, Mapped
+from ..numerics.symbolic import forward
 from .measures import local_peaks
 from .stroke import PEAKS, TAU, Kinematics, design, newton, prove, strokes
 
