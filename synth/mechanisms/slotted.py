@@ -1,7 +1,9 @@
-"""Shared by the slotted-lever types (crank_shaper, whitworth): the crank as a free scale.
+"""Shared by the slotted-lever types (crank_shaper, whitworth): the crank as a free scale, and
+the slider's dead centres.
 
 In both, the time ratio fixes the ratio of pivot_distance to crank and the stroke fixes the
-lever, so crank and pivot_distance are one family with a free scale.
+lever, so crank and pivot_distance are one family with a free scale; and the slider's dead
+centres are two crank angles mirrored about the line of centres, wherever the link moves it.
 """
 
 from __future__ import annotations
@@ -61,3 +63,10 @@ def scale(p: Problem, pivot_per_crank: float, reach: float = math.inf) -> float 
         crank = span[0]
     ok = crank <= reach * (1 + ROUNDING) and p.allows("crank", crank)
     return crank if ok and p.allows("pivot_distance", crank * pivot_per_crank) else None
+
+
+def dead_centres(cos: float) -> tuple[float, float]:
+    """The crank angles θ and 2π − θ with cos θ = ``cos``: a slotted lever's two dead centres
+    (``Space.dead``), the lower first."""
+    theta = math.acos(cos)
+    return theta, 2 * math.pi - theta

@@ -349,22 +349,22 @@ def _cut(
     """Every box cut in ``parts`` (``_split``), but the one holding the point x (None: none),
     whose one free side j is cut at x ± its width / ``GRADE``^k, k = 1 … ``GRADES``: parts
     that shrink geometrically towards x. Each part with its box's ``bound``."""
+    inside = np.zeros(len(lo), dtype=bool) if x is None else np.all((lo <= x) & (x <= hi), axis=1)
+    held = np.flatnonzero(inside)[:1]
     rest = np.ones(len(lo), dtype=bool)
-    if x is not None:
-        rest[np.flatnonzero(np.all((lo <= x) & (x <= hi), axis=1))[:1]] = False
+    rest[held] = False
     los, his = _split(lo[rest], hi[rest], width, parts)
     bounds = np.tile(bound[rest], parts)  # part j of box i: row j n + i (``_split``)
-    j = int(np.argmax(width > 0))
-    for i in np.flatnonzero(~rest):
-        assert x is not None
-        steps = (hi[i, j] - lo[i, j]) * float(GRADE) ** -np.arange(1, GRADES + 1)
-        cuts = np.concatenate([[lo[i, j], hi[i, j], x[j]], x[j] - steps, x[j] + steps])
-        cuts = np.unique(cuts[(cuts >= lo[i, j]) & (cuts <= hi[i, j])])
-        graded_lo, graded_hi = (np.tile(e[i], (len(cuts) - 1, 1)) for e in (lo, hi))
-        graded_lo[:, j], graded_hi[:, j] = cuts[:-1], cuts[1:]
-        los, his = np.vstack([los, graded_lo]), np.vstack([his, graded_hi])
-        bounds = np.concatenate([bounds, np.full(len(cuts) - 1, bound[i])])
-    return los, his, bounds
+    if x is None or not len(held):
+        return los, his, bounds
+    i, j = int(held[0]), int(np.argmax(width > 0))
+    steps = (hi[i, j] - lo[i, j]) * float(GRADE) ** -np.arange(1, GRADES + 1)
+    cuts = np.concatenate([[lo[i, j], hi[i, j], x[j]], x[j] - steps, x[j] + steps])
+    cuts = np.unique(cuts[(cuts >= lo[i, j]) & (cuts <= hi[i, j])])
+    graded_lo, graded_hi = (np.tile(e[i], (len(cuts) - 1, 1)) for e in (lo, hi))
+    graded_lo[:, j], graded_hi[:, j] = cuts[:-1], cuts[1:]
+    bounds = np.concatenate([bounds, np.full(len(cuts) - 1, bound[i])])
+    return np.vstack([los, graded_lo]), np.vstack([his, graded_hi]), bounds
 
 
 def _split(

@@ -328,8 +328,10 @@ def prove(kin: Kinematics, lo: Any, hi: Any, info: Any, k: np.ndarray) -> tuple[
         slope = np.abs(ae[1])
         move = np.sum(np.abs(de - dlevel) * half.T[:, :, None], axis=0) / slope
 
+    ordered = [np.take_along_axis(x, pick, 1) for x in (dead - wide, dead + wide)]  # start, end
+
     def enclosed(rows: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        at = tuple(np.take_along_axis(x, pick, 1)[rows] for x in (dead - wide, dead + wide))
+        at = ordered[0][rows], ordered[1][rows]
         return past(kin, theta, at, fractions, lo[rows], hi[rows], k)
 
     reach = SLACK * move + CROSSING

@@ -55,7 +55,7 @@ from ..registry import (
     register,
 )
 from ..rod import rod
-from ..slotted import check, ratio
+from ..slotted import check, dead_centres, ratio
 from ..slotted import scale as _scale
 
 
@@ -197,8 +197,7 @@ def space(p: Problem) -> Space | None:
 def _dead(k: Any) -> tuple[float, float]:
     """The lever's swing ends, cos θ = −crank/pivot_distance: the slider's dead centres
     wherever it moves one way over each swing (``one_way``)."""
-    theta = math.acos(-k[0] / k[1])
-    return theta, 2 * math.pi - theta
+    return dead_centres(-k[0] / k[1])
 
 
 def _slotted(u: Any, k: Any) -> dict[str, Any]:

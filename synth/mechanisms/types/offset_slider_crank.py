@@ -155,7 +155,7 @@ def space(p: Problem) -> Space | None:
     else:
         signs = (sign, -sign) if mirror else (sign,)
         parts = [b for b in (_q_box(p, s, c, int(x)) for x in signs) if b]
-        cb, star = p.cos_bound, s * (math.sqrt(s * s + 4) - 3 * s) / 2
+        cb, star = p.cos_bound, _star(s)
         if not parts or _cos_mu(star, s, c) > cb:
             return None
         if cb < 1:
@@ -198,7 +198,7 @@ def _cos_mu(q: float, s: float, c: float) -> float:
 def _optimum(p: Problem, s: float, c: float, lo: float, hi: float) -> float | None:
     """The best q in [lo, hi] ⊂ [0, c² − s²]: max transmission, or min size within the bound
     (the size falls with q on this branch)."""
-    star = clip(s * (math.sqrt(s * s + 4) - 3 * s) / 2, lo, hi)
+    star = clip(_star(s), lo, hi)
     if p.objective == MAX_TRANSMISSION:
         return star
     cb = p.cos_bound
@@ -207,6 +207,11 @@ def _optimum(p: Problem, s: float, c: float, lo: float, hi: float) -> float | No
     if _cos_mu(lo, s, c) <= cb:  # as small as the bound lets it
         return lo
     return _bound_root(s, c, cb, lo, star)
+
+
+def _star(s: float) -> float:
+    """q*, where the worst cos μ is least on the branch q < c² − s² (``reduced``)."""
+    return s * (math.sqrt(s * s + 4) - 3 * s) / 2
 
 
 def _bound_root(s: float, c: float, cb: float, out: float, star: float) -> float:

@@ -45,7 +45,7 @@ from ..registry import (
     Scale,
     register,
 )
-from ..slotted import check, ratio
+from ..slotted import check, dead_centres, ratio
 from ..slotted import scale as _scale
 
 
@@ -151,8 +151,7 @@ def space(p: Problem) -> Space | None:
 def _dead(k: Any) -> tuple[float, float]:
     """Where the crank pin is over the lever's pivot, cos θ = −pivot_distance/crank: the
     arm is across the ram's path, the slider's dead centres for every rod (l > L)."""
-    theta = math.acos(-k[1] / k[0])
-    return theta, 2 * math.pi - theta
+    return dead_centres(-k[1] / k[0])
 
 
 # the crank pin's block slides in the lever's slot, on the line from O4 through B; the lever's
