@@ -353,9 +353,11 @@ class Candidate:
     ranked_by: str = "objective"
     # a searched objective's certificate: the relative gap between this design's value and a
     # rigorous lower bound on every design of its type the request allows (None: no bound
-    # was computed), and whether that gap is within 1e-9 (the design a certified optimum)
+    # was computed), whether that gap is within 1e-9 (the design a certified optimum), and
+    # where it is not, why (None for the objectives the exact solvers answer)
     certified: bool = False
     gap: float | None = None
+    uncertified: str | None = None
 
 
 @dataclass(frozen=True)

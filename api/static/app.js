@@ -202,6 +202,9 @@ async function synthesize(choose = 0) {
     }
     if (c.certified) notes.push(`certified the best of its type (gap ${c.gap.toExponential(1)})`);
     else if (c.gap !== null) notes.push(`at most ${short(100 * c.gap, 3)}% above the best possible`);
+    else if (c.uncertified && !cands.slice(0, i).some((b) => b.type === c.type)) {
+      notes.push(`not certified the best of its type: ${c.uncertified}`);  // once per type
+    }
     if (c.ranked_by !== "objective") {  // tied with the one above: which rule placed it after
       notes.push(`tied with the design above; after it by ${c.ranked_by.replaceAll("_", " ")}`);
     }

@@ -94,6 +94,7 @@ def _candidate_rows(r: SynthesisResult) -> list[dict[str, Any]]:
             "ranked_by": c.ranked_by,
             "certified": c.certified,
             "gap": c.gap,
+            "uncertified": c.uncertified,
             **_drive(c.loads),
         }
         for i, c in enumerate(r.candidates)
@@ -131,9 +132,15 @@ def _candidate_text(r: SynthesisResult, objective: str) -> str:
         loaded = ("peak torque N·m", "motor W", "flywheel kg·m²") if r.candidates[0].loads else ()
         out.append(table(("#", "type", "lengths", "μ min °", measure, "at limit", *loaded), rows))
         out += dict.fromkeys(f"{c.type}: {c.family.relation}" for c in r.candidates if c.family)
+        seen = set()  # each type's best: whether it is certified the best, or why not
         for i, c in enumerate(r.candidates):
+            if c.type in seen:
+                continue
+            seen.add(c.type)
             if c.certified and c.gap is not None:
                 out.append(f"#{i + 1} is certified the best {c.type} (gap {c.gap:.1e})")
+            elif c.uncertified is not None:
+                out.append(f"#{i + 1} is not certified the best {c.type}: {c.uncertified}")
     for why in r.infeasible:
         out.append(f"{why.type}: no design ({why.code}): {why.reason}")
     if not r.complete:

@@ -46,7 +46,7 @@ from .formulation import formulation, relevant
 from .measures import Acceleration, Speed
 from .search import Spec, Targets, Variant, build_problem
 from .stroke import Kinematics, design
-from .torque import Model, Torque, supports
+from .torque import Model, Torque, unsupported
 
 METHOD = "branch_and_bound"  # its candidates' method
 # the objectives' terms (``Objective.terms``) searched here, and their measures
@@ -73,27 +73,32 @@ _local = threading.local()
 
 @dataclass(frozen=True)
 class Certificate:
-    """A search's answer: the best design it measured (stroke units), its measure, the least
-    lower bound over every design of the variant, whether the search finished (not stopped
-    by the deadline), and what it took."""
+    """A search's answer: the best design it measured (stroke units; empty: none better than
+    its cutoff), its measure, the least lower bound over every design of the variant, whether
+    the search finished (not stopped by the deadline) and closed every box (``closed``: not
+    stopped at ``LEVELS`` or ``LIVE``), and what it took."""
 
     design: dict[str, float]
     value: float
     bound: float
     complete: bool
+    closed: bool
     levels: int
     boxes: int
 
 
-def mark(c: Candidate, bound: float) -> Candidate:
+def mark(c: Candidate, bound: float, why: str | None = None) -> Candidate:
     """A verified candidate with its gap to ``bound``, a lower bound on every design of its
     type: certified where it is within ``TOL`` of it (its measure as the analysis verified
-    it)."""
+    it); else ``why`` it is not (default: how far above the bound it is)."""
     v = c.objective_value
     if not (v > 0 and math.isfinite(bound)):
-        return c
+        return replace(c, uncertified=why or "no finite bound on its type's designs")
     gap = max(0.0, (v - bound) / v)
-    return replace(c, certified=bool(gap <= TOL), gap=float(gap))
+    if gap <= TOL:
+        return replace(c, certified=True, gap=float(gap))
+    why = why or f"{gap:.2g} (relative) above the least any design of its type can reach"
+    return replace(c, gap=float(gap), uncertified=why)
 
 
 class Built:
@@ -143,7 +148,7 @@ def prepared(m: Mechanism, variant: frozenset[str]) -> list[Built]:
     if m.space is None:
         return []
     names = relevant(m, variant)
-    t = Targets(1.6, 1.0, 0.0, MAX_TRANSMISSION, math.inf)
+    t = Targets(1.6 if m.quick_return else 1.0, 1.0, 0.0, MAX_TRANSMISSION, math.inf)
     free = build_problem(m, variant, names, {}, Spec(m.type), t)
     solved = m.reduced(free) if m.reduced is not None else None
     designs = solved.designs if solved is not None else []
@@ -169,35 +174,43 @@ def search(
     load: Load | None = None,
     metres: float = 1.0,
     cutoff: float = math.inf,
-) -> Certificate | None:
+) -> Certificate | str:
     """The certified least of the ``terms``' peak over the variant ``v`` (``targets``: the
     time ratio and cos of the transmission bound; the peak torque's under ``load``, the
-    space's lengths ``metres`` each), or None where this search cannot take it (another
-    measure, no space, a load ``torque`` does not bound) or finds no design. A design known
+    space's lengths ``metres`` each), or why this search cannot take it (no space, a measure
+    its bounds do not close in good time, a load ``torque`` does not bound). A design known
     to measure ``cutoff`` (another variant's) starts it as the incumbent: boxes bounded above
     it go at once, and where none of the variant's designs is better the certificate has no
     design, and its bound says so."""
     # the box of the problem as searched: its transmission bound the search's own
     problem = replace(v.problem, cos_bound=targets[1])
     sp = m.space(problem) if m.space is not None else None
-    if sp is None or terms is None or (sp.measures is not None and terms not in sp.measures):
-        return None
+    if sp is None or terms is None:
+        return f"{m.type}'s designs are no box of free numbers that the certified search covers"
+    if sp.measures is not None and terms not in sp.measures:
+        free = int(np.count_nonzero(np.subtract(sp.hi, sp.lo)))
+        return (
+            f"over {m.type}'s {free} free numbers the certified search's bounds on this measure "
+            "are too loose to close in good time"
+        )
     b = built(m, v.parts, sp)
     if terms in MEASURES:
         measure, spaces = MEASURES[terms], [sp]
-    elif terms == TORQUE and load is not None and m.frame is not None and supports(load, sp):
+    elif terms == TORQUE and load is not None and m.frame is not None:
+        why = unsupported(load, sp)
+        if why is not None:
+            return f"the certified bound on the peak torque does not hold with {why}"
         measure = Torque(b.torque, load, numbers(load, metres))
         spaces = [sp] if sp.mirror is None else [sp, replace(sp, constants=sp.mirror)]
     else:
-        return None
+        return f"the certified search does not bound {m.type}'s {terms}"
     found = [_search(b, s, measure, v, targets, deadline, cutoff) for s in spaces]
     best = min(found, key=lambda c: c.value)
-    if not best.design and math.isinf(cutoff):
-        return None
     return replace(
         best,
         bound=min(c.bound for c in found),
         complete=all(c.complete for c in found),
+        closed=all(c.closed for c in found),
         levels=sum(c.levels for c in found),
         boxes=sum(c.boxes for c in found),
     )
@@ -279,16 +292,17 @@ def _search(
         if (lower <= top).any():  # where a design as good as the incumbent may be
             near = lo[lower <= top].min(axis=0), hi[lower <= top].max(axis=0)
         lo, hi, parent = _cut(lo[keep], hi[keep], lower[keep], width, parts, _on_face(best, sp))
+    closed = not (stopped or len(lo))
     if len(lo):  # stopped with boxes alive: their parents' bounds count (no work past it)
         least = min([least, *parent])
     if best is None:
-        return Certificate({}, math.inf, least, not stopped, levels, boxes)
+        return Certificate({}, math.inf, least, not stopped, closed, levels, boxes)
     if np.count_nonzero(width) == 1 and not stopped and top - least > POLISHED * top:
         top, best = _polish(b, measure, k, pv, (lb, ub), near, top, best)
     design = dict(
         zip(b.mechanism.names, np.asarray(b.design(best, k)).ravel().tolist(), strict=True)
     )
-    return Certificate(design, top, min(least, top), not stopped, levels, boxes)
+    return Certificate(design, top, min(least, top), not stopped, closed, levels, boxes)
 
 
 def _polish(

@@ -333,14 +333,21 @@ def motion(
             continue
         exact = list(mine)  # the exact solvers' designs, measured: the answer if cut short
         bounds: list[float] | None = []  # each variant's certified least; None: one has none
+        why = None  # why the type's answer is not certified, where that is known before it is
         for v in s.variants:
+            own = [c for c in mine if m.variant(c.params) == v.parts]
             starts = [
                 {k: x / t.stroke for k, x in c.params.items()}
-                for c in sorted(mine, key=lambda c: c.objective_value)
-                if m.variant(c.params) == v.parts
+                for c in sorted(own, key=lambda c: c.objective_value)
             ]
-            if not starts or not v.free:  # none (proved, if the solver is exact), or one
-                bounds = bounds if v.exact and not starts else None
+            if not v.free:  # one design (or none): its measure is the variant's least
+                least = sorted(c.objective_value for c in own)[:1]
+                bounds = None if bounds is None else bounds + least
+                continue
+            if not starts:  # none: proved, if the solver is exact
+                if not v.exact:
+                    bounds = None
+                    why = why or "a variant with no exact design to start from, and none proved"
                 continue
             targets = (t.time_ratio, min(t.cos_bound, 1 - ACROSS))
             load = extras.get("load")
@@ -349,19 +356,27 @@ def motion(
             cert = certify.search(
                 m, v, o.terms, targets, t.deadline, load, metres, known.objective_value
             )
-            if cert is None or not cert.complete:
-                bounds = None
-            elif bounds is not None:
-                bounds.append(cert.bound)
-            if cert is not None:  # the optimum without the limit: with it too, if it meets it
-                c = known  # where the variant has none better
-                if cert.design:
+            if isinstance(cert, str):  # the NLP's, below
+                bounds, why = None, why or f"{cert}: SLSQP's local optimum from ranked starts"
+            else:
+                if not cert.complete:
+                    bounds = None
+                elif bounds is not None:
+                    bounds.append(cert.bound)
+                if cert.complete and not cert.closed:
+                    why = why or (
+                        f"the certified search stopped at its limit ({certify.LEVELS} levels or"
+                        f" {certify.LIVE} boxes alive) before its gap closed"
+                    )
+                c = known  # the optimum without the limit, where it meets it; else the NLP's
+                if cert.design:  # where the variant has a design better than the known one
                     d = whole(spec, scaled(cert.design, t.stroke), v.parts)
                     q = proposal(m, i, d, certify.METHOD, t)
                     c = None if q is None else candidate(m, q, t, s.variants, extras, mine)
                     mine += [c] if c is not None and c not in mine else []
                 if c is not None and o.allows(c, limit):
                     continue
+                why = why or "under the limit, SLSQP's local optimum (the bound is without it)"
             aim, capped = aims.aim(m, v.parts, o, t, extras, limit, mine)
             optima = local_optima(
                 m,
@@ -386,9 +401,10 @@ def motion(
         cut = time.monotonic() >= t.deadline  # where the search stopped is the clock's
         if cut:  # not kept: its one reason is the cut
             mine, bounds = exact, None
+            why = "the budget ran out before the search finished: the exact solvers' designs"
             infeasible.append(cut_short(m.type, o.name))
-        if bounds:  # every variant's least certified (a limit only raises the optimum)
-            mine = [certify.mark(c, min(bounds)) for c in mine]
+        # every variant's least certified (a limit only raises the optimum)
+        mine = [certify.mark(c, min(bounds) if bounds else math.nan, why) for c in mine]
         kept = [c for c in mine if o.allows(c, limit)]
         if not kept and not mine and not cut:
             best = pool[0].params if pool else None

@@ -47,15 +47,19 @@ from .stroke import PEAKS, TAU, Kinematics, design, newton, prove, strokes
 BOUNDED = 2  # the angles a box's bound is taken at
 
 
-def supports(load: Load, sp: Space) -> bool:
-    """Whether the bound holds for this load on this space (the module's docstring): on a
-    space whose crank's scale is pinned (``Space.scaled``), unless the crank's weight
-    counts (a crank turning evenly about its pivot takes no torque but its weight's); not
-    with gravity in the machine's frame, whose direction in the drawing's varies by design."""
-    weighs = load.link_mass_per_length > 0 and load.gravity_deg is not None
-    machine = load.ram_incline_deg is not None  # its drawing frame's gravity varies by design
-    plain = load.force_profile is None and load.guide_friction == 0 and not machine
-    return plain and not (sp.scaled and weighs)
+def unsupported(load: Load, sp: Space) -> str | None:
+    """Why the bound does not hold for this load on this space (the module's docstring), None
+    where it does: on a space whose crank's scale is pinned (``Space.scaled``), not where the
+    crank's weight counts (a crank turning evenly about its pivot takes no torque but its
+    weight's); not with gravity in the machine's frame, whose direction in the drawing's
+    varies by design."""
+    if load.force_profile is not None or load.guide_friction != 0:
+        return "a force profile or guide friction (the bound takes a cutting force over a zone)"
+    if load.ram_incline_deg is not None:
+        return "gravity in the machine's frame (its direction in the drawing's varies by design)"
+    if sp.scaled and load.link_mass_per_length > 0 and load.gravity_deg is not None:
+        return "the crank's weight on a crank of free scale"
+    return None
 
 
 class Model:

@@ -507,3 +507,27 @@ def test_every_option_says_what_it_is_for():
     assert all(a.help for a in parser._actions if a.option_strings), [
         a.option_strings for a in parser._actions if not a.help
     ]
+
+
+def test_an_answer_not_certified_says_why_in_the_table_and_the_csv():
+    args = (
+        "synthesize",
+        "--time-ratio",
+        "1.6",
+        "--stroke",
+        "300",
+        "--bound",
+        "20",
+        "--type",
+        "drag_link_slider",
+        "--objective",
+        "min_peak_acceleration",
+    )
+    table = run(*args)
+    assert table.returncode == 0, table.stderr
+    lines = [x for x in table.stdout.splitlines() if "certified" in x]
+    assert len(lines) == 1  # once for the type, at its best
+    assert lines[0].startswith("#1 is not certified the best drag_link_slider: ")
+    assert lines[0].endswith("SLSQP's local optimum from ranked starts")
+    rows = list(csv.DictReader(io.StringIO(run(*args, "--csv").stdout)))
+    assert all(row["certified"] == "False" and "SLSQP" in row["uncertified"] for row in rows)

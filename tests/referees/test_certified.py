@@ -158,3 +158,30 @@ def test_with_a_part_fixed_the_answer_is_certified_too(mtype, fixed):
     assert c.objective_value >= free.objective_value * (1 - 1e-12)
     if "crank" in fixed:  # a scale: the same optimum
         assert c.objective_value == pytest.approx(free.objective_value, rel=1e-12)
+
+
+def test_an_answer_not_certified_says_why(monkeypatch):
+    """Every searched answer is certified or says why not: the four-bars (no certified
+    search), the crank shaper's most uniform speed (its two free numbers), a search stopped
+    at its level limit; the scotch yoke's one design is certified, its measure the brute
+    force's."""
+    for mtype, objective, why in (
+        ("drag_link_slider", PEAK, "drag_link_slider's designs are no box of free numbers"),
+        ("crank_rocker_slider", PEAK, "crank_rocker_slider's designs are no box"),
+        ("crank_shaper", UNIFORM, "over crank_shaper's 2 free numbers"),
+    ):
+        r = synth.synthesize(1.6, 300.0, 20.0, [{"type": mtype}], objective=objective)
+        assert r.candidates and r.complete
+        for c in r.candidates:
+            assert not c.certified and c.gap is None
+            assert c.uncertified.startswith(why)
+            assert c.uncertified.endswith("SLSQP's local optimum from ranked starts")
+    yoke = synth.synthesize(1.0, 300.0, 20.0, [{"type": "scotch_yoke"}], objective=UNIFORM)
+    (c,) = yoke.candidates
+    assert c.certified and c.uncertified is None
+    assert c.objective_value == pytest.approx(brute("scotch_yoke", c.params, UNIFORM), rel=1e-9)
+    monkeypatch.setattr(certify, "LEVELS", 3)
+    r = synth.synthesize(1.6, 300.0, 20.0, [{"type": "offset_slider_crank"}], objective=PEAK)
+    c = r.candidates[0]
+    assert r.complete and not c.certified and c.gap > certify.TOL
+    assert c.uncertified.startswith("the certified search stopped at its limit (3 levels")

@@ -687,6 +687,22 @@ def test_a_certified_optimum_says_so_and_the_others_how_far_they_are(page):
     assert "certified" not in rows.nth(1).inner_text()
 
 
+def test_an_answer_not_certified_says_why_once_for_its_type(page):
+    """The drag-link's least peak acceleration: no certified search covers its designs; its
+    first row says so and why, the rows after it do not repeat it."""
+    pg = page.page
+    only(pg, "drag_link_slider")
+    pg.fill("#bound", "20")
+    pg.select_option("#objective", "min_peak_acceleration")
+    pg.click("#run")
+    pg.wait_for_function("document.querySelectorAll('#candidates tbody tr').length > 1")
+    rows = pg.locator("#candidates tbody tr")
+    first = rows.nth(0).inner_text()
+    assert "not certified the best of its type: drag_link_slider's designs are no box" in first
+    assert "SLSQP's local optimum" in first
+    assert all("certified" not in rows.nth(i).inner_text() for i in range(1, rows.count()))
+
+
 def test_a_refusal_leaves_no_design_of_the_answer_before(page):
     """After designs, a request no design meets shows its refusals alone: the design shown
     before (its drawing, its loads) goes."""

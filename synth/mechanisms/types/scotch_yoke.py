@@ -24,7 +24,7 @@ import casadi as ca
 from ...errors import Unreachable
 from ...results import TOL
 from ..facts import Facts
-from ..reduced import Problem, Reduced, judge
+from ..reduced import Problem, Reduced, Space, judge
 from ..registry import GROUND, RAM, Frame, Mechanism, Parameter, Params, register
 
 
@@ -59,6 +59,19 @@ def reduced(p: Problem) -> Reduced:
     return Reduced([{"crank": p.fixed.get("crank", 0.5)}])
 
 
+def space(p: Problem) -> Space | None:
+    """One design, ``reduced``'s (its box a point): the certified search measures it, and its
+    measure is the least; the dead centres at θ = 0 and π."""
+    if p.beta > math.pi / 2 * TOL:
+        return None
+    crank = p.fixed.get("crank", 0.5)
+    return Space((0.0,), (0.0,), (crank,), lambda u, k: {"crank": k[0]}, dead=_dead)
+
+
+def _dead(k: Any) -> tuple[float, float]:
+    return 0.0, math.pi
+
+
 # the crank pin's block slides in the yoke's slot, across the yoke's path
 FRAME = Frame(
     bodies=(("crank",),),
@@ -82,6 +95,7 @@ register(
         transmission=transmission,
         facts=facts,
         reduced=reduced,
+        space=space,
         joints=joints,
         frame=lambda variant: FRAME,
         drawing=(("crank", "O2", "B"),),
