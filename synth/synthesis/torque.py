@@ -24,7 +24,7 @@ does the cut's force.
 A zone that starts or ends at a dead centre (a fraction 0 or 1) ends there: its interval is
 the dead centre's, and T does not step there (s′ = 0). This holds where the force is the
 whole of the load's step: a cutting force over its zone, no force profile, and no guide
-friction (whose work needs the guide's force, ``supports``).
+friction (whose work needs the guide's force, ``unsupported``).
 """
 
 from __future__ import annotations

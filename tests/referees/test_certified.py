@@ -162,9 +162,9 @@ def test_with_a_part_fixed_the_answer_is_certified_too(mtype, fixed):
 
 def test_an_answer_not_certified_says_why(monkeypatch):
     """Every searched answer is certified or says why not: the four-bars (no certified
-    search), the crank shaper's most uniform speed (its two free numbers), a search stopped
-    at its level limit; the scotch yoke's one design is certified, its measure the brute
-    force's."""
+    search), the crank shaper's most uniform speed (its two free numbers), a guide's friction
+    (the torque's bound does not hold), a search stopped at its level limit; the scotch
+    yoke's one design is certified, its measure the brute force's."""
     for mtype, objective, why in (
         ("drag_link_slider", PEAK, "drag_link_slider's designs are no box of free numbers"),
         ("crank_rocker_slider", PEAK, "crank_rocker_slider's designs are no box"),
@@ -176,6 +176,16 @@ def test_an_answer_not_certified_says_why(monkeypatch):
             assert not c.certified and c.gap is None
             assert c.uncertified.startswith(why)
             assert c.uncertified.endswith("SLSQP's local optimum from ranked starts")
+    rubbing = synth.Load(
+        length_unit="mm", crank_rpm=40, cutting_force=2000, slider_mass=20, guide_friction=0.1
+    )
+    r = synth.synthesize(
+        1.6, 300.0, 20.0, [{"type": "offset_slider_crank"}], "min_peak_torque", load=rubbing
+    )
+    assert r.candidates and not any(c.certified for c in r.candidates)
+    assert r.candidates[0].uncertified.startswith(
+        "the certified bound on the peak torque does not hold with a force profile or guide"
+    )
     yoke = synth.synthesize(1.0, 300.0, 20.0, [{"type": "scotch_yoke"}], objective=UNIFORM)
     (c,) = yoke.candidates
     assert c.certified and c.uncertified is None
