@@ -1,10 +1,12 @@
 """A proposal made a candidate: verified by the forward analysis, with what the answer says
-about it (its objective value, the constraints and bounds it rests on, its family), and the
-order in which an objective ranks the exact solvers' proposals."""
+about it (its objective value, the constraints and bounds it rests on, its family, and that
+family's smallest member), and the order in which an objective ranks the exact solvers'
+proposals."""
 
 from __future__ import annotations
 
 import math
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
@@ -13,7 +15,7 @@ from .. import objectives
 from ..analysis.verify import verify, verify_many
 from ..mechanisms import Mechanism
 from ..results import Analysis, Candidate, Family
-from .search import Proposal, Searched, Targets, Variant, same
+from .search import Proposal, Searched, Targets, Variant, proposal, same
 
 ONE = 1e-12  # two designs this close (stroke units, each parameter) are one
 ONE_OPTIMUM = 1e-3  # two runs' ends this close (stroke units), their values tied: one optimum
@@ -175,3 +177,25 @@ def distinct(cands: list[Candidate], stroke: float, tie: float) -> list[Candidat
 def _one(a: Candidate, b: Candidate, stroke: float, tie: float) -> bool:
     x, y = a.objective_value, b.objective_value
     return abs(x - y) <= tie * max(x, y) and same(a.params, b.params, stroke, ONE_OPTIMUM)
+
+
+def smallest_member(
+    m: Mechanism,
+    i: int,
+    c: Candidate,
+    t: Targets,
+    variants: list[Variant],
+    extras: dict[str, Any],
+) -> Candidate:
+    """The smallest member of a candidate's family (the same motion and angles), verified."""
+    f = c.family
+    if f is None or time.monotonic() >= t.deadline:  # past it: one analysis (~15 ms) saved
+        return c
+    (free,) = f.free
+    lo = f.range[free][0]
+    if lo >= c.params[free]:
+        return c
+    params = {**c.params, free: lo, **{k: r * lo for k, (_, r) in f.tied.items()}}
+    p = proposal(m, i, params, c.method, t)
+    smaller = None if p is None else candidate(m, p, t, variants, extras)
+    return smaller or c

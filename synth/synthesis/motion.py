@@ -43,14 +43,13 @@ from ..mechanisms import Mechanism, get
 from ..results import Candidate, Infeasible
 from ..targets import MAX_TRANSMISSION, MIN_SIZE
 from . import aims, certify, screen
-from .candidate import candidate, distinct
+from .candidate import candidate, distinct, smallest_member
 from .diagnose import cut_short, diagnose, locked
 from .formulation import TIE, formulation, kept_by
 from .search import (
     Searched,
     Spec,
     Targets,
-    Variant,
     proposal,
     scaled,
     search,
@@ -396,7 +395,7 @@ def motion(
                 q = proposal(m, i, whole(spec, scaled(d, t.stroke), v.parts), "slsqp", t)
                 c = None if q is None else candidate(m, q, t, s.variants, extras)
                 if c is not None:  # its family's smallest member, and it where that differs
-                    smallest = _smallest_member(m, i, c, t, s.variants, extras)
+                    smallest = smallest_member(m, i, c, t, s.variants, extras)
                     mine += [smallest] if aim.scale_free else [c, smallest]
         cut = time.monotonic() >= t.deadline  # where the search stopped is the clock's
         if cut:  # not kept: its one reason is the cut
@@ -438,25 +437,3 @@ def _unreachable(
         f"search finds) at time ratio {t.time_ratio:g}, stroke {t.stroke:g} and bound "
         f"{t.bound_deg:g}°, above the limit {limit:g}{capped.unit}",
     )
-
-
-def _smallest_member(
-    m: Mechanism,
-    i: int,
-    c: Candidate,
-    t: Targets,
-    variants: list[Variant],
-    extras: dict[str, Any],
-) -> Candidate:
-    """The smallest member of a candidate's family (the same motion and angles), verified."""
-    f = c.family
-    if f is None or time.monotonic() >= t.deadline:  # past it: one analysis (~15 ms) saved
-        return c
-    (free,) = f.free
-    lo = f.range[free][0]
-    if lo >= c.params[free]:
-        return c
-    params = {**c.params, free: lo, **{k: r * lo for k, (_, r) in f.tied.items()}}
-    p = proposal(m, i, params, c.method, t)
-    smaller = None if p is None else candidate(m, p, t, variants, extras)
-    return smaller or c
