@@ -20,8 +20,10 @@ scale, the torque does).
   ``ANALYSES`` calls), so that each time is also a multiple of an analysis in the same run.
 - Per type and variant: median and p99 ms and multiples, the share of answers ``complete``,
   the share answered (a candidate), the share certified (the best candidate's
-  ``certified``), and for the limited variants the share
-  where the limit binds (how many: the answer worse than the same target's without it, or gone).
+  ``certified``), the share certified or saying why not (``said``: its ``uncertified``; the
+  reasons are listed below the table, counted per type), and for the limited variants the
+  share where the limit binds (how many: the answer worse than the same target's without it,
+  or gone).
 - ``--busy``: the same while two processes spin, keeping both cores busy; ``complete`` then
   says how many requests completed within their budget.
 - ``referee``: run time against error on a sample (``REFEREED``; ``all``: every type and
@@ -38,6 +40,7 @@ mode (quiet or busy, the budget; the other modes' kept), with each request as a 
 from __future__ import annotations
 
 import argparse
+import collections
 import itertools
 import json
 import os
@@ -157,11 +160,13 @@ def best(r: synth.SynthesisResult) -> float | None:
     return r.candidates[0].objective_value if r.candidates else None
 
 
-def certified(r: synth.SynthesisResult) -> tuple[bool, float | None]:
-    """Whether the best candidate is a certified optimum, and its gap (None: not bounded)."""
+def certified(r: synth.SynthesisResult) -> tuple[bool, float | None, str | None]:
+    """Whether the best candidate is a certified optimum, its gap (None: not bounded), and
+    where it is not, why (``uncertified``)."""
     if not r.candidates:
-        return False, None
-    return r.candidates[0].certified, r.candidates[0].gap
+        return False, None, None
+    c = r.candidates[0]
+    return c.certified, c.gap, c.uncertified
 
 
 def analysis_ms(r: synth.SynthesisResult, mtype: str) -> float:
@@ -182,7 +187,7 @@ def one(target: dict[str, Any], variant: str, budget_ms: float) -> dict[str, Any
     r = synth.synthesize(**request(target, variant, budget_ms))
     ms, cpu = (time.perf_counter() - t0) * 1e3, (time.process_time() - c0) * 1e3
     unit = analysis_ms(r, target["type"])
-    cert, gap = certified(r)
+    cert, gap, why = certified(r)
     return {
         "id": target["id"],
         "type": target["type"],
@@ -197,6 +202,7 @@ def one(target: dict[str, Any], variant: str, budget_ms: float) -> dict[str, Any
         "best": best(r),
         "certified": cert,
         "gap": gap,
+        "uncertified": why,
         "within_budget": r.complete and ms <= budget_ms,
         "refusals": " ".join(sorted({i.code for i in r.infeasible})),
     }
@@ -264,6 +270,10 @@ def summary(records: list[dict[str, Any]]) -> list[dict[str, Any]]:
             "within_budget": sum(r["within_budget"] for r in rs),
             "answered": len(answered) / len(rs),
             "certified": sum(r["certified"] for r in answered) / len(answered)
+            if answered
+            else None,
+            # the answers certified or saying why not
+            "said": sum(r["certified"] or bool(r["uncertified"]) for r in answered) / len(answered)
             if answered
             else None,
         }
@@ -347,12 +357,16 @@ def _short(key: str, v: Any) -> Any:
 
 
 SUMMARY = "type variant n median_ms p99_ms median_cpu_ms median_x p99_x complete within_budget"
-SUMMARY += " answered certified binds"
+SUMMARY += " answered certified said binds"
 REFEREE = "type variant ours_ms ours_excess unbounded_ms unbounded_excess referee_ms referee"
 
 
 def text(result: dict[str, Any]) -> str:
     out = table(result["summary"], tuple(SUMMARY.split()))
+    reasons = collections.Counter(
+        (r["type"], r["uncertified"]) for r in result["requests"] if r["uncertified"]
+    )
+    out += "".join(f"\n{t}, {n}×: {why}" for (t, why), n in sorted(reasons.items()))
     return out + (
         "\n" + table(result["referee"], tuple(REFEREE.split())) if result["referee"] else ""
     )
