@@ -113,6 +113,18 @@ class Frame:
 
 
 @dataclass(frozen=True)
+class Roles:
+    """A four-bar type's parameters in the crank-rocker's roles on its dead-centre construction
+    (``synth.mechanisms.fourbar.construction``)."""
+
+    links: tuple[str, str, str, str]  # the crank-rocker's ground, crank, coupler, rocker
+    arm: str
+    rod: str
+    height: str | None  # the slider path's placement (crank-rocker), None: on the ground line
+    swings: bool  # the arm swings with the rocker (stroke 2 r5 sin(ψ/2)); else stroke 2 r5
+
+
+@dataclass(frozen=True)
 class Mechanism:
     """One mechanism type: parameters, validity, and its kinematics as functions of (p, θ)."""
 
@@ -141,6 +153,9 @@ class Mechanism:
     # the designs that meet the time ratio and stroke as functions of a few free numbers
     # (synth.mechanisms.reduced.Space), None where it cannot take the problem
     space: Callable[[Problem], Space | None] | None = None
+    # a four-bar type's parameters in the crank-rocker's roles on its dead-centre construction
+    # (synth.mechanisms.fourbar.construction), where its searched objectives move
+    construction: Roles | None = None
     # the pin positions {name: (x, y)} at crank angle θ, named as in the module docstring, the
     # slider's pin last, in CasADi maths (for drawings, and the envelope the frame must hold)
     joints: Callable[[Params, Any], dict[str, tuple[Any, Any]]] | None = None

@@ -50,6 +50,7 @@ from ...numerics.native import Points
 from ...numerics.ops import CASADI, NUMPY, Ops
 from .. import rod
 from ..reduced import Problem, unreachable
+from ..registry import Roles
 from .geometry import grashof_margins, worst_cos
 
 BOUND_TOL = 1e-9  # relative: a link this far past its bound is on it (Newton's 1e-10 on a ratio)
@@ -86,17 +87,6 @@ TAYLOR = ("f", "size", "log_a2", "log_a3", "log_a4")
 AT = 2  # where the first row's six numbers start in ``Compiled.taylor``'s list
 
 _local = threading.local()
-
-
-@dataclass(frozen=True)
-class Roles:
-    """A type's parameters in the crank-rocker's roles."""
-
-    links: tuple[str, str, str, str]  # the crank-rocker's ground, crank, coupler, rocker
-    arm: str
-    rod: str
-    height: str | None  # the slider path's placement (crank-rocker), None: on the ground line
-    swings: bool  # the arm swings with the rocker (stroke 2 r5 sin(ψ/2)); else stroke 2 r5
 
 
 @dataclass(frozen=True)
@@ -143,23 +133,34 @@ def _evaluation(rows: Sequence[Any], sigma: int, at: Any = None) -> Evaluation:
     )
 
 
+def crank(psi: Any, lam: Any, er: Any, ei: Any, ops: Ops = CASADI) -> tuple[Any, Any]:
+    """The crank vector at the extended toggle, z1 = (1 − e^{iψ}) / ((1 − λ) e^{iφ} − (1 +
+    λ) e^{iψ}), in real arithmetic (er, ei: e^{iφ})."""
+    cp, sp = ops.cos(psi), ops.sin(psi)
+    nr, ni = 1 - cp, -sp
+    dr, di = (1 - lam) * er - (1 + lam) * cp, (1 - lam) * ei - (1 + lam) * sp
+    dd = dr * dr + di * di
+    return (nr * dr + ni * di) / dd, (ni * dr - nr * di) / dd
+
+
+def circuit(zr: Any, zi: Any, er: Any, ei: Any) -> Any:
+    """Negative where the toggles lie in one assembly circuit, sin θ sin(θ + φ) < 0 (θ = arg
+    z1), up to the positive factor |z1|²."""
+    return zi * (zr * ei + zi * er)
+
+
 def rows(psi: Any, lam: Any, p: Any, ops: Ops = CASADI) -> tuple[Any, ...]:
     """The rows (``ROWS``) at (ψ, λ) with the parameters p (``PARAMS``): CasADi symbols, or
     numpy arrays (``ops``)."""
     q = {n: p[i] for i, n in enumerate(PARAMS)}
     er, ei = q["ep_r"], q["ep_i"]
-    # z1 = (1 − e^{iψ}) / ((1 − λ) e^{iφ} − (1 + λ) e^{iψ}), in real arithmetic
-    cp, sp = ops.cos(psi), ops.sin(psi)
-    nr, ni = 1 - cp, -sp
-    dr, di = (1 - lam) * er - (1 + lam) * cp, (1 - lam) * ei - (1 + lam) * sp
-    dd = dr * dr + di * di
-    zr, zi = (nr * dr + ni * di) / dd, (ni * dr - nr * di) / dd
+    zr, zi = crank(psi, lam, er, ei, ops)
     a2 = ops.sqrt(zr * zr + zi * zi)
     a3 = lam * a2
     wr, wi = (1 + lam) * zr - 1, (1 + lam) * zi
     a4 = ops.sqrt(wr * wr + wi * wi)
-    # one assembly circuit, sin θ sin(θ + φ) < 0, and Grashof with the crank the shortest link
-    valid = zi * (zr * ei + zi * er) < 0
+    # one assembly circuit, and Grashof with the crank the shortest link
+    valid = circuit(zr, zi, er, ei) < 0
     for margin in grashof_margins((1.0, a2, a3, a4), 1):
         valid = ops.logic_and(valid, margin >= 0)
     f = worst_cos(1.0, a2, a3, a4, ops)

@@ -33,8 +33,9 @@ from ...numerics import ROUNDING
 from ...numerics.dense import Taylor, newton, solve
 from ...targets import MAX_TRANSMISSION, MIN_SIZE
 from ..reduced import Reduced, clip
+from ..registry import Roles
 from . import strata
-from .construction import Design, Evaluation, Roles
+from .construction import Design, Evaluation
 from .levels import levels
 from .limited import limited
 from .search import CONTINUE, GRID, NEAR, SHORTCUT, SLACK, U_HI, U_LO, Search

@@ -214,6 +214,7 @@ register(
         fourbar=lambda p: tuple(p[n] for n in LINKS),
         facts=facts,
         reduced=lambda p: FourBar(p, ROLES).solve(),
+        construction=ROLES,
         scale=fourbar_scale("rocker"),
         joints=joints,
         frame=frame,

@@ -206,6 +206,7 @@ register(
         fourbar=lambda p: tuple(p[n] for n in LINKS),
         facts=facts,
         reduced=reduced,
+        construction=ROLES,
         scale=fourbar_scale("follower"),
         joints=joints,
         frame=lambda variant: FRAME,
