@@ -1,4 +1,4 @@
-"""What the search over one structural variant minimises (``motion.local_optima``): a motion
+"""What the search over one structural variant minimises (``local.local_optima``): a motion
 measure or the peak crank torque, as the terms whose largest it is, with their exact
 derivatives, and as a quick ranking of many designs at once (the starts')."""
 
@@ -33,19 +33,21 @@ class Aim:
     measure stays the same over a candidate's family (``scale_free``: the family's members
     move alike, but links that weigh load the drive differently), and how many of the box's
     best-ranked points a search runs from (``drawn``: with everything free, with parts
-    fixed)."""
+    fixed, on a four-bar's construction)."""
 
     evaluate: Callable[[dict[str, float]], Any]
     pick: Pick
     rank: Callable[[np.ndarray], np.ndarray]
     scale_free: bool
-    drawn: tuple[int, int]
+    drawn: dict[str, int]
 
 
-# the box's points a search runs from, free and with parts fixed: the motion measures' ranks
-# pick their basins well; the torque's have more (the links' inertia against the cut: a
-# crank-rocker's slot drive at time ratio 1.3 took 8 to reach its optimum, 0.8% below)
-DRAWN_MOTION, DRAWN_TORQUE = (2, 4), (8, 8)
+# the box's points a search runs from: the motion measures' ranks pick their basins well; the
+# torque's have more (the links' inertia against the cut: a crank-rocker's slot drive at time
+# ratio 1.3 took 8 to reach its optimum, 0.8% below; on the construction, whose runs are
+# shorter and stay within a sheet, 16)
+DRAWN_MOTION = {"free": 2, "fixed": 4, "construction": 2}
+DRAWN_TORQUE = {"free": 8, "fixed": 8, "construction": 16}
 
 
 # the motion terms an objective bounds (``Objective.terms``), from ``quality.MotionTerms`` with

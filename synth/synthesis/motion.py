@@ -6,22 +6,10 @@ What each search bounds is its ``aims.Aim``.
 No closed form gives these measures: they are extremes over the crank's turn, found by root
 finding (``synth.analysis.quality``, ``synth.analysis.loads``). Where a variant's designs are
 a box of free numbers and the measure is one the certified search takes (``certify``), it
-answers, with its certificate. Otherwise the designs come from a local NLP over each
-variant's free parameters (stroke units), solved by SLSQP:
-
-- the constraints are the type's formulation (``synth.synthesis.formulation``: CasADi, exact
-  derivatives), the bounds the request's;
-- each measure is the largest of a few terms (the speed, acceleration or torque at each place
-  along the turn where it may peak), so the NLP takes it in epigraph form, with the terms'
-  exact derivatives (``quality.motion_terms``, ``loads.peak_terms``: the envelope theorem at
-  a peak, the implicit function theorem at a dead centre or a window's end);
-- its starts are the exact solvers' designs for the request (best-transmitting and smallest,
-  at ``ACROSS_DEG`` without a bound) and ``SAMPLES`` points of the box projected onto the
-  equalities (with fixed parts and few such points, ``SAMPLES`` more within ``AROUND`` of
-  the starts), ranked by their measure on a grid of crank angles (``screen``); it runs from
-  the ``STARTS`` best of the former and as many of the latter as ``Aim.drawn`` says, at most
-  ``MAX_ITER`` iterations each. No clock but the request's deadline decides anything: a
-  type's search it cuts short answers the exact solvers' designs alone, and says so.
+answers, with its certificate. Otherwise the designs come from a local search from the exact
+solvers' designs and ranked points of the box (``local``: SLSQP in epigraph form). No clock
+but the request's deadline decides anything: a type's search it cuts short answers the exact
+solvers' designs alone, and says so.
 
 Its answer, a local optimum, is verified like every candidate, and checked against an
 independent global search by ``tests/referees/test_motion_search.py``."""
@@ -30,22 +18,18 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
-import numpy as np
-
 from .. import objectives
-from ..errors import SynthError
 from ..mechanisms import Mechanism, get
 from ..results import Candidate, Infeasible
 from ..targets import MAX_TRANSMISSION, MIN_SIZE
-from . import aims, certify, screen
+from . import aims, certify
 from .candidate import candidate, distinct, smallest_member
 from .diagnose import cut_short, diagnose, locked
-from .formulation import TIE, formulation, kept_by
+from .local import local_optima
 from .search import (
     Searched,
     Spec,
@@ -55,235 +39,12 @@ from .search import (
     search,
     whole,
 )
-from .solve import starts as halton
 
-# SLSQP runs per variant from the best ranked exact solvers' designs (STARTS) and projected
-# points of the box, where the four-bars' other basins lie (``Aim.drawn``)
-STARTS = 2
-MAX_ITER = 300
-AROUND = 3.0  # the box about the starts (each part within this factor of theirs) drawn again
-STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
-NEAR = 1e-4  # how close (stroke units, each parameter) to an earlier run's end a run ends
-TERMS = 4  # the largest terms of a measure that its epigraph bounds
-SAMPLES = 256  # Halton points of the box projected onto the equalities (``screen``): starts
 # the least 1 − cos μ a search for motion keeps at every joint, whatever the bound: as a rod
 # comes to stand across its slider's path (μ → 0) the slider's speed there grows without
 # bound in a spike narrower than the analysis's grid, so a measure there is no design's
 ACROSS = 1e-3
 ACROSS_DEG = math.degrees(math.acos(1 - ACROSS))
-FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
-
-
-def local_optima(
-    m: Mechanism,
-    variant: frozenset[str],
-    free: tuple[str, ...],
-    fixed: dict[str, float],
-    bounds: Mapping[str, tuple[float, float]],
-    explicit: frozenset[str],
-    targets: tuple[float, float],
-    aim: aims.Aim,
-    starts: list[dict[str, float]],
-    limit: tuple[aims.Pick, float] | None,
-    deadline: float,
-    fixed_parts: bool = False,
-) -> Iterator[dict[str, float]]:
-    """Local optima of the ``aim``'s measure over one variant, each as its run ends (verified
-    by the caller before the next), from ``starts`` (designs, stroke units); ``targets`` is
-    (time ratio, cos of the transmission bound). The measure, a maximum of terms, is minimised
-    in epigraph form: t ≥ each of the ``TERMS`` largest terms (a peak moving along the turn is
-    one constraint handing over to another, not a kink); a ``limit`` (terms, cap) bounds its
-    terms alike. A default bound (not in ``explicit``) gives way to a start beyond it. Points
-    about the starts are drawn where the box's hold too few designs (``fixed_parts``: more). The
-    deadline is looked at before each evaluation of the measure at a new design (a few ms,
-    ~15 with a load): a run it cuts short ends at its last iterate."""
-    if time.monotonic() >= deadline:  # nothing built for a search that cannot run
-        return
-    from scipy.linalg import qr  # on first use: ~0.4 s of an import of synth
-    from scipy.optimize import minimize
-
-    form = formulation(m, variant, free)
-    key = kept_by(m, variant, free)
-    pv = np.concatenate([[fixed[k] for k in form.fixed], targets])
-    n = len(free)
-
-    def design(y: np.ndarray) -> dict[str, float]:
-        return {**fixed, **dict(zip(free, y[:n], strict=True)), **dict.fromkeys(variant, 0.0)}
-
-    memo: dict[bytes, Any] = {}
-    columns = [m.names.index(k) for k in free]  # the free parameters among the type's
-
-    def terms(y: np.ndarray) -> Any:
-        key = y[:n].tobytes()
-        if key not in memo:
-            if time.monotonic() >= deadline:
-                raise _Late
-            if len(memo) > 256:
-                memo.clear()
-            try:
-                memo[key] = aim.evaluate(design(y))
-            except SynthError:
-                memo[key] = None
-        return memo[key]
-
-    def largest(y: np.ndarray, pick: aims.Pick) -> tuple[np.ndarray, np.ndarray]:
-        """The ``TERMS`` largest terms (the last repeated where there are fewer), and their
-        derivatives in the free parameters."""
-        got = terms(y)
-        if got is None:
-            return np.full(TERMS, FAIL), np.zeros((TERMS, n))
-        values, dp = pick(got)
-        order = np.argsort(values)[::-1][:TERMS]
-        order = np.concatenate([order, np.full(TERMS - order.size, order[-1])])
-        return values[order], dp[order][:, columns]
-
-    def bounded(pick: aims.Pick, cap: float | None) -> dict[str, Any]:
-        """The constraint cap − each of the largest terms ≥ 0 (cap None: the epigraph's t)."""
-
-        def fun(y: np.ndarray) -> np.ndarray:
-            return (y[n] if cap is None else cap) - largest(y, pick)[0]
-
-        def jac(y: np.ndarray) -> np.ndarray:
-            out = np.zeros((TERMS, y.size))
-            out[:, :n] = -largest(y, pick)[1]
-            out[:, n] = 1.0 if cap is None else 0.0
-            return out
-
-        return {"type": "ineq", "fun": fun, "jac": jac}
-
-    lbg, ubg = form.lbg, form.ubg
-    eq = lbg == ubg
-    below, above = np.isfinite(lbg) & ~eq, np.isfinite(ubg) & ~eq
-
-    def rows(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # y: x, or x and t
-        g, jac = screen.constraints(form, key, y[None, :n], pv)
-        return g[0], np.hstack([jac[0], np.zeros((jac.shape[1], 1))])  # t appears in none
-
-    def inequalities(y: np.ndarray) -> np.ndarray:
-        g = rows(y)[0]
-        return np.concatenate([g[below] - lbg[below], ubg[above] - g[above]])
-
-    def inequalities_jac(y: np.ndarray) -> np.ndarray:
-        j = rows(y)[1]
-        return np.vstack([j[below], -j[above]])
-
-    # ties (a free scale that leaves the motion as it is) to the smaller design, as the
-    # formulation's max_transmission_angle does: the scale is then no flat direction
-    links = np.array([float(m.parameter(k).link) for k in free] + [0.0])
-    pick = aim.pick
-    measures = [{"type": "ineq", "fun": inequalities, "jac": inequalities_jac}, bounded(pick, None)]
-    if limit is not None:
-        measures.append(bounded(*limit))
-
-    def equalities(x: np.ndarray) -> np.ndarray:
-        """The equalities' rows independent at x: where the targets set one ratio twice (a
-        slotted lever's fixed lever: the time ratio and the stroke both set crank /
-        pivot_distance), the second is met with the first, and SLSQP's subproblems would be
-        singular with both."""
-        jac = rows(x)[1][eq][:, :n]
-        _, r, order = qr(jac.T, pivoting=True, mode="economic")
-        diag = np.abs(np.diag(r))
-        rank = int(np.sum(diag > 1e-9 * diag[0])) if diag.size and diag[0] > 0 else diag.size
-        kept: np.ndarray = np.flatnonzero(eq)[np.sort(order[:rank])]
-        return kept
-
-    def box_of(s: dict[str, float]) -> list[tuple[float, float]]:
-        return [
-            bounds[k] if k in explicit else (min(bounds[k][0], s[k]), max(bounds[k][1], s[k]))
-            for k in free
-        ]
-
-    # the starts: the exact solvers' designs and projected Halton points, the best ranked first
-    wide = box_of(starts[0]) if starts else [bounds[k] for k in free]
-    lo, hi = (np.array([b[i] for b in wide]) for i in (0, 1))
-    own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
-    drawn_starts = aim.drawn[bool(fixed_parts)]
-    drawn = screen.project(form, key, halton(lo, hi, lo > 0, SAMPLES), pv, lo, hi)
-    near = drawn[:0]
-    if len(drawn) < drawn_starts and len(own):
-        # the box's points may hold few designs (a drag-link's ground is its shortest link; a
-        # short fixed coupler leaves a four-bar's other links few): points about the starts too
-        near_lo = np.maximum(lo, np.where(lo > 0, own.min(axis=0) / AROUND, lo))
-        near_hi = np.minimum(hi, np.where(lo > 0, own.max(axis=0) * AROUND, hi))
-        near = screen.project(form, key, halton(near_lo, near_hi, lo > 0, SAMPLES), pv, lo, hi)
-    points = np.vstack([own, drawn, near])
-    pvs = np.array([list(m.filled(design(x)).values()) for x in points])
-    value = aim.rank(pvs) if len(points) else np.empty(0)
-    measured = []  # the best ranked of each source that the analysis takes
-    ends = np.cumsum([0, len(own), len(drawn), len(near)])
-    for j, most in enumerate((STARTS, drawn_starts, drawn_starts)):
-        source = np.arange(ends[j], ends[j + 1])
-        taken = 0
-        for k in source[np.argsort(value[source], kind="stable")]:
-            try:
-                got = terms(points[k]) if np.isfinite(value[k]) and taken < most else None
-            except _Late:
-                return
-            if got is not None:
-                measured.append((float(pick(got)[0].max()), points[k]))
-                taken += 1
-    # a start at the smallest member of its free scale (the same motion): SLSQP then has a
-    # bound in that direction, where it would crawl towards the tie to the smaller design
-    sc = m.scale
-    scaled = [] if sc is None else [free.index(k) for k in (sc.free, *sc.tied) if k in free]
-    if sc is not None and len(scaled) == 1 + len(sc.tied):
-        for _, x in measured:
-            x[scaled] *= max(lo[scaled] / x[scaled])
-    ended: list[np.ndarray] = []  # where the runs so far ended
-    for first, x0 in measured:
-        if time.monotonic() >= deadline:
-            break
-        kept = equalities(x0)
-        if kept.size == n:  # the equalities leave no freedom: the start is the optimum
-            yield design(x0)
-            continue
-        constraints = [
-            {
-                "type": "eq",
-                "fun": lambda y, k=kept: rows(y)[0][k] - lbg[k],
-                "jac": lambda y, k=kept: rows(y)[1][k],
-            },
-            *measures,
-        ]
-        seen: list[np.ndarray] = []  # this run's iterates
-
-        def cap(y: np.ndarray, seen: list[np.ndarray] = seen) -> None:
-            """Ends SLSQP (with its last iterate, projected below) at the deadline; once its
-            iterates stand still (where its line search can no longer meet ``ftol`` it may
-            repeat one point for a hundred iterations); or once it comes within ``NEAR`` of an
-            optimum an earlier run ended at (the rest of the way is that run's)."""
-            seen.append(y.copy())
-            still = len(seen) > STILL and np.ptp(seen[-STILL:], axis=0).max() <= 1e-12
-            known = any(np.abs(y[:n] - x).max() <= NEAR for x in ended)
-            if still or known or time.monotonic() >= deadline:
-                raise StopIteration
-
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # SLSQP's notes on clipping to the bounds
-                last = minimize(
-                    lambda y: y[n] + TIE * (links @ y),
-                    np.append(x0, first),
-                    jac=lambda y: np.eye(n + 1)[n] + TIE * links,
-                    method="SLSQP",
-                    bounds=[*zip(lo, hi, strict=True), (0.0, None)],
-                    constraints=constraints,
-                    callback=cap,
-                    options={"maxiter": MAX_ITER, "ftol": 1e-12},
-                ).x
-        except _Late:  # within an iteration: the run ends where its last one did
-            if not seen:
-                break
-            last = seen[-1]
-        # SLSQP meets its constraints to ~1e-8, the verification asks 1e-9: projected onto
-        # the equalities, the inequalities it is beyond held inside
-        for x in screen.project(form, key, last[None, :n], pv, lo, hi, every=False):
-            ended.append(x)
-            yield design(x)
-
-
-class _Late(Exception):
-    """The deadline passed before an evaluation of the measure (``local_optima``)."""
 
 
 def motion(
@@ -294,7 +55,7 @@ def motion(
     limit: float | None,
 ) -> tuple[list[Candidate], list[Infeasible]]:
     """A searched objective (a motion measure, or the peak torque): per type and variant, the
-    certified search (``certify``) or SLSQP (``local_optima``) from the exact solvers' designs;
+    certified search (``certify``) or the local search (``local``) from the exact solvers' designs;
     the optima and those designs, verified, ranked by the measure (the ``limit`` met)."""
     found: list[Candidate] = []
     infeasible = []

@@ -13,7 +13,8 @@ are never shared between threads):
 - the motion search's formulation and its compiled constraints (``formulation.formulation``,
   ``screen``): per type, variant and free set;
 - the certified search's enclosures (``certify``): per type with a space, variant and form
-  of its spaces (nothing fixed, one part fixed), the peak torque's with them.
+  of its spaces (nothing fixed, one part fixed), the peak torque's with them; a four-bar's
+  coordinates on its construction (``chart``), per variant.
 
 ``compile_all`` puts every native library in the disk cache (an image's build step, ``make``'s
 install step; ``python -m synth.synthesis.warm``). ``warm`` builds in the calling thread the
@@ -42,7 +43,7 @@ from ..analysis import forces, model
 from ..mechanisms import Mechanism, all_types, get, rod
 from ..mechanisms.fourbar.construction import construction
 from ..numerics.native import WIDTHS, cache
-from . import certify, screen
+from . import certify, chart, screen
 from .formulation import DIAGNOSTICS, SOLVED, formulation, kept_by, relevant
 
 OBJECTIVES = (*SOLVED, *DIAGNOSTICS)  # those a request's search and diagnosis solve by IPOPT
@@ -116,6 +117,9 @@ def searched(m: Mechanism, variant: frozenset[str]) -> None:
     for w in WIDTHS:
         constraints[w]
     certify.prepared(m, variant)
+    if chart.applies(m, variant, free):  # a four-bar's construction
+        for scale in (False, True):
+            chart.function(m, variant, free, scale)
 
 
 def variants(m: Mechanism) -> list[frozenset[str]]:

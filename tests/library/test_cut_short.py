@@ -10,7 +10,7 @@ import json
 import time
 
 import synth
-from synth.synthesis import driver, motion
+from synth.synthesis import driver, local, motion
 
 REQUEST = {
     "time_ratio": 1.6,
@@ -36,6 +36,7 @@ def test_a_search_cut_anywhere_gives_one_reply(monkeypatch):
             return real() + (1e9 if len(looks) > cut_after[0] else 0.0)
 
     monkeypatch.setattr(motion, "time", Clock)
+    monkeypatch.setattr(local, "time", Clock)
     monkeypatch.setattr(driver, "time", Driver)
 
     def ask() -> tuple[synth.SynthesisResult, str]:

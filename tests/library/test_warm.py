@@ -12,7 +12,7 @@ import pytest
 import synth
 from synth.analysis import forces, model
 from synth.mechanisms import all_types, get
-from synth.synthesis import motion, search, warm
+from synth.synthesis import local, search, warm
 
 from ..support import reference_cases as ref
 
@@ -75,9 +75,9 @@ def test_every_structure_a_request_builds_is_counted(monkeypatch):
         formulated.append((m.type, variant, free))
         return formulation(m, variant, free)
 
-    solver, formulation = search.built, motion.formulation
+    solver, formulation = search.built, local.formulation
     monkeypatch.setattr(search, "built", recorded_solver)
-    monkeypatch.setattr(motion, "formulation", recorded_formulation)
+    monkeypatch.setattr(local, "formulation", recorded_formulation)
     for body in REQUESTS:
         synth.synthesize(**body, time_budget_ms=20_000)
     assert built and formulated

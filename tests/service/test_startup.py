@@ -28,7 +28,7 @@ import pytest
 import synth
 from benchmarks.startup import FIRST, FIRST_SEARCHED, SEARCHED, SLACK_MS, TYPES
 from synth.analysis import model
-from synth.synthesis import certify, formulation, motion, screen, solve, stroke, torque, warm
+from synth.synthesis import certify, formulation, local, screen, solve, stroke, torque, warm
 
 from ..support.server import ROOT, call, serving
 
@@ -111,7 +111,7 @@ def test_after_the_warm_up_a_searched_request_with_nothing_fixed_builds_nothing(
             (solve, "formulate"),
         ]:
             watched(module, name, lambda *_, at=f"{module.__name__}.{name}": built.append(at))
-        watched(motion, "formulation", lambda m, *_: searched.add(m.type))
+        watched(local, "formulation", lambda m, *_: searched.add(m.type))
         watched(certify, "search", lambda m, *_: searched.add(m.type))
         for objective, targets in SEARCHED.items():
             load = targets.get("load")

@@ -1,0 +1,184 @@
+"""A four-bar type's local search on its dead-centre construction
+(``synth.mechanisms.fourbar.construction``, ``Mechanism.construction``): coordinates
+(``local.Coordinates``) in which every point is a design with the request's time ratio and
+stroke, so SLSQP keeps only inequalities and never leaves the equalities on its way. In the
+type's own parameters its iterates left them by up to 14% of the stroke and crawled back,
+100–300 iterations a run (``docs/benchmarks.md``).
+
+On a sheet σ (the crank turns φ = π + σβ between the toggles), a point is
+z = (ψ, v[, s][, l][, h]): the rocker's swing ψ, λ = 1 + e^v (the coupler over the crank),
+the four-bar's scale e^s (its ground link; a constant of the start where the measure does not
+depend on it, the motion's), the rod's length l and its path's placement h where the variant
+has a rod. The links are e^s (1, a2, a3, a4)(ψ, λ) in the crank-rocker's roles, the arm the
+construction's (1/(2 sin(ψ/2)) where it swings with the rocker, else half the stroke). Its own
+rows: the request's bounds on the parameters that are no coordinates (where the scale is a
+constant, on the links' ratios: some scale then meets them all, the smallest is the answer),
+and the toggles in one assembly circuit."""
+
+from __future__ import annotations
+
+import math
+import threading
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..mechanisms import Mechanism
+from ..mechanisms.fourbar.construction import PARAMS, ROWS, circuit, crank, rows
+from ..mechanisms.geometry import triangle_angle
+from ..mechanisms.registry import Roles
+from ..targets import beta
+
+MATCH = 1e-9  # relative: how closely a start's coordinates give the start back
+FAR = 30.0  # the logs v and s stay within ±FAR (λ − 1 and the scale within e^±30)
+EDGE = 1e-9  # ψ within (EDGE, π − EDGE)
+_local = threading.local()
+
+
+class Chart:
+    """One variant's coordinates on the construction, with the request's box on its free
+    parameters (``local.Coordinates``)."""
+
+    equalities = False
+    drawn = "construction"
+
+    def __init__(
+        self,
+        m: Mechanism,
+        variant: frozenset[str],
+        free: tuple[str, ...],
+        lo: np.ndarray,
+        hi: np.ndarray,
+        time_ratio: float,
+        scale: bool,
+    ) -> None:
+        r = self.roles = m.construction
+        assert r is not None
+        self.names = names(r, free, scale)
+        self.own = [n for n in (r.rod, r.height) if n is not None and n in free]  # l, h
+        self.free, self.lo, self.hi, self.beta = free, lo, hi, beta(time_ratio)
+        self.fn = function(m, variant, free, scale)
+        self.links = [free.index(n) for n in r.links]
+        self.own_at = [free.index(n) for n in self.own]
+        own = self.own_at
+        bounded = [i for i in range(len(free)) if i not in own and (scale or i not in self.links)]
+        self.low = [i for i in bounded if math.isfinite(lo[i])]
+        self.high = [i for i in bounded if math.isfinite(hi[i])]
+        li = [] if scale else self.links
+        self.pairs = [(i, j) for i in li for j in li if i != j and lo[i] > 0 and hi[j] < math.inf]
+        self.box = [(EDGE, math.pi - EDGE), (-FAR, FAR), *[(-FAR, FAR)] * scale]
+        self.box += [(lo[i], hi[i]) for i in own]
+
+    def constants(self, sigma: int, s: float) -> np.ndarray:
+        """e^{iφ}, half the stroke (a fixed arm's length) and the scale's log."""
+        return np.array([-math.cos(sigma * self.beta), -math.sin(sigma * self.beta), 0.5, s])
+
+    def starts(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The coordinates of the design x on the sheet that gives it back (none: no sheet
+        does, a design of no crank-rocker's construction)."""
+        rho = x[self.links]
+        k, lam = rho[0], rho[2] / rho[1]
+        if not (k > 0 and lam > 1):
+            return []
+        swing = triangle_angle(rho[0], rho[3], rho[2] + rho[1])
+        swing -= triangle_angle(rho[0], rho[3], rho[2] - rho[1])
+        scale = [math.log(k)] if "s" in self.names else []
+        z = np.array([float(swing), math.log(lam - 1), *scale, *x[self.own_at]])
+        found = []
+        for sigma in (1, -1):
+            c = self.constants(sigma, math.log(k))
+            if np.abs(self.at(z, c)[0] - x).max() <= MATCH * np.abs(x).max():
+                found.append((z, c))
+        return found
+
+    def _out(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
+        return np.asarray(self.fn(z, c)).ravel()
+
+    def at(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        n, k = len(self.free), len(z)
+        out = self._out(z, c)
+        return out[:n], out[n : n + n * k].reshape(k, n).T
+
+    def extra(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        n, k = len(self.free), len(z)
+        out = self._out(z, c)
+        x, dx = out[:n], out[n : n + n * k].reshape(k, n).T
+        margin, dm = out[n + n * k], out[n + n * k + 1 :]
+        lo, hi, low, high = self.lo, self.hi, self.low, self.high
+        values = [x[low] - lo[low], hi[high] - x[high], [-margin]]
+        values += [[math.log(hi[j] / lo[i]) - math.log(x[j] / x[i]) for i, j in self.pairs]]
+        rates = [dx[low], -dx[high], -dm[None]]
+        rates += [np.array([dx[i] / x[i] - dx[j] / x[j] for i, j in self.pairs]).reshape(-1, k)]
+        return np.concatenate(values), np.vstack(rates)
+
+    def bounds(self) -> list[tuple[float, float]]:
+        return self.box
+
+    def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
+        """The design at z; where the scale is no coordinate, the smallest the box allows."""
+        x = self.at(z, c)[0]
+        if "s" not in self.names:
+            x[self.links] *= max(self.lo[i] / x[i] for i in self.links)
+        return x
+
+
+def coordinates(
+    m: Mechanism,
+    variant: frozenset[str],
+    free: tuple[str, ...],
+    lo: np.ndarray,
+    hi: np.ndarray,
+    time_ratio: float,
+    scale_free: bool,
+) -> Chart | None:
+    """The variant's coordinates on its construction (``applies``), else None."""
+    if not applies(m, variant, free):
+        return None
+    return Chart(m, variant, free, lo, hi, time_ratio, not scale_free)
+
+
+def applies(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> bool:
+    """Whether the variant's free parameters are its construction's (nothing of it fixed)."""
+    r = m.construction
+    if r is None:
+        return False
+    wanted = {*r.links, r.arm} | {n for n in (r.rod, r.height) if n and r.rod not in variant}
+    return set(free) == wanted
+
+
+def function(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], scale: bool) -> Any:
+    """This thread's function of the variant's coordinates (with the scale one of them, or
+    not): (z, constants) → x, ∂x/∂z (by columns), the circuit's margin (< 0: one circuit) and
+    its gradient (``warm`` builds them before a service is ready)."""
+    cache: dict[Any, ca.Function] = _local.__dict__.setdefault("charts", {})
+    key = (m.type, variant, free, scale)
+    if key not in cache:
+        assert m.construction is not None
+        cache[key] = _function(m.construction, free, names(m.construction, free, scale))
+    return cache[key]
+
+
+def names(r: Roles, free: tuple[str, ...], scale: bool) -> tuple[str, ...]:
+    """The coordinates' names: ψ, v, the scale's log s where it is one, the rod's length l
+    and its path's placement h where they are free."""
+    own = [n for n in (r.rod, r.height) if n is not None and n in free]
+    return ("psi", "v", *(("s",) if scale else ()), *("l", "h")[: len(own)])
+
+
+def _function(r: Roles, free: tuple[str, ...], names: tuple[str, ...]) -> ca.Function:
+    z, c = ca.SX.sym("z", len(names)), ca.SX.sym("c", 4)
+    lam = 1 + ca.exp(z[1])
+    k = ca.exp(z[names.index("s")] if "s" in names else c[3])
+    q = dict.fromkeys(PARAMS, 0.0) | {"ep_r": c[0], "ep_i": c[1], "arm": c[2]}
+    q |= {"swings": float(r.swings), "free_scale": 1.0} | {f"hi{i}": 1.0 for i in range(4)}
+    got = dict(zip(ROWS, rows(z[0], lam, ca.vertcat(*(q[n] for n in PARAMS))), strict=True))
+    value = dict(zip(r.links, (k, k * got["a2"], k * got["a3"], k * got["a4"]), strict=True))
+    value[r.arm] = got["r5"]
+    for name, part in (("l", r.rod), ("h", r.height)):
+        if name in names and part is not None:
+            value[part] = z[names.index(name)]
+    x = ca.vertcat(*(value[n] for n in free))
+    margin = circuit(*crank(z[0], lam, c[0], c[1]), c[0], c[1])
+    out = ca.vertcat(x, ca.vec(ca.jacobian(x, z)), margin, ca.gradient(margin, z))
+    return ca.Function("chart", [z, c], [out], {"cse": True})
