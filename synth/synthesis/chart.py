@@ -37,8 +37,9 @@ _local = threading.local()
 
 
 class Chart:
-    """One variant's coordinates on the construction, with the request's box on its free
-    parameters (``local.Coordinates``)."""
+    """One variant's coordinates on the construction (where it ``applies``), with the request's
+    box on its free parameters (``local.Coordinates``); ``scale``: the four-bar's scale is one
+    of them (the measure depends on it)."""
 
     equalities = False
     drawn = "construction"
@@ -121,21 +122,6 @@ class Chart:
         if "s" not in self.names:
             x[self.links] *= max(self.lo[i] / x[i] for i in self.links)
         return x
-
-
-def coordinates(
-    m: Mechanism,
-    variant: frozenset[str],
-    free: tuple[str, ...],
-    lo: np.ndarray,
-    hi: np.ndarray,
-    time_ratio: float,
-    scale_free: bool,
-) -> Chart | None:
-    """The variant's coordinates on its construction (``applies``), else None."""
-    if not applies(m, variant, free):
-        return None
-    return Chart(m, variant, free, lo, hi, time_ratio, not scale_free)
 
 
 def applies(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> bool:

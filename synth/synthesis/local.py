@@ -155,8 +155,11 @@ def local_optima(
     # the starts: the exact solvers' designs and projected Halton points, the best ranked first
     wide = box_of(starts[0]) if starts else [bounds[k] for k in free]
     lo, hi = (np.array([b[i] for b in wide]) for i in (0, 1))
-    on = chart.coordinates(m, variant, free, lo, hi, targets[0], aim.scale_free)
-    coords: Coordinates = on if on is not None else Parameters(lo, hi, fixed_parts)
+    coords: Coordinates = (
+        chart.Chart(m, variant, free, lo, hi, targets[0], not aim.scale_free)
+        if chart.applies(m, variant, free)
+        else Parameters(lo, hi, fixed_parts)
+    )
     measured = _ranked(m, form, key, pv, lo, hi, starts, free, aim, coords.drawn, terms, design)
     # a start at the smallest member of its free scale (the same motion): SLSQP then has a
     # bound in that direction, where it would crawl towards the tie to the smaller design
