@@ -29,10 +29,12 @@ from ..mechanisms.fourbar.construction import PARAMS, ROWS, circuit, crank, rows
 from ..mechanisms.geometry import triangle_angle
 from ..mechanisms.registry import Roles
 from ..targets import beta
+from .solve import starts as halton
 
 MATCH = 1e-9  # relative: how closely a start's coordinates give the start back
 FAR = 30.0  # the logs v and s stay within ±FAR (λ − 1 and the scale within e^±30)
 EDGE = 1e-9  # ψ within (EDGE, π − EDGE)
+DRAWN_V = (-7.0, 4.0)  # the range of v = log(λ − 1) that ``Chart.draw`` draws from
 _local = threading.local()
 
 
@@ -115,6 +117,22 @@ class Chart:
 
     def bounds(self) -> list[tuple[float, float]]:
         return self.box
+
+    def draw(self, n: int) -> np.ndarray:
+        """Designs at n/2 Halton points of the construction on each sheet (ψ over its range, v
+        over ``DRAWN_V``, the rod's numbers over their box; the scale the smallest the box
+        allows): each meets the time ratio and the stroke where its toggles lie in one
+        circuit. Of 256 such points 19–90 pass the screen on a crank-rocker at time ratio 1.6
+        and 0°, of the box's own 3–7."""
+        lo = np.array([EDGE, DRAWN_V[0], *(self.lo[i] for i in self.own_at)])
+        hi = np.array([math.pi - EDGE, DRAWN_V[1], *(self.hi[i] for i in self.own_at)])
+        z = halton(lo, hi, np.r_[False, False, self.lo[self.own_at] > 0], n // 2)
+        if "s" in self.names:
+            z = np.insert(z, 2, 0.0, axis=1)
+        out = np.array([self.at(p, self.constants(sigma, 0.0))[0] for sigma in (1, -1) for p in z])
+        links = out[:, self.links]
+        out[:, self.links] *= np.max(self.lo[self.links] / links, axis=1, keepdims=True)
+        return out
 
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
         """The design at z; where the scale is no coordinate, the smallest the box allows."""

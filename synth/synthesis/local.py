@@ -57,8 +57,9 @@ class Coordinates(Protocol):
     """Where SLSQP moves: points z, each start with its constants c, and the free parameters
     x(z) with ∂x/∂z. ``equalities``: whether x(z) may leave the formulation's equalities (then
     constrained); ``extra``: further inequality rows at z (the request's bounds where they are
-    no bounds of z); ``end``: the parameters a run's last point stands for. ∂x/∂z None: x is
-    z."""
+    no bounds of z); ``draw``: n points (parameters) spread over the space, which the search
+    projects onto the formulation's constraints and ranks as starts; ``end``: the parameters a
+    run's last point stands for. ∂x/∂z None: x is z."""
 
     equalities: bool
     drawn: str  # the key of ``Aim.drawn``
@@ -67,6 +68,7 @@ class Coordinates(Protocol):
     def at(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]: ...
     def extra(self, z: np.ndarray, c: np.ndarray) -> Rows: ...
     def bounds(self) -> list[tuple[float, float]]: ...
+    def draw(self, n: int) -> np.ndarray: ...
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray: ...
 
 
@@ -90,6 +92,10 @@ class Parameters:
 
     def bounds(self) -> list[tuple[float, float]]:
         return list(zip(self.lo, self.hi, strict=True))
+
+    def draw(self, n: int) -> np.ndarray:
+        """Halton points of the box (log-uniform where its bounds are positive)."""
+        return halton(self.lo, self.hi, self.lo > 0, n)
 
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
         return z
@@ -160,7 +166,7 @@ def local_optima(
         if chart.applies(m, variant, free)
         else Parameters(lo, hi, fixed_parts)
     )
-    measured = _ranked(m, form, key, pv, lo, hi, starts, free, aim, coords.drawn, terms, design)
+    measured = _ranked(m, form, key, pv, lo, hi, starts, free, aim, coords, terms, design)
     # a start at the smallest member of its free scale (the same motion): SLSQP then has a
     # bound in that direction, where it would crawl towards the tie to the smaller design
     sc = m.scale
@@ -343,7 +349,7 @@ def _ranked(
     starts: list[dict[str, float]],
     free: tuple[str, ...],
     aim: aims.Aim,
-    drawn_key: str,
+    coords: Coordinates,
     terms: Any,
     design: Any,
 ) -> list[tuple[float, np.ndarray]]:
@@ -352,8 +358,8 @@ def _ranked(
     starts where the box's hold too few designs. Empty where the deadline passed."""
     n = len(free)
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
-    drawn_starts = aim.drawn[drawn_key]
-    drawn = screen.project(form, key, halton(lo, hi, lo > 0, SAMPLES), pv, lo, hi)
+    drawn_starts = aim.drawn[coords.drawn]
+    drawn = screen.project(form, key, coords.draw(SAMPLES), pv, lo, hi)
     near = drawn[:0]
     if len(drawn) < drawn_starts and len(own):
         # the box's points may hold few designs (a drag-link's ground is its shortest link; a
