@@ -13,7 +13,8 @@ has a rod. The links are e^s (1, a2, a3, a4)(ψ, λ) in the crank-rocker's roles
 construction's (1/(2 sin(ψ/2)) where it swings with the rocker, else half the stroke). Its own
 rows: the request's bounds on the parameters that are no coordinates (where the scale is a
 constant, on the links' ratios: some scale then meets them all, the smallest is the answer),
-and the toggles in one assembly circuit."""
+and the toggles in one assembly circuit. The search's drawn starts are points of the
+construction too (``Chart.draw``)."""
 
 from __future__ import annotations
 

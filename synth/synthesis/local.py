@@ -8,10 +8,11 @@ from ranked starts, in the variant's coordinates.
   exact derivatives (``quality.motion_terms``, ``loads.peak_terms``: the envelope theorem at
   a peak, the implicit function theorem at a dead centre or a window's end);
 - its starts are the exact solvers' designs for the request (best-transmitting and smallest)
-  and ``SAMPLES`` points of the box projected onto the equalities (with fixed parts and few
-  such points, ``SAMPLES`` more within ``AROUND`` of the starts), ranked by their measure on
-  a grid of crank angles (``screen``); it runs from the ``STARTS`` best of the former and as
-  many of the latter as ``Aim.drawn`` says, at most ``MAX_ITER`` iterations each.
+  and ``SAMPLES`` points its coordinates draw (the box's, or the construction's) projected
+  onto the equalities (with few such designs, ``SAMPLES`` more within ``AROUND`` of the
+  starts), ranked by their measure on a grid of crank angles (``screen``); it runs from the
+  ``STARTS`` best of the former and as many of the latter as ``Aim.drawn`` says, at most
+  ``MAX_ITER`` iterations each.
 - its coordinates (``Coordinates``): a four-bar with nothing of its construction fixed moves
   on its dead-centre construction (``chart``), where every point meets the time ratio and
   the stroke; any other variant in its free parameters, the equalities constraints.
