@@ -57,14 +57,13 @@ class Chart:
         time_ratio: float,
         scale: bool,
     ) -> None:
-        r = self.roles = m.construction
+        r = m.construction
         assert r is not None
         self.names = names(r, free, scale)
-        self.own = [n for n in (r.rod, r.height) if n is not None and n in free]  # l, h
         self.free, self.lo, self.hi, self.beta = free, lo, hi, beta(time_ratio)
         self.fn = function(m, variant, free, scale)
         self.links = [free.index(n) for n in r.links]
-        self.own_at = [free.index(n) for n in self.own]
+        self.own_at = [free.index(n) for n in _own(r, free)]  # l, h
         own = self.own_at
         bounded = [i for i in range(len(free)) if i not in own and (scale or i not in self.links)]
         self.low = [i for i in bounded if math.isfinite(lo[i])]
@@ -96,17 +95,19 @@ class Chart:
                 found.append((z, c))
         return found
 
-    def _out(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
-        return np.asarray(self.fn(z, c)).ravel()
-
     def at(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """x(z) and ∂x/∂z."""
         n, k = len(self.free), len(z)
-        out = self._out(z, c)
+        out = np.asarray(self.fn(z, c)).ravel()
         return out[:n], out[n : n + n * k].reshape(k, n).T
 
-    def extra(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def point(
+        self, z: np.ndarray, c: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+        """x(z), ∂x/∂z and the own rows: the request's bounds on what is no coordinate, the
+        toggles in one circuit (its margin < 0)."""
         n, k = len(self.free), len(z)
-        out = self._out(z, c)
+        out = np.asarray(self.fn(z, c)).ravel()
         x, dx = out[:n], out[n : n + n * k].reshape(k, n).T
         margin, dm = out[n + n * k], out[n + n * k + 1 :]
         lo, hi, low, high = self.lo, self.hi, self.low, self.high
@@ -114,7 +115,7 @@ class Chart:
         values += [[math.log(hi[j] / lo[i]) - math.log(x[j] / x[i]) for i, j in self.pairs]]
         rates = [dx[low], -dx[high], -dm[None]]
         rates += [np.array([dx[i] / x[i] - dx[j] / x[j] for i, j in self.pairs]).reshape(-1, k)]
-        return np.concatenate(values), np.vstack(rates)
+        return x, dx, (np.concatenate(values), np.vstack(rates))
 
     def bounds(self) -> list[tuple[float, float]]:
         return self.box
@@ -130,16 +131,19 @@ class Chart:
         z = halton(lo, hi, np.r_[False, False, self.lo[self.own_at] > 0], n // 2)
         if "s" in self.names:
             z = np.insert(z, 2, 0.0, axis=1)
-        out = np.array([self.at(p, self.constants(sigma, 0.0))[0] for sigma in (1, -1) for p in z])
-        links = out[:, self.links]
-        out[:, self.links] *= np.max(self.lo[self.links] / links, axis=1, keepdims=True)
-        return out
+        return self._smallest(
+            np.array([self.at(p, self.constants(sigma, 0.0))[0] for sigma in (1, -1) for p in z])
+        )
 
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
         """The design at z; where the scale is no coordinate, the smallest the box allows."""
         x = self.at(z, c)[0]
-        if "s" not in self.names:
-            x[self.links] *= max(self.lo[i] / x[i] for i in self.links)
+        return x if "s" in self.names else self._smallest(x)
+
+    def _smallest(self, x: np.ndarray) -> np.ndarray:
+        """The designs x (rows, or one) at the smallest scale the box's lower bounds allow."""
+        links = x[..., self.links]
+        x[..., self.links] *= np.max(self.lo[self.links] / links, axis=-1, keepdims=True)
         return x
 
 
@@ -167,8 +171,12 @@ def function(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], scale
 def names(r: Roles, free: tuple[str, ...], scale: bool) -> tuple[str, ...]:
     """The coordinates' names: ψ, v, the scale's log s where it is one, the rod's length l
     and its path's placement h where they are free."""
-    own = [n for n in (r.rod, r.height) if n is not None and n in free]
-    return ("psi", "v", *(("s",) if scale else ()), *("l", "h")[: len(own)])
+    return ("psi", "v", *(("s",) if scale else ()), *("l", "h")[: len(_own(r, free))])
+
+
+def _own(r: Roles, free: tuple[str, ...]) -> list[str]:
+    """The rod's length and its path's placement, those of them free."""
+    return [n for n in (r.rod, r.height) if n is not None and n in free]
 
 
 def _function(r: Roles, free: tuple[str, ...], names: tuple[str, ...]) -> ca.Function:

@@ -52,22 +52,23 @@ class Late(Exception):
 
 
 Rows = tuple[np.ndarray, np.ndarray]  # values (≥ 0 where met) and their derivatives in z
+Point = tuple[np.ndarray, np.ndarray | None, Rows]  # x(z), ∂x/∂z, the coordinates' own rows
 
 
 class Coordinates(Protocol):
-    """Where SLSQP moves: points z, each start with its constants c, and the free parameters
-    x(z) with ∂x/∂z. ``equalities``: whether x(z) may leave the formulation's equalities (then
-    constrained); ``extra``: further inequality rows at z (the request's bounds where they are
-    no bounds of z); ``draw``: n points (parameters) spread over the space, which the search
-    projects onto the formulation's constraints and ranks as starts; ``end``: the parameters a
-    run's last point stands for. ∂x/∂z None: x is z."""
+    """Where SLSQP moves: points z, each start with its constants c; ``point``: the free
+    parameters x(z), ∂x/∂z (None: x is z) and the coordinates' own inequality rows at z (the
+    request's bounds where they are no bounds of z), in one evaluation. ``equalities``:
+    whether x(z) may leave the formulation's equalities (then constrained); ``draw``: n
+    points (parameters) spread over the space, which the search projects onto the
+    formulation's constraints and ranks as starts; ``end``: the parameters a run's last
+    point stands for."""
 
     equalities: bool
     drawn: str  # the key of ``Aim.drawn``
 
     def starts(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]: ...
-    def at(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]: ...
-    def extra(self, z: np.ndarray, c: np.ndarray) -> Rows: ...
+    def point(self, z: np.ndarray, c: np.ndarray) -> Point: ...
     def bounds(self) -> list[tuple[float, float]]: ...
     def draw(self, n: int) -> np.ndarray: ...
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray: ...
@@ -85,11 +86,8 @@ class Parameters:
     def starts(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         return [(x, np.empty(0))]
 
-    def at(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, None]:
-        return z, None
-
-    def extra(self, z: np.ndarray, c: np.ndarray) -> Rows:
-        return np.empty(0), np.empty((0, len(z)))
+    def point(self, z: np.ndarray, c: np.ndarray) -> Point:
+        return z, None, (np.empty(0), np.empty((0, len(z))))
 
     def bounds(self) -> list[tuple[float, float]]:
         return list(zip(self.lo, self.hi, strict=True))
@@ -246,7 +244,7 @@ class _Run:
     ) -> None:
         self.coords, self.c, self.k = coords, c, k
         self.form, self.key, self.pv, self.terms, self.columns = form, key, pv, terms, columns
-        self.memo: dict[bytes, tuple[np.ndarray, np.ndarray | None]] = {}
+        self.memo: dict[bytes, dict[str, Any]] = {}  # per point z: what was found there
         lbg, ubg = form.lbg, form.ubg
         eq = lbg == ubg
         self.below, self.above = np.isfinite(lbg) & ~eq, np.isfinite(ubg) & ~eq
@@ -266,28 +264,44 @@ class _Run:
         if limit is not None:
             self.constraints.append(self.bounded(*limit))
 
-    def x(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-        """x(z) and ∂x/∂z (y = (z, t))."""
+    def _at(self, y: np.ndarray) -> dict[str, Any]:
+        """What was found at the point z of y = (z, t): SLSQP asks each function and its
+        derivatives there in turn, each found once."""
         z = y[: self.k]
         key = z.tobytes()
         if key not in self.memo:
             if len(self.memo) > 64:
                 self.memo.clear()
-            self.memo[key] = self.coords.at(z, self.c)
+            self.memo[key] = {"point": self.coords.point(z, self.c)}
         return self.memo[key]
+
+    def x(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """x(z) and ∂x/∂z."""
+        x, dx, _ = self._at(y)["point"]
+        return x, dx
 
     def rows(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The formulation's rows at x(z) and their derivatives in y (t appears in none)."""
-        x, dx = self.x(y)
-        g, jac = screen.constraints(self.form, self.key, x[None], self.pv)
-        return g[0], np.hstack([_chained(jac[0], dx), np.zeros((g.shape[1], 1))])
+        at = self._at(y)
+        if "rows" not in at:
+            x, dx = self.x(y)
+            g, jac = screen.constraints(self.form, self.key, x[None], self.pv)
+            at["rows"] = g[0], np.hstack([_chained(jac[0], dx), np.zeros((g.shape[1], 1))])
+        rows: tuple[np.ndarray, np.ndarray] = at["rows"]
+        return rows
 
     def inequalities(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        g, j = self.rows(y)
-        lbg, ubg, below, above = self.form.lbg, self.form.ubg, self.below, self.above
-        own, own_j = self.coords.extra(y[: self.k], self.c)
-        values = np.concatenate([g[below] - lbg[below], ubg[above] - g[above], own])
-        return values, np.vstack([j[below], -j[above], np.hstack([own_j, np.zeros((len(own), 1))])])
+        """The formulation's inequalities and the coordinates' own rows, with derivatives."""
+        at = self._at(y)
+        if "inequalities" not in at:
+            g, j = self.rows(y)
+            lbg, ubg, below, above = self.form.lbg, self.form.ubg, self.below, self.above
+            own, own_j = at["point"][2]
+            values = np.concatenate([g[below] - lbg[below], ubg[above] - g[above], own])
+            own_j = np.hstack([own_j, np.zeros((len(own), 1))])
+            at["inequalities"] = values, np.vstack([j[below], -j[above], own_j])
+        ineq: tuple[np.ndarray, np.ndarray] = at["inequalities"]
+        return ineq
 
     def _jac(self, y: np.ndarray) -> np.ndarray:
         return self.inequalities(y)[1]

@@ -104,14 +104,14 @@ def project(
         if step == STEPS or todo.size == 0:
             break
         last = res
-        step = (np.linalg.pinv(jac) @ res[..., None])[..., 0]
+        dx = (np.linalg.pinv(jac) @ res[..., None])[..., 0]
         # a part on a bound that the step would take beyond it stays there, and the step is
         # taken again without it (else each clipped step undoes part of the next)
         at = x[todo]
-        out = ((at <= lo) & (step > 0)) | ((at >= hi) & (step < 0))
+        out = ((at <= lo) & (dx > 0)) | ((at >= hi) & (dx < 0))
         if out.any():
-            step = (np.linalg.pinv(jac * ~out[:, None, :]) @ res[..., None])[..., 0]
-        x[todo] = np.clip(at - step, lo, hi)
+            dx = (np.linalg.pinv(jac * ~out[:, None, :]) @ res[..., None])[..., 0]
+        x[todo] = np.clip(at - dx, lo, hi)
     x, g = x[finite], g[finite]
     ok = np.all(np.abs(g[:, eq] - lbg[eq]) <= CLOSE, axis=1)
     if every:
