@@ -12,7 +12,9 @@ from ranked starts, in the variant's coordinates.
   onto the equalities (with few such designs, ``SAMPLES`` more within ``AROUND`` of the
   starts), ranked by their measure on a grid of crank angles (``screen``); it runs from the
   ``STARTS`` best of the former and as many of the latter as ``Aim.drawn`` says, at most
-  ``MAX_ITER`` iterations each.
+  ``MAX_ITER`` iterations each, but not from a start ``FAR`` above the best (the smallest
+  design at a 0° bound, near locking, measures 10–5 000 times the best start: its runs went
+  to the edge of the coordinates and ended infeasible).
 - its coordinates (``Coordinates``): a four-bar with nothing of its construction fixed moves
   on its dead-centre construction (``chart``), where every point meets the time ratio and
   the stroke; any other variant in its free parameters, the equalities constraints.
@@ -41,14 +43,21 @@ STARTS = 2
 MAX_ITER = 300
 AROUND = 3.0  # the box about the starts (each part within this factor of theirs) drawn again
 STILL = 5  # iterations without a change above 1e-12 (stroke units) that end an SLSQP run
-NEAR = 1e-4  # how close (stroke units, each parameter) to an earlier run's end a run ends
+# a run ends once it comes this close (stroke units, each parameter) to where an earlier run
+# ended, its epigraph's t no further below that run's measure than LEVEL (relative)
+NEAR, LEVEL = 1e-2, 1e-3
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
 SAMPLES = 256  # Halton points of the box projected onto the equalities (``screen``): starts
 FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
+FAR = 10.0  # a start measuring more than this many times the best start's is not run from
 
 
 class Late(Exception):
     """The deadline passed before an evaluation of the measure (``local_optima``)."""
+
+
+class Known(Exception):
+    """A run came to an optimum an earlier run ended at (``local_optima``)."""
 
 
 Rows = tuple[np.ndarray, np.ndarray]  # values (≥ 0 where met) and their derivatives in z
@@ -174,8 +183,11 @@ def local_optima(
         for _, x in measured:
             x[scaled] *= max(lo[scaled] / x[scaled])
     links = np.array([float(m.parameter(k).link) for k in free])
-    ended: list[np.ndarray] = []  # where the runs so far ended
+    ended: list[tuple[np.ndarray, float]] = []  # where the runs so far ended, their t
+    best = min((first for first, _ in measured), default=0.0)
     for first, x0 in measured:
+        if first > FAR * best > 0:  # a design near locking (the smallest at a 0° bound)
+            continue
         for z0, c in coords.starts(x0):
             if time.monotonic() >= deadline:
                 return
@@ -189,13 +201,18 @@ def local_optima(
             def cap(y: np.ndarray, seen: list[np.ndarray] = seen, run: _Run = run) -> None:
                 """Ends SLSQP (with its last iterate, projected below) at the deadline; once
                 its iterates stand still (where its line search can no longer meet ``ftol``
-                it may repeat one point for a hundred iterations); or once it comes within
-                ``NEAR`` of an optimum an earlier run ended at (the rest is that run's)."""
+                it may repeat one point for a hundred iterations). Once it comes within
+                ``NEAR`` of an optimum an earlier run ended at, no lower than it by ``LEVEL``,
+                the run ends with nothing of its own (``Known``: the rest is that run's)."""
                 seen.append(y.copy())
                 still = len(seen) > STILL and np.ptp(seen[-STILL:], axis=0).max() <= 1e-12
                 x = run.x(y)[0]
-                known = any(np.abs(x - e).max() <= NEAR for e in ended)
-                if still or known or time.monotonic() >= deadline:
+                known = any(
+                    np.abs(x - e).max() <= NEAR and y[-1] >= t - LEVEL * abs(t) for e, t in ended
+                )
+                if known:
+                    raise Known
+                if still or time.monotonic() >= deadline:
                     raise StopIteration
 
             try:
@@ -211,6 +228,8 @@ def local_optima(
                         callback=cap,
                         options={"maxiter": MAX_ITER, "ftol": 1e-12},
                     ).x
+            except Known:  # the rest is an earlier run's: nothing of its own to answer
+                continue
             except Late:  # within an iteration: the run ends where its last one did
                 if not seen:
                     return
@@ -219,7 +238,7 @@ def local_optima(
             # the equalities, the inequalities it is beyond held inside
             end = coords.end(last[:-1], c)
             for x in screen.project(form, key, end[None], pv, lo, hi, every=False):
-                ended.append(x)
+                ended.append((x, float(last[-1])))
                 yield design(x)
 
 
