@@ -8,8 +8,9 @@ type's own parameters its iterates left them by up to 14% of the stroke and craw
 On a sheet σ (the crank turns φ = π + σβ between the toggles), a point is
 z = (ψ, v[, s][, l][, h]): the rocker's swing ψ, λ = 1 + e^v (the coupler over the crank),
 the four-bar's scale e^s (its ground link; a constant of the start where the measure does not
-depend on it, the motion's), the rod's length l and its path's placement h where the variant
-has a rod. The links are e^s (1, a2, a3, a4)(ψ, λ) in the crank-rocker's roles, the arm the
+depend on it, the motion's; where one link is fixed, its length over its ratio to the ground,
+no coordinate), the rod's length l and its path's placement h where the variant has a rod and
+they are free. The links are e^s (1, a2, a3, a4)(ψ, λ) in the crank-rocker's roles, the arm the
 construction's (1/(2 sin(ψ/2)) where it swings with the rocker, else half the stroke). Its own
 rows: the request's bounds on the parameters that are no coordinates (where the scale is a
 constant, on the links' ratios: some scale then meets them all, the smallest is the answer),
@@ -45,7 +46,6 @@ class Chart:
     of them (the measure depends on it)."""
 
     equalities = False
-    drawn = "construction"
 
     def __init__(
         self,
@@ -56,31 +56,40 @@ class Chart:
         hi: np.ndarray,
         time_ratio: float,
         scale: bool,
+        fixed: dict[str, float],
     ) -> None:
         r = m.construction
         assert r is not None
         self.names = names(r, free, scale)
         self.free, self.lo, self.hi, self.beta = free, lo, hi, beta(time_ratio)
         self.fn = function(m, variant, free, scale)
-        self.links = [free.index(n) for n in r.links]
+        self.roles = r.links
+        self.drawn = "fixed" if fixed else "construction"  # how many drawn starts it runs from
+        pinned = _pinned(r, free)
+        # a fixed link's length, else None (its log is the constants' last)
+        self.pinned = None if pinned is None else fixed[pinned]
+        self.links = [free.index(n) for n in r.links if n in free]
         self.own_at = [free.index(n) for n in _own(r, free)]  # l, h
-        own = self.own_at
-        bounded = [i for i in range(len(free)) if i not in own and (scale or i not in self.links)]
+        own, sized = self.own_at, scale or pinned is not None  # the links' lengths are set
+        bounded = [i for i in range(len(free)) if i not in own and (sized or i not in self.links)]
         self.low = [i for i in bounded if math.isfinite(lo[i])]
         self.high = [i for i in bounded if math.isfinite(hi[i])]
-        li = [] if scale else self.links
+        li = [] if sized else self.links
         self.pairs = [(i, j) for i in li for j in li if i != j and lo[i] > 0 and hi[j] < math.inf]
-        self.box = [(EDGE, math.pi - EDGE), (-FAR, FAR), *[(-FAR, FAR)] * scale]
+        self.box = [(EDGE, math.pi - EDGE), (-FAR, FAR), *[(-FAR, FAR)] * ("s" in self.names)]
         self.box += [(lo[i], hi[i]) for i in own]
 
     def constants(self, sigma: int, s: float) -> np.ndarray:
-        """e^{iφ}, half the stroke (a fixed arm's length) and the scale's log."""
+        """e^{iφ}, half the stroke (a fixed arm's length) and the scale's log (a fixed link's
+        length's, where one is fixed)."""
+        s = s if self.pinned is None else math.log(self.pinned)
         return np.array([-math.cos(sigma * self.beta), -math.sin(sigma * self.beta), 0.5, s])
 
     def starts(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         """The coordinates of the design x on the sheet that gives it back (none: no sheet
         does, a design of no crank-rocker's construction)."""
-        rho = x[self.links]
+        given = iter(x[self.links])
+        rho = np.array([self.pinned if n not in self.free else next(given) for n in self.roles])
         k, lam = rho[0], rho[2] / rho[1]
         if not (k > 0 and lam > 1):
             return []
@@ -131,29 +140,38 @@ class Chart:
         z = halton(lo, hi, np.r_[False, False, self.lo[self.own_at] > 0], n // 2)
         if "s" in self.names:
             z = np.insert(z, 2, 0.0, axis=1)
-        return self._smallest(
-            np.array([self.at(p, self.constants(sigma, 0.0))[0] for sigma in (1, -1) for p in z])
-        )
+        x = np.array([self.at(p, self.constants(sigma, 0.0))[0] for sigma in (1, -1) for p in z])
+        return self._smallest(x)
 
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
         """The design at z; where the scale is no coordinate, the smallest the box allows."""
-        x = self.at(z, c)[0]
-        return x if "s" in self.names else self._smallest(x)
+        return self._smallest(self.at(z, c)[0])
 
     def _smallest(self, x: np.ndarray) -> np.ndarray:
-        """The designs x (rows, or one) at the smallest scale the box's lower bounds allow."""
+        """The designs x (rows, or one) at the smallest scale the box's lower bounds allow,
+        where the scale is free and no coordinate (else as they are)."""
+        if "s" in self.names or self.pinned is not None:
+            return x
         links = x[..., self.links]
         x[..., self.links] *= np.max(self.lo[self.links] / links, axis=-1, keepdims=True)
         return x
 
 
 def applies(m: Mechanism, variant: frozenset[str], free: tuple[str, ...]) -> bool:
-    """Whether the variant's free parameters are its construction's (nothing of it fixed)."""
+    """Whether the variant's free parameters are its construction's: the arm and every link
+    free, or all but one (whose length then sets the scale); the rod's length and its path's
+    placement free or fixed."""
     r = m.construction
     if r is None:
         return False
-    wanted = {*r.links, r.arm} | {n for n in (r.rod, r.height) if n and r.rod not in variant}
-    return set(free) == wanted
+    rod = {n for n in (r.rod, r.height) if n and r.rod not in variant}
+    core = {*r.links, r.arm}
+    return r.arm in free and len(core - set(free)) <= 1 and set(free) <= core | rod
+
+
+def _pinned(r: Roles, free: tuple[str, ...]) -> str | None:
+    """The four-bar's link that is fixed (at most one where the chart ``applies``), or None."""
+    return next((n for n in r.links if n not in free), None)
 
 
 def function(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], scale: bool) -> Any:
@@ -169,9 +187,11 @@ def function(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], scale
 
 
 def names(r: Roles, free: tuple[str, ...], scale: bool) -> tuple[str, ...]:
-    """The coordinates' names: ψ, v, the scale's log s where it is one, the rod's length l
-    and its path's placement h where they are free."""
-    return ("psi", "v", *(("s",) if scale else ()), *("l", "h")[: len(_own(r, free))])
+    """The coordinates' names: ψ, v, the scale's log s where it is one (the measure depends
+    on it and no link is fixed), the rod's length l and its path's placement h where they
+    are free."""
+    s = ("s",) if scale and _pinned(r, free) is None else ()
+    return ("psi", "v", *s, *({r.rod: "l", r.height: "h"}[n] for n in _own(r, free)))
 
 
 def _own(r: Roles, free: tuple[str, ...]) -> list[str]:
@@ -182,11 +202,15 @@ def _own(r: Roles, free: tuple[str, ...]) -> list[str]:
 def _function(r: Roles, free: tuple[str, ...], names: tuple[str, ...]) -> ca.Function:
     z, c = ca.SX.sym("z", len(names)), ca.SX.sym("c", 4)
     lam = 1 + ca.exp(z[1])
-    k = ca.exp(z[names.index("s")] if "s" in names else c[3])
     q = dict.fromkeys(PARAMS, 0.0) | {"ep_r": c[0], "ep_i": c[1], "arm": c[2]}
     q |= {"swings": float(r.swings), "free_scale": 1.0} | {f"hi{i}": 1.0 for i in range(4)}
     got = dict(zip(ROWS, rows(z[0], lam, ca.vertcat(*(q[n] for n in PARAMS))), strict=True))
-    value = dict(zip(r.links, (k, k * got["a2"], k * got["a3"], k * got["a4"]), strict=True))
+    ratios = dict(zip(r.links, (1, got["a2"], got["a3"], got["a4"]), strict=True))
+    pinned = _pinned(r, free)
+    k = ca.exp(z[names.index("s")] if "s" in names else c[3])
+    if pinned is not None:  # c[3]: the fixed link's log
+        k /= ratios[pinned]
+    value = {n: k * a for n, a in ratios.items()}
     value[r.arm] = got["r5"]
     for name, part in (("l", r.rod), ("h", r.height)):
         if name in names and part is not None:

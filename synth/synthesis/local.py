@@ -15,9 +15,9 @@ from ranked starts, in the variant's coordinates.
   ``MAX_ITER`` iterations each, but not from a start ``FAR`` above the best (the smallest
   design at a 0° bound, near locking, measures 10–5 000 times the best start: its runs went
   to the edge of the coordinates and ended infeasible).
-- its coordinates (``Coordinates``): a four-bar with nothing of its construction fixed moves
-  on its dead-centre construction (``chart``), where every point meets the time ratio and
-  the stroke; any other variant in its free parameters, the equalities constraints.
+- its coordinates (``Coordinates``): a four-bar with its arm and all its links but one free
+  moves on its dead-centre construction (``chart``), where every point meets the time ratio
+  and the stroke; any other variant in its free parameters, the equalities constraints.
 
 No clock but the request's deadline decides anything: a run it cuts short ends at its last
 iterate (and the caller answers the exact designs alone)."""
@@ -170,7 +170,7 @@ def local_optima(
     wide = box_of(starts[0]) if starts else [bounds[k] for k in free]
     lo, hi = (np.array([b[i] for b in wide]) for i in (0, 1))
     coords: Coordinates = (
-        chart.Chart(m, variant, free, lo, hi, targets[0], not aim.scale_free)
+        chart.Chart(m, variant, free, lo, hi, targets[0], not aim.scale_free, fixed)
         if chart.applies(m, variant, free)
         else Parameters(lo, hi, fixed_parts)
     )

@@ -23,12 +23,26 @@ from synth.synthesis.solve import starts as halton
 FOURBARS = ["crank_rocker_slider", "drag_link_slider"]
 
 
-def _chart(mtype: str, time_ratio: float, scale: bool) -> chart.Chart:
+def _chart(
+    mtype: str, time_ratio: float, scale: bool, fixed: dict[str, float] | None = None
+) -> chart.Chart:
     m = get(mtype)
-    free = tuple(m.names)
+    fixed = fixed or {}
+    free = tuple(n for n in m.names if n not in fixed)
     assert chart.applies(m, frozenset(), free)
     lo, hi = np.full(len(free), 0.1), np.full(len(free), 5.0)
-    return chart.Chart(m, frozenset(), free, lo, hi, time_ratio, scale)
+    return chart.Chart(m, frozenset(), free, lo, hi, time_ratio, scale, fixed)
+
+
+# one part of each kind fixed (stroke units): a link of the four-bar (its length then sets the
+# scale), the rod
+PINNED = [
+    ("crank_rocker_slider", {"coupler": 2.99}),
+    ("crank_rocker_slider", {"rocker": 0.6}),
+    ("crank_rocker_slider", {"connecting_rod": 0.64}),
+    ("drag_link_slider", {"ground": 0.4}),
+    ("drag_link_slider", {"crank": 1.2}),
+]
 
 
 def _points(c: chart.Chart, n: int) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -71,10 +85,40 @@ def test_every_point_in_one_circuit_is_a_design_with_the_targets(mtype, time_rat
     assert judged >= 20
 
 
+@pytest.mark.parametrize(("mtype", "fixed"), PINNED)
+@pytest.mark.parametrize("time_ratio", [1.3, 2.0])
+def test_with_a_part_fixed_every_point_is_a_design_with_the_targets_and_that_part(
+    mtype, fixed, time_ratio
+):
+    """One link fixed: the coordinates are (ψ, v[, l, h]) and the link's length sets the
+    scale; the rod fixed: (ψ, v, s, h). Judged by the forward analysis of the whole design."""
+    c = _chart(mtype, time_ratio, scale=True, fixed=fixed)
+    assert "s" not in c.names or "connecting_rod" in fixed
+    m = get(mtype)
+    form, key = formulation(m, frozenset(), c.free), kept_by(m, frozenset(), c.free)
+    pv = np.array([*fixed.values(), time_ratio, 0.999])
+    inequality = form.lbg != form.ubg
+    judged = 0
+    for z, k in _points(c, 64):
+        x = c.at(z, k)[0]
+        g = screen.constraints(form, key, x[None], pv)[0][0]
+        if not np.all((g >= form.lbg)[inequality] & (g <= form.ubg)[inequality]):
+            continue
+        a = synth.analyze(mtype, {**dict(zip(c.free, x, strict=True)), **fixed})
+        assert a.time_ratio == pytest.approx(time_ratio, rel=1e-9), (z, k)
+        assert a.stroke == pytest.approx(1.0, rel=1e-9), (z, k)
+        back = c.starts(x)
+        assert any(np.abs(c.at(zb, kb)[0] - x).max() <= 1e-9 * np.abs(x).max() for zb, kb in back)
+        judged += 1
+    assert judged >= 10
+
+
 @pytest.mark.parametrize("mtype", FOURBARS)
 @pytest.mark.parametrize("scale", [False, True])
-def test_the_coordinates_derivatives_agree_with_central_differences(mtype, scale):
-    c = _chart(mtype, 1.6, scale)
+@pytest.mark.parametrize("fixed", [None, "link"])
+def test_the_coordinates_derivatives_agree_with_central_differences(mtype, scale, fixed):
+    link = {m: f for m, f in PINNED if "connecting_rod" not in f}[mtype] if fixed else None
+    c = _chart(mtype, 1.6, scale, link)
     for z, k in _points(c, 8)[:6]:
         x, dx = c.at(z, k)
         h = 1e-6
