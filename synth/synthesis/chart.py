@@ -43,7 +43,8 @@ _local = threading.local()
 class Chart:
     """One variant's coordinates on the construction (where it ``applies``), with the request's
     box on its free parameters (``local.Coordinates``); ``scale``: the four-bar's scale is one
-    of them (the measure depends on it)."""
+    of them (the measure depends on it) unless ``fixed`` (the request's fixed parts) holds a
+    link, whose length then sets it."""
 
     equalities = False
 
@@ -144,7 +145,8 @@ class Chart:
         return self._smallest(x)
 
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
-        """The design at z; where the scale is no coordinate, the smallest the box allows."""
+        """The design at z; where the scale is free and no coordinate, the smallest the box
+        allows."""
         return self._smallest(self.at(z, c)[0])
 
     def _smallest(self, x: np.ndarray) -> np.ndarray:

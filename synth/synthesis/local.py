@@ -12,7 +12,7 @@ from ranked starts, in the variant's coordinates.
   onto the equalities (with few such designs, ``SAMPLES`` more within ``AROUND`` of the
   starts), ranked by their measure on a grid of crank angles (``screen``); it runs from the
   ``STARTS`` best of the former and as many of the latter as ``Aim.drawn`` says, at most
-  ``MAX_ITER`` iterations each, but not from a start ``FAR`` above the best (the smallest
+  ``MAX_ITER`` iterations each, but not from a start ``FAR_ABOVE`` the best (the smallest
   design at a 0° bound, near locking, measures 10–5 000 times the best start: its runs went
   to the edge of the coordinates and ended infeasible).
 - its coordinates (``Coordinates``): a four-bar with its arm and all its links but one free
@@ -49,7 +49,7 @@ NEAR, LEVEL = 1e-2, 1e-3
 TERMS = 4  # the largest terms of a measure that its epigraph bounds
 SAMPLES = 256  # Halton points of the box projected onto the equalities (``screen``): starts
 FAIL = 1e3  # a design the analysis rejects, for the line search: far above every measure
-FAR = 10.0  # a start measuring more than this many times the best start's is not run from
+FAR_ABOVE = 10.0  # a start measuring more than this many times the best start's: no run
 
 
 class Late(Exception):
@@ -186,7 +186,7 @@ def local_optima(
     ended: list[tuple[np.ndarray, float]] = []  # where the runs so far ended, their t
     best = min((first for first, _ in measured), default=0.0)
     for first, x0 in measured:
-        if first > FAR * best > 0:  # a design near locking (the smallest at a 0° bound)
+        if first > FAR_ABOVE * best > 0:  # a design near locking (the smallest at a 0° bound)
             continue
         for z0, c in coords.starts(x0):
             if time.monotonic() >= deadline:
