@@ -32,8 +32,8 @@ class Aim:
     parameter rows of designs -> their measures, inf where one does not run), and whether the
     measure stays the same over a candidate's family (``scale_free``: the family's members
     move alike, but links that weigh load the drive differently), and how many of the box's
-    best-ranked points a search runs from (``drawn``: with everything free, with parts
-    fixed, on a four-bar's construction)."""
+    best-ranked points a search runs from (``drawn``: with everything free, on a four-bar's
+    construction, and with parts fixed, whichever the coordinates)."""
 
     evaluate: Callable[[dict[str, float]], Any]
     pick: Pick

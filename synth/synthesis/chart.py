@@ -47,6 +47,7 @@ class Chart:
     link, whose length then sets it."""
 
     equalities = False
+    drawn = "construction"
 
     def __init__(
         self,
@@ -65,7 +66,6 @@ class Chart:
         self.free, self.lo, self.hi, self.beta = free, lo, hi, beta(time_ratio)
         self.fn = function(m, variant, free, scale)
         self.roles = r.links
-        self.drawn = "fixed" if fixed else "construction"  # how many drawn starts it runs from
         pinned = _pinned(r, free)
         # a fixed link's length, else None (its log is the constants' last)
         self.pinned = None if pinned is None else fixed[pinned]
@@ -105,21 +105,23 @@ class Chart:
                 found.append((z, c))
         return found
 
-    def at(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """x(z) and ∂x/∂z."""
+    def _split(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any, Any]:
+        """x(z), ∂x/∂z, the circuit's margin and its gradient."""
         n, k = len(self.free), len(z)
         out = np.asarray(self.fn(z, c)).ravel()
-        return out[:n], out[n : n + n * k].reshape(k, n).T
+        return out[:n], out[n : n + n * k].reshape(k, n).T, out[n + n * k], out[n + n * k + 1 :]
+
+    def at(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """x(z) and ∂x/∂z."""
+        return self._split(z, c)[:2]
 
     def point(
         self, z: np.ndarray, c: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
         """x(z), ∂x/∂z and the own rows: the request's bounds on what is no coordinate, the
         toggles in one circuit (its margin < 0)."""
-        n, k = len(self.free), len(z)
-        out = np.asarray(self.fn(z, c)).ravel()
-        x, dx = out[:n], out[n : n + n * k].reshape(k, n).T
-        margin, dm = out[n + n * k], out[n + n * k + 1 :]
+        x, dx, margin, dm = self._split(z, c)
+        k = len(z)
         lo, hi, low, high = self.lo, self.hi, self.low, self.high
         values = [x[low] - lo[low], hi[high] - x[high], [-margin]]
         values += [[math.log(hi[j] / lo[i]) - math.log(x[j] / x[i]) for i, j in self.pairs]]
@@ -141,8 +143,9 @@ class Chart:
         z = halton(lo, hi, np.r_[False, False, self.lo[self.own_at] > 0], n // 2)
         if "s" in self.names:
             z = np.insert(z, 2, 0.0, axis=1)
-        x = np.array([self.at(p, self.constants(sigma, 0.0))[0] for sigma in (1, -1) for p in z])
-        return self._smallest(x)
+        n = len(self.free)  # every point of a sheet in one call (each its own, to the bit)
+        x = [np.asarray(self.fn(z.T, self.constants(sigma, 0.0)))[:n].T for sigma in (1, -1)]
+        return self._smallest(np.vstack(x))
 
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
         """The design at z; where the scale is free and no coordinate, the smallest the box

@@ -87,10 +87,10 @@ class Parameters:
     """The variant's free parameters themselves, within the request's box."""
 
     equalities = True
+    drawn = "free"
 
-    def __init__(self, lo: np.ndarray, hi: np.ndarray, fixed_parts: bool) -> None:
+    def __init__(self, lo: np.ndarray, hi: np.ndarray) -> None:
         self.lo, self.hi = lo, hi
-        self.drawn = "fixed" if fixed_parts else "free"
 
     def starts(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
         return [(x, np.empty(0))]
@@ -129,7 +129,8 @@ def local_optima(
     in epigraph form: t ≥ each of the ``TERMS`` largest terms (a peak moving along the turn is
     one constraint handing over to another, not a kink); a ``limit`` (terms, cap) bounds its
     terms alike. A default bound (not in ``explicit``) gives way to a start beyond it. Points
-    about the starts are drawn where the box's hold too few designs (``fixed_parts``: more). The
+    about the starts are drawn where the box's hold too few designs; ``fixed_parts`` (the
+    request fixes parts): more drawn starts are run from, whichever the coordinates. The
     deadline is looked at before each evaluation of the measure at a new design (a few ms,
     ~15 with a load): a run it cuts short ends at its last iterate."""
     if time.monotonic() >= deadline:  # nothing built for a search that cannot run
@@ -172,9 +173,10 @@ def local_optima(
     coords: Coordinates = (
         chart.Chart(m, variant, free, lo, hi, targets[0], not aim.scale_free, fixed)
         if chart.applies(m, variant, free)
-        else Parameters(lo, hi, fixed_parts)
+        else Parameters(lo, hi)
     )
-    measured = _ranked(m, form, key, pv, lo, hi, starts, free, aim, coords, terms, design)
+    drawn = aim.drawn["fixed" if fixed_parts else coords.drawn]  # whichever the coordinates
+    measured = _ranked(m, form, key, pv, lo, hi, starts, free, drawn, coords, aim, terms, design)
     # a start at the smallest member of its free scale (the same motion): SLSQP then has a
     # bound in that direction, where it would crawl towards the tie to the smaller design
     sc = m.scale
@@ -382,17 +384,17 @@ def _ranked(
     hi: np.ndarray,
     starts: list[dict[str, float]],
     free: tuple[str, ...],
-    aim: aims.Aim,
+    drawn_starts: int,
     coords: Coordinates,
+    aim: aims.Aim,
     terms: Any,
     design: Any,
 ) -> list[tuple[float, np.ndarray]]:
     """The runs' starts, measured, with their measures: the best ranked of the exact designs
-    (``STARTS``) and of the box's projected points (``Aim.drawn``), and of points about the
-    starts where the box's hold too few designs. Empty where the deadline passed."""
+    (``STARTS``) and of the coordinates' projected points (``drawn_starts``), and of points
+    about the starts where those hold too few designs. Empty where the deadline passed."""
     n = len(free)
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
-    drawn_starts = aim.drawn[coords.drawn]
     drawn = screen.project(form, key, coords.draw(SAMPLES), pv, lo, hi)
     near = drawn[:0]
     if len(drawn) < drawn_starts and len(own):
