@@ -108,6 +108,8 @@ class Mapped:
     ) -> None:
         self.symbolic, self.fn = fn, compiled or native(fn)  # ``compiled``: fn, already built
         self.shared, self.looped = list(shared), tuple(looped)
+        self.own = self.shared.index(False)  # an argument with a row per point
+        self.rows = self.fn.nnz_out(0)
         self.slots: dict[int, Slot] = {}
 
     def __getitem__(self, width: int) -> Slot:
@@ -123,8 +125,17 @@ class Mapped:
     def __call__(self, *args: np.ndarray) -> np.ndarray:
         """The function at n points: a shared argument's numbers (k,), any other's (n, k), a
         row a point; shape (rows, n). Every point's numbers are its own call's, to the bit."""
-        n = next(len(a) for a, one in zip(args, self.shared, strict=True) if not one)
-        out = np.empty((self.fn.nnz_out(0), n))
+        n = len(args[self.own])
+        if 0 < n <= SMALL:  # one slot: the common few points, with the least overhead
+            slot = self[1 << (n - 1).bit_length()]
+            for a, into, one in zip(args, slot.args, self.shared, strict=True):
+                if one:
+                    into[:] = a
+                else:
+                    into[:n], into[n:] = a, a[0]
+            slot.run()
+            return slot.out[:n].T.copy()
+        out = np.empty((self.rows, n))
         k = 0
         for w in widths(n):
             slot, m = self[w], min(w, n - k)  # m points, the rest padding (copies of the first)
