@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import InvalidDesign
 from ..mechanisms import Mechanism, kinetics
-from .model import GRID, Batched
+from .model import GRID, Batched, Polisher
 
 _local = threading.local()
 S = TypeVar("S", "Forces", "Torques")  # a compiled system, cached per thread and variant
@@ -238,8 +238,10 @@ class Torques:
         t = kinetics.torque(m, variant, p, th, w)
         t1 = ca.jacobian(t, th)
         self.name = "_".join((m.type, *sorted(variant), "power"))
-        self.fn = Batched(self.name, th, pv, ca.vertcat(t, t1, ca.jacobian(t1, th)))
+        t2 = ca.jacobian(t1, th)
+        self.fn = Batched(self.name, th, pv, ca.vertcat(t, t1, t2))
         self.gradient = Batched(f"{self.name}_dp", th, pv, ca.jacobian(t, pv).T)
+        self.polish = Polisher(f"{self.name}_polish", th, pv, t1, t2)  # T's extremes
 
     def __call__(self, theta: np.ndarray, pv: np.ndarray, order: int = 2) -> np.ndarray:
         """T and its θ-derivatives up to ``order`` at each θ (``pv``: the numbers, shared, or
@@ -300,4 +302,4 @@ def compiled(m: Mechanism, variant: frozenset[str]) -> list[ca.Function]:
     if m.frame is None:
         return []
     sys, t = forces(m, variant), torques(m, variant)
-    return [sys.fn.fn, sys._values.fn, sys._dp.fn, t.fn.fn, t.gradient.fn]
+    return [sys.fn.fn, sys._values.fn, sys._dp.fn, t.fn.fn, t.gradient.fn, t.polish.fn]

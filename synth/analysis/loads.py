@@ -38,17 +38,10 @@ from ..load import Load
 from ..mechanisms import Mechanism, kinetics
 from ..results import Flywheel, Force, Loads, Power, Torque
 from .forces import Forces, Torques, forces, torques
-from .model import GRID, Model
+from .model import Model
+from .pieces import Found, Piece, Pieces, Quantity
 from .quality import Strokes, reached
-from .roots import TWO_PI, rtsafe, stationary_points
-
-PANEL = math.pi / 64  # the widest panel of the quadrature (π/32: a sharp drag-link mean 5e-8 off)
-NODES, WEIGHTS = np.polynomial.legendre.leggauss(16)  # per panel
-
-
-# a quantity of z, z′, z″ (rows: angles): its value and first two derivatives at each angle
-Quantity = Callable[[np.ndarray], np.ndarray]
-Found = tuple[np.ndarray, np.ndarray]  # angles (radians) and the piece or value at each
+from .roots import TWO_PI, stationary_points
 
 
 def _torque(z: np.ndarray) -> np.ndarray:
@@ -67,101 +60,6 @@ def _magnitude(cols: list[int]) -> Quantity:
         return np.array([mag, d1, d2])
 
     return q
-
-
-@dataclass(frozen=True)
-class Piece:
-    """A part [lo, hi] of the turn (radians) where the load is one (``pv``: the design's and
-    the load's numbers, ``kinetics.LOAD``) and everything is smooth; ``span``: which of the
-    turn's spans (``_Span``) it lies in."""
-
-    lo: float
-    hi: float
-    pv: np.ndarray
-    span: int
-
-
-class Pieces:
-    """Pieces evaluated together, each angle with its piece's numbers: their quantities on a
-    grid (``GRID`` cells a turn, at least 8 a piece), their roots, their integrals."""
-
-    def __init__(self, sys: Forces | Torques, pieces: list[Piece]) -> None:
-        self.sys, self.pieces = sys, pieces
-        self.lo = np.array([p.lo for p in pieces])
-        self.hi = np.array([p.hi for p in pieces])
-        self.pv = np.array([p.pv for p in pieces])
-        cells = np.maximum(8, np.ceil(GRID * (self.hi - self.lo) / TWO_PI).astype(int))
-        spans = zip(self.lo, self.hi, cells, strict=True)
-        self.grid = np.concatenate([np.linspace(a, b, c + 1) for a, b, c in spans])
-        self.owner = np.repeat(np.arange(len(pieces)), cells + 1)
-        self.starts = np.concatenate([[0], np.cumsum(cells + 1)[:-1]])  # each piece's first
-        self.cells = np.nonzero(self.owner[:-1] == self.owner[1:])[0]  # grid[i] to grid[i + 1]
-        self.z = sys(self.grid, self.pv[self.owner])
-        self._integrals: tuple[list[np.ndarray], np.ndarray] | None = None
-
-    def __call__(self, x: np.ndarray, owner: np.ndarray, order: int = 2) -> np.ndarray:
-        """z and its θ-derivatives at angles ``x`` of the pieces ``owner``."""
-        return self.sys(x, self.pv[owner], order)
-
-    def largest(self, g: np.ndarray) -> np.ndarray:
-        """Each piece's largest finite |g| over its grid (g: a row per grid angle)."""
-        a = np.abs(np.where(np.isfinite(g), g, 0.0))
-        return np.maximum.reduceat(a.reshape(a.shape[0], -1).max(axis=1), self.starts)
-
-    def roots(self, fs: list[Quantity], k: int, falling: int = 0) -> list[Found]:
-        """Each quantity's roots of its row k (0: value, 1: derivative) in the pieces, and the
-        piece of each: sign changes on the grid, polished together (``roots.rtsafe`` on rows
-        k and k + 1); only the falling ones for the first ``falling`` quantities (their
-        derivative's: maxima)."""
-        c = self.cells
-        which, at, f_lo, f_hi, scale = [], [], [], [], []
-        for i, f in enumerate(fs):
-            g = f(self.z)[k]
-            down = (g[c] > 0) & (g[c + 1] < 0)
-            cc = c[down if i < falling else down | (g[c] < 0) & (g[c + 1] > 0)]
-            which.append(np.full(cc.size, i))
-            at.append(cc)
-            f_lo.append(g[cc])
-            f_hi.append(g[cc + 1])
-            scale.append(self.largest(g)[self.owner[cc]])
-        w, cc = np.concatenate(which), np.concatenate(at)
-        owner = self.owner[cc]
-
-        def fd(x: np.ndarray) -> np.ndarray:
-            z = self(x, owner)
-            out = np.empty((2, x.size))
-            for i, f in enumerate(fs):
-                mine = w == i
-                if mine.any():
-                    out[:, mine] = f(z[:, mine])[k : k + 2]
-            return out
-
-        ends = (self.grid[cc], self.grid[cc + 1], *map(np.concatenate, (f_lo, f_hi, scale)))
-        x = rtsafe(fd, *ends)
-        return [(x[w == i], owner[w == i]) for i in range(len(fs))]
-
-    def integrals(self) -> tuple[list[np.ndarray], np.ndarray]:
-        """Each piece's panels' edges (each panel at most ``PANEL`` wide), and ∫ T dθ and
-        ∫ T² dθ over every panel (shape (2, panels), the pieces' in turn): Gauss–Legendre, in
-        one evaluation; once."""
-        if self._integrals is None:
-            edges = [
-                np.linspace(a, b, math.ceil((b - a) / PANEL) + 1)
-                for a, b in zip(self.lo, self.hi, strict=True)
-            ]
-            owner = np.repeat(np.arange(len(edges)), [e.size - 1 for e in edges])
-            lo = np.concatenate([e[:-1] for e in edges])
-            hi = np.concatenate([e[1:] for e in edges])
-            self._integrals = edges, self.gauss(lo, hi, owner, 2)
-        return self._integrals
-
-    def gauss(self, lo: np.ndarray, hi: np.ndarray, owner: np.ndarray, powers: int) -> np.ndarray:
-        """∫ T^k dθ over each [lo, hi] of the pieces ``owner`` (16-point Gauss–Legendre), for
-        k = 1 … powers: shape (powers, spans)."""
-        mid, half = (lo + hi) / 2, (hi - lo) / 2
-        x = (mid[:, None] + half[:, None] * NODES[None, :]).ravel()
-        t = self(x, np.repeat(owner, NODES.size), 0)[0, :, 0].reshape(lo.size, NODES.size)
-        return np.array([(t**k @ WEIGHTS) * half for k in range(1, powers + 1)])
 
 
 def _extremes(sys: Forces, pieces: Pieces, fs: list[Quantity], k: int) -> list[Found]:
@@ -338,7 +236,8 @@ def peak_terms(
             moving[i, 0] = sign * (d_raw * level + slope * (metres * ds0 + u0 * d_travel))
             moving[i, 1] = -sign * d_raw
     pieces = _pieces(sys, spans, st, load.guide_friction)
-    ((x, owner),) = pieces.roots([_torque], 1, falling=1)
+    polisher = sys.polish if isinstance(sys, Torques) else None
+    ((x, owner),) = pieces.roots([_torque], 1, falling=1, polisher=polisher)
     n, found = len(pieces.pieces), x.size
     x = np.concatenate([x, pieces.lo, pieces.hi])
     owner = np.concatenate([owner, np.arange(n), np.arange(n)])

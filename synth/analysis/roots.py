@@ -30,12 +30,16 @@ Brackets = tuple[
 ]
 
 
-def stationary_points(f: Model, pv: np.ndarray, n: int = GRID) -> Points:
+def stationary_points(
+    f: Model, pv: np.ndarray, n: int = GRID, reversals: int | None = None
+) -> Points:
     """Every stationary point of every row that changes the sign of its derivative.
 
     Returns (row, θ, value) arrays. Roots are bracketed on an n-point grid, refined where the
     motion is fast (see ``refine_grid``), and polished by safeguarded Newton steps on g' with g''
-    (``_polish``: compiled, all roots in one call).
+    (``polish``: compiled, all roots in one call). ``reversals``: how many stationary points
+    row 0 (the slider's position) must have, or InvalidDesign, raised before any is polished
+    (a search's design near a change point can have a thousand at the level of rounding).
     """
     grid, widths = _grid(n)
     g, g1, g2 = f(grid, pv)
@@ -47,13 +51,17 @@ def stationary_points(f: Model, pv: np.ndarray, n: int = GRID) -> Points:
         _refuse_dwell(grid, g1[0])
     grid, widths, g1 = refine_grid(f, pv, grid, widths, g1, g2)
     (rows, lo, hi, f_lo, f_hi, scale), (zr, zx) = _brackets(grid, widths, g1)
+    found = np.count_nonzero(rows == 0) + np.count_nonzero(zr == 0)
+    if reversals is not None and found != reversals:
+        msg = f"the slider reverses {found} times a turn: not one working and one return stroke"
+        raise InvalidDesign(msg, (), "stroke")
     nr = g1.shape[0]
 
     # g', g'' of roots i, each of its own row
     def derivatives(x: np.ndarray, i: np.ndarray) -> np.ndarray:
         return f.fn(x, pv).reshape(3, nr, -1)[1:, rows[i], np.arange(i.size)]
 
-    x = _polish(f.polish, derivatives, rows, lo, hi, f_lo, f_hi, scale, pv)
+    x = polish(f.polish, derivatives, f.polish.one_hot(rows), lo, hi, f_lo, f_hi, scale, pv)
     if f.dead is not None:
         x = _dead_centres(f, pv[None, :], np.zeros(rows.size, dtype=int), rows == 0, x, TWO_PI / n)
     rows = np.concatenate([rows, zr])
@@ -100,7 +108,8 @@ def stationary_points_many(f: Model, pvs: np.ndarray) -> list[Points | None]:
     def derivatives(x: np.ndarray, i: np.ndarray) -> np.ndarray:
         return f.fn.each(x, pvs[design[i]]).reshape(3, nr, -1)[1:, rows[i] % nr, np.arange(i.size)]
 
-    x = _polish(f.polish, derivatives, rows % nr, lo, hi, f_lo, f_hi, scale, pvs[design])
+    w = f.polish.one_hot(rows % nr)
+    x = polish(f.polish, derivatives, w, lo, hi, f_lo, f_hi, scale, pvs[design])
     if f.dead is not None:
         x = _dead_centres(f, pvs, design, rows % nr == 0, x, TWO_PI / n)
     rows = np.concatenate([rows, *(z for z, _ in zeros)])
@@ -144,10 +153,10 @@ def _next(a: np.ndarray) -> np.ndarray:
     return np.concatenate((a[:, 1:], a[:, :1]), axis=1)
 
 
-def _polish(
+def polish(
     polisher: Polisher,
     fd: Callable[[np.ndarray, np.ndarray], np.ndarray],
-    rows: np.ndarray,
+    w: np.ndarray,
     lo: np.ndarray,
     hi: np.ndarray,
     f_lo: np.ndarray,
@@ -155,24 +164,24 @@ def _polish(
     scale: np.ndarray,
     pv: np.ndarray,
 ) -> np.ndarray:
-    """The roots of each one's row of fd (x, rows -> (value, derivative), vectorised) in the
-    brackets [lo, hi], where it changes sign from f_lo to f_hi, to machine precision: the
-    compiled Newton steps (``model.Polisher``) from the secant point, and ``rtsafe`` for
-    any they leave unfinished (a kink, a slow start)."""
-    if rows.size == 0:
+    """The roots i of fd (x, i -> (value, derivative), vectorised), the polisher's rows
+    weighted by ``w``, in the brackets [lo, hi], where it changes sign from f_lo to f_hi, to
+    machine precision: the compiled Newton steps (``model.Polisher``) from the secant point,
+    and ``rtsafe`` for any they leave unfinished (a kink, a slow start)."""
+    if len(w) == 0:
         return np.empty(0)
-    x, done = _compiled(polisher, rows, lo, hi, f_lo, f_hi, scale, pv)
+    x, done = _compiled(polisher, w, lo, hi, f_lo, f_hi, scale, pv)
     if not done.all():
         left = np.nonzero(~done)[0]
         x[left] = rtsafe(
-            lambda y: fd(y, left), lo[left], hi[left], f_lo[left], f_hi[left], scale[left]
+            lambda y, i: fd(y, left[i]), lo[left], hi[left], f_lo[left], f_hi[left], scale[left]
         )
     return x
 
 
 def _compiled(
     polisher: Polisher,
-    rows: np.ndarray,
+    w: np.ndarray,
     lo: np.ndarray,
     hi: np.ndarray,
     f_lo: np.ndarray,
@@ -180,12 +189,12 @@ def _compiled(
     scale: np.ndarray,
     pv: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The compiled Newton steps of ``_polish`` from the secant point: the points they reach,
+    """The compiled Newton steps of ``polish`` from the secant point: the points they reach,
     and which of them are roots (``pv``: the parameters, shared (p,) or each root's (n, p))."""
     with np.errstate(divide="ignore", invalid="ignore"):
         x0 = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     x0 = np.where(np.isfinite(x0), x0, 0.5 * (lo + hi))
-    x, step, fx, width = polisher(x0, lo, hi, np.where(f_lo < 0, 1.0, -1.0), rows, pv)
+    x, step, fx, width = polisher(x0, lo, hi, np.where(f_lo < 0, 1.0, -1.0), w, pv)
     tol = EPS4 * np.maximum(1.0, np.abs(x))
     # finished like ``rtsafe``: on a root, a closed bracket, or a Newton step down to
     # rounding where the function is ~0 too (at a kink it jumps across 0)
@@ -194,30 +203,33 @@ def _compiled(
 
 
 def rtsafe(
-    fd: Callable[[np.ndarray], np.ndarray],
+    fd: Callable[[np.ndarray, np.ndarray], np.ndarray],
     lo: np.ndarray,
     hi: np.ndarray,
     f_lo: np.ndarray,
     f_hi: np.ndarray,
     scale: np.ndarray,
 ) -> np.ndarray:
-    """The roots of fd (x -> (value, derivative), vectorised) in the brackets [lo, hi], where
-    it changes sign from f_lo to f_hi: Newton from the secant point while it stays in the
-    bracket and at least halves the step before last, else bisection (rtsafe), to machine
-    precision; ``scale`` is the function's size, to tell a root from a kink."""
+    """The roots of fd (x, i -> (value, derivative) of the roots i at x, vectorised) in the
+    brackets [lo, hi], where it changes sign from f_lo to f_hi: Newton from the secant point
+    while it stays in the bracket and at least halves the step before last, else bisection
+    (rtsafe), to machine precision; ``scale`` is the function's size, to tell a root from a
+    kink. A root once found stays where it is while the others go on."""
     # start from the secant (regula falsi) point: already close on a fine grid
     with np.errstate(divide="ignore", invalid="ignore"):
         x = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     x = np.where(np.isfinite(x), x, 0.5 * (lo + hi))
     if x.size == 0:
         return cast(np.ndarray, x)
-    # one evaluation of fd for all roots per step, the steps in Python floats: numpy's
-    # per-operation overhead on a handful of roots cost more than the evaluations
+    # one evaluation of fd for the roots not yet found per step, the steps in Python floats:
+    # numpy's per-operation overhead on a handful of roots cost more than the evaluations
     x, lo, hi, dx_old = x.tolist(), lo.tolist(), hi.tolist(), (hi - lo).tolist()
     rising, tiny = (f_lo < 0).tolist(), (1e-12 * scale).tolist()
+    left = list(range(len(x)))
     for _ in range(100):
-        done = True
-        for i, (fx, dfx) in enumerate(zip(*fd(np.array(x)).tolist(), strict=True)):
+        going = []
+        values = fd(np.array([x[i] for i in left]), np.array(left)).tolist()
+        for i, fx, dfx in zip(left, *values, strict=True):
             xi = x[i]
             if fx < 0 if rising[i] else fx > 0:  # on lo's side (not where fx is 0 or NaN)
                 lo[i] = xi
@@ -234,10 +246,12 @@ def rtsafe(
             # a tiny Newton step is convergence only where the function is ~0 too: at a kink
             # (a change point, a rod at its reach) it jumps across 0, and bisection must finish
             small = abs(fx) <= tiny[i]
-            done &= fx == 0 or b - a <= tol or (abs(dx) <= tol and newton and small)
             if fx != 0:
                 x[i] = xi - dx
-        if done:
+            if not (fx == 0 or b - a <= tol or (abs(dx) <= tol and newton and small)):
+                going.append(i)
+        left = going
+        if not left:
             break
     return np.array(x)
 
@@ -266,10 +280,10 @@ def _dead_centres(
     scale = np.maximum(np.abs(h_lo), np.abs(h_hi))[ok]
     pv = pv[ok]
     x = x.copy()
-    x[on_s[ok]] = _polish(
+    x[on_s[ok]] = polish(
         polisher,
         lambda y, i: dead.each(y, pv[i]),
-        np.zeros(pv.shape[0], dtype=int),
+        polisher.one_hot(np.zeros(pv.shape[0], dtype=int)),
         lo[ok],
         hi[ok],
         h_lo[ok],
