@@ -166,18 +166,19 @@ class Prepared:
     points: Points
 
 
-def prepared(mechanism: str, params: Mapping[str, float]) -> Prepared:
-    """The design ``params`` of type ``mechanism``, completed and prepared."""
+def prepared(mechanism: str, params: Mapping[str, float], reversals: int | None = None) -> Prepared:
+    """The design ``params`` of type ``mechanism``, completed and prepared (``reversals``:
+    ``roots.stationary_points``')."""
     m = get(mechanism)
-    return _prepared(m, m.complete(params))
+    return _prepared(m, m.complete(params), reversals)
 
 
-def _prepared(m: Mechanism, p: dict[str, float]) -> Prepared:
+def _prepared(m: Mechanism, p: dict[str, float], reversals: int | None = None) -> Prepared:
     """A completed design ``p`` prepared."""
     variant = m.variant(p)
     f = model(m, variant)
     pv = np.array([p[n] for n in m.names], dtype=float)
-    return Prepared(m, p, variant, f, pv, stationary_points(f, pv))
+    return Prepared(m, p, variant, f, pv, stationary_points(f, pv, reversals=reversals))
 
 
 def slider_extremes(

@@ -37,12 +37,10 @@ def peak_torque_terms(
 
 def _running(mechanism: str, params: Mapping[str, float]) -> tuple[Prepared, quality.Strokes]:
     """A design prepared, and its strokes; raises InvalidDesign where its slider does not run
-    one working and one return stroke."""
-    d = prepared(mechanism, params)
+    one working and one return stroke (two reversals a turn: counted before they are
+    polished)."""
+    d = prepared(mechanism, params, reversals=2)
     rows, theta, values = d.points
-    if np.count_nonzero(rows == 0) != 2:
-        msg = "the slider does not run one working and one return stroke"
-        raise InvalidDesign(msg, (), "stroke")
     st = quality.Strokes(*slider_extremes(rows, theta, values))
     if st.stroke == 0:  # a design at the edge of running: its extremes coincide
         raise InvalidDesign("the slider does not move: its stroke is 0", (), "stroke")
