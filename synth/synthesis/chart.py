@@ -6,16 +6,17 @@ type's own parameters its iterates left them by up to 14% of the stroke and craw
 100–300 iterations a run (``docs/benchmarks.md``).
 
 On a sheet σ (the crank turns φ = π + σβ between the toggles), a point is
-z = (ψ, v[, s][, l][, h]): the rocker's swing ψ, λ = 1 + e^v (the coupler over the crank),
-the four-bar's scale e^s (its ground link; a constant of the start where the measure does not
-depend on it, the motion's; where one link is fixed, its length over its ratio to the ground,
-no coordinate), the rod's length l and its path's placement h where the variant has a rod and
-they are free. The links are e^s (1, a2, a3, a4)(ψ, λ) in the crank-rocker's roles, the arm the
-construction's (1/(2 sin(ψ/2)) where it swings with the rocker, else half the stroke). Its own
-rows: the request's bounds on the parameters that are no coordinates (where the scale is a
-constant, on the links' ratios: some scale then meets them all, the smallest is the answer),
-and the toggles in one assembly circuit. The search's drawn starts are points of the
-construction too (``Chart.draw``)."""
+z = (ψ, v[, s][, l][, h]): the rocker's swing ψ, λ = 1 + e^v (the coupler over the crank), the
+four-bar's scale e^s (its ground link, in the request's bounds on that link: SLSQP keeps a
+coordinate's bounds at every iterate, not its rows; a constant of the start where the measure
+does not depend on it, the motion's; where one link is fixed, its length over its ratio to the
+ground, no coordinate), the rod's length l and its path's placement h where the variant has a
+rod and they are free. The links are e^s (1, a2, a3, a4)(ψ, λ) in the crank-rocker's roles,
+the arm the construction's (1/(2 sin(ψ/2)) where it swings with the rocker, else half the
+stroke). Its own rows: the request's bounds on the parameters that are no coordinates (where
+the scale is a constant, on the links' ratios: some scale then meets them all, the smallest is
+the answer), and the toggles in one assembly circuit. The search's drawn starts are points of
+the construction too (``Chart.draw``)."""
 
 from __future__ import annotations
 
@@ -77,7 +78,12 @@ class Chart:
         self.high = [i for i in bounded if math.isfinite(hi[i])]
         li = [] if sized else self.links
         self.pairs = [(i, j) for i in li for j in li if i != j and lo[i] > 0 and hi[j] < math.inf]
-        self.box = [(EDGE, math.pi - EDGE), (-FAR, FAR), *[(-FAR, FAR)] * ("s" in self.names)]
+        self.box = [(EDGE, math.pi - EDGE), (-FAR, FAR)]
+        if "s" in self.names:  # e^s is the first link's length: its bounds, as SLSQP keeps them
+            first = free.index(r.links[0])
+            with np.errstate(divide="ignore"):
+                a, b = np.clip(np.log([lo[first], hi[first]]), -FAR, FAR)
+            self.box.append((float(a), float(b)))
         self.box += [(lo[i], hi[i]) for i in own]
 
     def constants(self, sigma: int, s: float) -> np.ndarray:
