@@ -31,6 +31,7 @@ from ..mechanisms import Mechanism
 from ..mechanisms.fourbar.construction import PARAMS, ROWS, circuit, crank, rows
 from ..mechanisms.geometry import triangle_angle
 from ..mechanisms.registry import Roles
+from ..numerics.native import Mapped
 from ..targets import beta
 from .solve import starts as halton
 
@@ -114,7 +115,7 @@ class Chart:
     def _split(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any, Any]:
         """x(z), ∂x/∂z, the circuit's margin and its gradient."""
         n, k = len(self.free), len(z)
-        out = np.asarray(self.fn(z, c)).ravel()
+        out = self.fn(z[None, :], c)[:, 0]
         return out[:n], out[n : n + n * k].reshape(k, n).T, out[n + n * k], out[n + n * k + 1 :]
 
     def at(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -150,7 +151,7 @@ class Chart:
         if "s" in self.names:
             z = np.insert(z, 2, 0.0, axis=1)
         n = len(self.free)  # every point of a sheet in one call (each its own, to the bit)
-        x = [np.asarray(self.fn(z.T, self.constants(sigma, 0.0)))[:n].T for sigma in (1, -1)]
+        x = [self.fn(z, self.constants(sigma, 0.0))[:n].T for sigma in (1, -1)]
         return self._smallest(np.vstack(x))
 
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -185,15 +186,17 @@ def _pinned(r: Roles, free: tuple[str, ...]) -> str | None:
     return next((n for n in r.links if n not in free), None)
 
 
-def function(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], scale: bool) -> Any:
+def function(m: Mechanism, variant: frozenset[str], free: tuple[str, ...], scale: bool) -> Mapped:
     """This thread's function of the variant's coordinates (with the scale one of them, or
-    not): (z, constants) → x, ∂x/∂z (by columns), the circuit's margin (< 0: one circuit) and
-    its gradient (``warm`` builds them before a service is ready)."""
-    cache: dict[Any, ca.Function] = _local.__dict__.setdefault("charts", {})
+    not), compiled, at points z (a row each) with shared constants: (z, constants) → x,
+    ∂x/∂z (by columns), the circuit's margin (< 0: one circuit) and its gradient, a column
+    a point (``warm`` builds them before a service is ready)."""
+    cache: dict[Any, Mapped] = _local.__dict__.setdefault("charts", {})
     key = (m.type, variant, free, scale)
     if key not in cache:
         assert m.construction is not None
-        cache[key] = _function(m.construction, free, names(m.construction, free, scale))
+        fn = _function(m.construction, free, names(m.construction, free, scale))
+        cache[key] = Mapped(fn, (False, True))
     return cache[key]
 
 
@@ -228,5 +231,5 @@ def _function(r: Roles, free: tuple[str, ...], names: tuple[str, ...]) -> ca.Fun
             value[part] = z[names.index(name)]
     x = ca.vertcat(*(value[n] for n in free))
     margin = circuit(*crank(z[0], lam, c[0], c[1]), c[0], c[1])
-    out = ca.vertcat(x, ca.vec(ca.jacobian(x, z)), margin, ca.gradient(margin, z))
+    out = ca.densify(ca.vertcat(x, ca.vec(ca.jacobian(x, z)), margin, ca.gradient(margin, z)))
     return ca.Function("chart", [z, c], [out], {"cse": True})
