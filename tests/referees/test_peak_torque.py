@@ -44,8 +44,10 @@ SPREAD = [(tr, b) for tr in (1.3, 1.6, 2.0, 2.5) for b in (0.0, 10.0, 20.0, 30.0
 
 
 # the crank-rocker's many local optima need a referee of more effort (as for the motion
-# objectives: with the defaults it stops 4e-4 short of ours)
+# objectives: with the defaults it stops 4e-4 short of ours); over make stress's targets the
+# drag-link's too (at 1.3 and 20° the defaults stop 1.4e-3 short of ours, this 1.9e-7, ~9 min)
 EFFORT = {"crank_rocker_slider": {"seeds": (0, 1, 2), "popsize": 20, "maxiter": 120}}
+EFFORT_SPREAD = {**EFFORT, "drag_link_slider": EFFORT["crank_rocker_slider"]}
 
 
 def least(mtype, tr=1.6, bound=20.0, load=LOAD, **kw):
@@ -63,22 +65,22 @@ def least(mtype, tr=1.6, bound=20.0, load=LOAD, **kw):
     return r
 
 
-def referee(mtype, tr, bound, load):
-    return motion_referee.search(mtype, OBJECTIVE, tr, bound, load=load, **EFFORT.get(mtype, {}))
+def referee(mtype, tr, bound, load, effort=EFFORT):
+    return motion_referee.search(mtype, OBJECTIVE, tr, bound, load=load, **effort.get(mtype, {}))
 
 
-def against_the_referee(mtype, tr, bound, load=LOAD):
+def against_the_referee(mtype, tr, bound, load=LOAD, effort=EFFORT):
     r = least(mtype, tr, bound, load)
     # the search keeps every transmission angle ACROSS_DEG from 0° whatever the bound (as the
     # motion objectives' does): the referee's bound where the request has less
     kept = max(bound, ACROSS_DEG)
     if not r.candidates:  # no design: the referee finds none either
-        assert referee(mtype, tr, kept, load).params is None
+        assert referee(mtype, tr, kept, load, effort).params is None
         return
     c = r.candidates[0]
     assert_meets(c, tr, 1.0, bound)
     assert c.objective_value == c.loads.torque.max
-    ref = referee(mtype, tr, kept, load)
+    ref = referee(mtype, tr, kept, load, effort)
     assert ref.params is not None
     beat = (c.objective_value - ref.value) / ref.value
     assert beat <= BEATEN, f"ours {c.params} is beaten by {ref.params}"
@@ -106,7 +108,7 @@ def test_the_least_peak_torque_is_not_beaten_by_a_global_search(mtype, tr, bound
 @pytest.mark.parametrize(("tr", "bound"), SPREAD)
 @pytest.mark.parametrize("mtype", TYPES)
 def test_the_least_peak_torque_over_targets(mtype, tr, bound):
-    against_the_referee(mtype, tr, bound)
+    against_the_referee(mtype, tr, bound, effort=EFFORT_SPREAD)
 
 
 @pytest.mark.parametrize("mtype", TYPES)
