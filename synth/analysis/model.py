@@ -56,7 +56,7 @@ class Model:
         self.name = f"{base}_{kind}"
         self.fn = Batched(self.name, th, pv, ca.vertcat(g, g1, g2))
         self.polish = Polisher(f"{self.name}_polish", th, pv, g1, g2)
-        self._rows = (th, pv, g, g1)
+        self._rows = (th, pv, ca.vertcat(g, g1))
         self.dead: Batched | None = None
         self.dead_polish: Polisher | None = None
         if kind == "kinematics" and m.dead_centres is not None:
@@ -77,18 +77,8 @@ class Model:
 
     @functools.cached_property
     def _dp(self) -> Batched:  # built on first use: only sensitivities need it
-        th, pv, g, g1 = self._rows
-        return Batched(f"{self.name}_dp", th, pv, ca.vec(ca.jacobian(ca.vertcat(g, g1), pv)))
-
-    @functools.cached_property
-    def level(self) -> Polisher:
-        """Where the first row (the kinematics' s) reaches levels: the rows (s, 1) weighted
-        (1, −level) (built on first use: the motion measures and the loads need it)."""
-        th, pv, g, g1 = self._rows
-        one, zero = ca.SX(1), ca.SX(0)
-        return Polisher(
-            f"{self.name}_level", th, pv, ca.vertcat(g[0], one), ca.vertcat(g1[0], zero)
-        )
+        th, pv, g = self._rows
+        return Batched(f"{self.name}_dp", th, pv, ca.vec(ca.jacobian(g, pv)))
 
 
 def _rows(
@@ -137,15 +127,14 @@ class Batched:
 
 
 class Polisher:
-    """Roots of one weighted sum of the rows each, w·d(θ) (w·d′ its derivative), from brackets
-    where it changes sign: ``POLISH_STEPS`` safeguarded Newton steps (bisection where Newton
-    leaves the bracket) unrolled into one compiled function, mapped over the roots, each with
-    its own weights (one-hot: one row) and parameters. A call replaces the several evaluations
-    and the Python loop of a step-by-step iteration; the caller checks convergence and
-    finishes the others (``roots.rtsafe``)."""
+    """Roots of one row each of d(θ) (d′ its derivative), from brackets where it changes sign:
+    ``POLISH_STEPS`` safeguarded Newton steps (bisection where Newton leaves the bracket)
+    unrolled into one compiled function, mapped over the roots, each with its own row and
+    parameters. A call replaces the several evaluations and the Python loop of a step-by-step
+    iteration; the caller checks convergence and finishes the others (``roots.rtsafe``)."""
 
     def __init__(self, name: str, th: ca.SX, pv: ca.SX, d: ca.SX, d1: ca.SX) -> None:
-        w = ca.SX.sym("w", d.numel())  # the root's weights on the rows
+        w = ca.SX.sym("w", d.numel())  # the root's row, one-hot
         row = ca.Function("row", [th, pv, w], [ca.dot(w, d), ca.dot(w, d1)])
         # by the row and the unrolling's code: a start loads it, without unrolling it again
         fn = stored.compiled(name, [row, POLISH_STEPS], _unrolled)
@@ -158,21 +147,16 @@ class Polisher:
         lo: np.ndarray,
         hi: np.ndarray,
         rising: np.ndarray,
-        w: np.ndarray,
+        rows: np.ndarray,
         pv: np.ndarray,
     ) -> np.ndarray:
-        """(x, the last step, w·d at the point before it, the bracket's width) per root: shape
-        (4, n). ``w``: each root's weights (n, rows); ``pv``: the parameters, (n, p) or shared
-        (p,)."""
+        """(x, the last step, d at the point before it, the bracket's width) per root: shape
+        (4, n). ``rows``: each root's row; ``pv``: the parameters, (n, p) or shared (p,)."""
         n = len(x0)
+        w = np.zeros((n, self.mapped.fn.nnz_in(4)))
+        w[np.arange(n), rows] = 1.0
         pv = np.broadcast_to(pv, (n, pv.shape[-1]))
         return self.mapped(x0[:, None], lo[:, None], hi[:, None], rising[:, None], w, pv)
-
-    def one_hot(self, rows: np.ndarray) -> np.ndarray:
-        """The weights that pick each root's row."""
-        w = np.zeros((len(rows), self.mapped.fn.nnz_in(4)))
-        w[np.arange(len(rows)), rows] = 1.0
-        return w
 
 
 def _merged(name: str, plain: ca.Function) -> ca.Function:
@@ -220,5 +204,4 @@ def compiled(m: Mechanism, variant: frozenset[str]) -> list[ca.Function]:
         f = model(m, variant, kind)
         fns += [f.fn.fn, f.polish.fn, *([f._dp.fn] if kind in SENSITIVE else [])]
         fns += [g.fn for g in (f.dead, f.dead_polish) if g is not None]
-        fns += [f.level.fn] if kind == "kinematics" else []
     return fns

@@ -97,9 +97,10 @@ class Pieces:
         lo, hi = self.grid[cc], self.grid[cc + 1]
         a, b, size = (np.concatenate(v) for v in (f_lo, f_hi, scale))
         if polisher is None:
-            x = rtsafe(fd, lo, hi, a, b, size)
+            every = np.arange(cc.size)
+            x = rtsafe(lambda y: fd(y, every), lo, hi, a, b, size)
         else:  # the one quantity's rows k and k + 1 are the polisher's one row and its derivative
-            one = polisher.one_hot(np.zeros(cc.size, dtype=int))
+            one = np.zeros(cc.size, dtype=int)
             x = polish(polisher, fd, one, lo, hi, a, b, size, self.pv[owner])
         return [(x[w == i], owner[w == i]) for i in range(len(fs))]
 

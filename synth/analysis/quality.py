@@ -35,7 +35,7 @@ from ..results import (
     Tolerance,
 )
 from .model import Model, model
-from .roots import TWO_PI, polish, stationary_points
+from .roots import TWO_PI, rtsafe, stationary_points
 
 CUT = 0.1  # a tool cuts over the middle 80% of the working stroke: 10% run-in, 10% run-out
 MIDDLE = f"middle {1 - 2 * CUT:.0%} of the working stroke"  # where a tool cuts, in words
@@ -59,19 +59,16 @@ class Strokes:
 def reached(f: Model, pv: np.ndarray, st: Strokes, fractions: np.ndarray) -> np.ndarray:
     """The crank angles (radians, from ``st.start`` on) where the working stroke has run each
     of ``fractions`` (0 < each < 1) of its travel: roots of s − level, bracketed by the
-    stroke's dead centres, where s is monotonic (``roots.polish``, with the model's ``level``
-    polisher: the rows (s, 1) weighted (1, −level))."""
+    stroke's dead centres, where s is monotonic."""
 
-    def fd(t: np.ndarray, i: np.ndarray) -> np.ndarray:
+    def fd(t: np.ndarray) -> np.ndarray:
         g, g1, _ = f(t, pv)
-        return np.array([g[0] - levels[i], g1[0]])
+        return np.array([g[0] - levels, g1[0]])
 
     levels = st.s0 + fractions * (st.s1 - st.s0)
     k = fractions.size
     lo, hi = np.full(k, st.start), np.full(k, st.start + st.working)
-    w = np.column_stack([np.ones(k), -levels])
-    scale = np.full(k, abs(st.stroke))
-    return polish(f.level, fd, w, lo, hi, st.s0 - levels, st.s1 - levels, scale, pv)
+    return rtsafe(fd, lo, hi, st.s0 - levels, st.s1 - levels, np.full(k, abs(st.stroke)))
 
 
 def _inside(x: np.ndarray, start: float, length: float) -> np.ndarray:

@@ -61,7 +61,7 @@ def stationary_points(
     def derivatives(x: np.ndarray, i: np.ndarray) -> np.ndarray:
         return f.fn(x, pv).reshape(3, nr, -1)[1:, rows[i], np.arange(i.size)]
 
-    x = polish(f.polish, derivatives, f.polish.one_hot(rows), lo, hi, f_lo, f_hi, scale, pv)
+    x = polish(f.polish, derivatives, rows, lo, hi, f_lo, f_hi, scale, pv)
     if f.dead is not None:
         x = _dead_centres(f, pv[None, :], np.zeros(rows.size, dtype=int), rows == 0, x, TWO_PI / n)
     rows = np.concatenate([rows, zr])
@@ -108,8 +108,7 @@ def stationary_points_many(f: Model, pvs: np.ndarray) -> list[Points | None]:
     def derivatives(x: np.ndarray, i: np.ndarray) -> np.ndarray:
         return f.fn.each(x, pvs[design[i]]).reshape(3, nr, -1)[1:, rows[i] % nr, np.arange(i.size)]
 
-    w = f.polish.one_hot(rows % nr)
-    x = polish(f.polish, derivatives, w, lo, hi, f_lo, f_hi, scale, pvs[design])
+    x = polish(f.polish, derivatives, rows % nr, lo, hi, f_lo, f_hi, scale, pvs[design])
     if f.dead is not None:
         x = _dead_centres(f, pvs, design, rows % nr == 0, x, TWO_PI / n)
     rows = np.concatenate([rows, *(z for z, _ in zeros)])
@@ -156,7 +155,7 @@ def _next(a: np.ndarray) -> np.ndarray:
 def polish(
     polisher: Polisher,
     fd: Callable[[np.ndarray, np.ndarray], np.ndarray],
-    w: np.ndarray,
+    rows: np.ndarray,
     lo: np.ndarray,
     hi: np.ndarray,
     f_lo: np.ndarray,
@@ -164,24 +163,24 @@ def polish(
     scale: np.ndarray,
     pv: np.ndarray,
 ) -> np.ndarray:
-    """The roots i of fd (x, i -> (value, derivative), vectorised), the polisher's rows
-    weighted by ``w``, in the brackets [lo, hi], where it changes sign from f_lo to f_hi, to
-    machine precision: the compiled Newton steps (``model.Polisher``) from the secant point,
-    and ``rtsafe`` for any they leave unfinished (a kink, a slow start)."""
-    if len(w) == 0:
+    """The roots of each one's row of fd (x, rows -> (value, derivative), vectorised) in the
+    brackets [lo, hi], where it changes sign from f_lo to f_hi, to machine precision: the
+    compiled Newton steps (``model.Polisher``) from the secant point, and ``rtsafe`` for
+    any they leave unfinished (a kink, a slow start)."""
+    if rows.size == 0:
         return np.empty(0)
-    x, done = _compiled(polisher, w, lo, hi, f_lo, f_hi, scale, pv)
+    x, done = _compiled(polisher, rows, lo, hi, f_lo, f_hi, scale, pv)
     if not done.all():
         left = np.nonzero(~done)[0]
         x[left] = rtsafe(
-            lambda y, i: fd(y, left[i]), lo[left], hi[left], f_lo[left], f_hi[left], scale[left]
+            lambda y: fd(y, left), lo[left], hi[left], f_lo[left], f_hi[left], scale[left]
         )
     return x
 
 
 def _compiled(
     polisher: Polisher,
-    w: np.ndarray,
+    rows: np.ndarray,
     lo: np.ndarray,
     hi: np.ndarray,
     f_lo: np.ndarray,
@@ -194,7 +193,7 @@ def _compiled(
     with np.errstate(divide="ignore", invalid="ignore"):
         x0 = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     x0 = np.where(np.isfinite(x0), x0, 0.5 * (lo + hi))
-    x, step, fx, width = polisher(x0, lo, hi, np.where(f_lo < 0, 1.0, -1.0), w, pv)
+    x, step, fx, width = polisher(x0, lo, hi, np.where(f_lo < 0, 1.0, -1.0), rows, pv)
     tol = EPS4 * np.maximum(1.0, np.abs(x))
     # finished like ``rtsafe``: on a root, a closed bracket, or a Newton step down to
     # rounding where the function is ~0 too (at a kink it jumps across 0)
@@ -203,33 +202,30 @@ def _compiled(
 
 
 def rtsafe(
-    fd: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    fd: Callable[[np.ndarray], np.ndarray],
     lo: np.ndarray,
     hi: np.ndarray,
     f_lo: np.ndarray,
     f_hi: np.ndarray,
     scale: np.ndarray,
 ) -> np.ndarray:
-    """The roots of fd (x, i -> (value, derivative) of the roots i at x, vectorised) in the
-    brackets [lo, hi], where it changes sign from f_lo to f_hi: Newton from the secant point
-    while it stays in the bracket and at least halves the step before last, else bisection
-    (rtsafe), to machine precision; ``scale`` is the function's size, to tell a root from a
-    kink. A root once found stays where it is while the others go on."""
+    """The roots of fd (x -> (value, derivative), vectorised) in the brackets [lo, hi], where
+    it changes sign from f_lo to f_hi: Newton from the secant point while it stays in the
+    bracket and at least halves the step before last, else bisection (rtsafe), to machine
+    precision; ``scale`` is the function's size, to tell a root from a kink."""
     # start from the secant (regula falsi) point: already close on a fine grid
     with np.errstate(divide="ignore", invalid="ignore"):
         x = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     x = np.where(np.isfinite(x), x, 0.5 * (lo + hi))
     if x.size == 0:
         return cast(np.ndarray, x)
-    # one evaluation of fd for the roots not yet found per step, the steps in Python floats:
-    # numpy's per-operation overhead on a handful of roots cost more than the evaluations
+    # one evaluation of fd for all roots per step, the steps in Python floats: numpy's
+    # per-operation overhead on a handful of roots cost more than the evaluations
     x, lo, hi, dx_old = x.tolist(), lo.tolist(), hi.tolist(), (hi - lo).tolist()
     rising, tiny = (f_lo < 0).tolist(), (1e-12 * scale).tolist()
-    left = list(range(len(x)))
     for _ in range(100):
-        going = []
-        values = fd(np.array([x[i] for i in left]), np.array(left)).tolist()
-        for i, fx, dfx in zip(left, *values, strict=True):
+        done = True
+        for i, (fx, dfx) in enumerate(zip(*fd(np.array(x)).tolist(), strict=True)):
             xi = x[i]
             if fx < 0 if rising[i] else fx > 0:  # on lo's side (not where fx is 0 or NaN)
                 lo[i] = xi
@@ -246,12 +242,10 @@ def rtsafe(
             # a tiny Newton step is convergence only where the function is ~0 too: at a kink
             # (a change point, a rod at its reach) it jumps across 0, and bisection must finish
             small = abs(fx) <= tiny[i]
+            done &= fx == 0 or b - a <= tol or (abs(dx) <= tol and newton and small)
             if fx != 0:
                 x[i] = xi - dx
-            if not (fx == 0 or b - a <= tol or (abs(dx) <= tol and newton and small)):
-                going.append(i)
-        left = going
-        if not left:
+        if done:
             break
     return np.array(x)
 
@@ -283,7 +277,7 @@ def _dead_centres(
     x[on_s[ok]] = polish(
         polisher,
         lambda y, i: dead.each(y, pv[i]),
-        polisher.one_hot(np.zeros(pv.shape[0], dtype=int)),
+        np.zeros(pv.shape[0], dtype=int),
         lo[ok],
         hi[ok],
         h_lo[ok],
