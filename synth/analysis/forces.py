@@ -31,6 +31,9 @@ class Forces:
 
     RCOND = 1e-12  # A's reciprocal condition number (``conditioning``) where z is rounding
     FLAT = 4 * np.finfo(float).eps  # |1 − |cos μ|| that is a transmission angle 0 (< 3e-8 rad)
+    # compiled steps to the torque's extremes (``Torques.polish``): none, the torque is one
+    # unknown of a linear solve, polished step by step
+    polish: Polisher | None = None
 
     def __init__(self, m: Mechanism, variant: frozenset[str]) -> None:
         th, pv, p, w = _loaded(m, variant)

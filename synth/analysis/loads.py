@@ -236,8 +236,7 @@ def peak_terms(
             moving[i, 0] = sign * (d_raw * level + slope * (metres * ds0 + u0 * d_travel))
             moving[i, 1] = -sign * d_raw
     pieces = _pieces(sys, spans, st, load.guide_friction)
-    polisher = sys.polish if isinstance(sys, Torques) else None
-    ((x, owner),) = pieces.roots([_torque], 1, falling=1, polisher=polisher)
+    ((x, owner),) = pieces.roots([_torque], 1, falling=1, polisher=sys.polish)
     n, found = len(pieces.pieces), x.size
     x = np.concatenate([x, pieces.lo, pieces.hi])
     owner = np.concatenate([owner, np.arange(n), np.arange(n)])

@@ -127,27 +127,29 @@ class Mapped:
         row a point; shape (rows, n). Every point's numbers are its own call's, to the bit."""
         n = len(args[self.own])
         if 0 < n <= SMALL:  # one slot: the common few points, with the least overhead
-            slot = self[1 << (n - 1).bit_length()]
-            for a, into, one in zip(args, slot.args, self.shared, strict=True):
-                if one:
-                    into[:] = a
-                else:
-                    into[:n], into[n:] = a, a[0]
+            slot = self._filled(1 << (n - 1).bit_length(), args, 0, n)
             slot.run()
             return slot.out[:n].T.copy()
         out = np.empty((self.rows, n))
         k = 0
         for w in widths(n):
-            slot, m = self[w], min(w, n - k)  # m points, the rest padding (copies of the first)
-            for a, into, one in zip(args, slot.args, self.shared, strict=True):
-                if one:
-                    into[:] = a
-                else:
-                    into[:m], into[m:] = a[k : k + m], a[k]
+            m = min(w, n - k)
+            slot = self._filled(w, args, k, m)
             slot.run()
             out[:, k : k + m] = slot.out[:m].T
             k += m
         return out
+
+    def _filled(self, width: int, args: Sequence[np.ndarray], k: int, m: int) -> Slot:
+        """The slot of ``width`` holding points k … k + m − 1 of ``args`` (the rest padding:
+        copies of point k) and the shared arguments."""
+        slot = self[width]
+        for a, into, one in zip(args, slot.args, self.shared, strict=True):
+            if one:
+                into[:] = a
+            else:
+                into[:m], into[m:] = a[k : k + m], a[k]
+        return slot
 
     def compiled(self) -> list[ca.Function]:
         """The compiled functions: one point's, and each looped map (built here if need be)."""

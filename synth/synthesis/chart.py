@@ -150,8 +150,8 @@ class Chart:
         z = halton(lo, hi, np.r_[False, False, self.lo[self.own_at] > 0], n // 2)
         if "s" in self.names:
             z = np.insert(z, 2, 0.0, axis=1)
-        n = len(self.free)  # every point of a sheet in one call (each its own, to the bit)
-        x = [self.fn(z, self.constants(sigma, 0.0))[:n].T for sigma in (1, -1)]
+        nx = len(self.free)  # every point of a sheet in one call (each its own, to the bit)
+        x = [self.fn(z, self.constants(sigma, 0.0))[:nx].T for sigma in (1, -1)]
         return self._smallest(np.vstack(x))
 
     def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
