@@ -209,7 +209,7 @@ def local_optima(
                 the run ends with nothing of its own (``Known``: the rest is that run's)."""
                 seen.append(y.copy())
                 still = len(seen) > STILL and np.ptp(seen[-STILL:], axis=0).max() <= 1e-12
-                x = run.x(y)[0]
+                x = coords.end(y[:-1], run.c)  # as the ends are kept (a free scale its least)
                 known = any(
                     np.abs(x - e).max() <= NEAR and y[-1] >= t - LEVEL * abs(t) for e, t in ended
                 )

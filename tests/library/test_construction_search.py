@@ -180,3 +180,36 @@ def test_a_local_optimum_on_its_bounds_survives_the_projection():
     a = synth.analyze("crank_rocker_slider", dict(zip(free, x, strict=True)))
     assert a.time_ratio == pytest.approx(1.6, rel=1e-9)
     assert a.stroke == pytest.approx(1.0, rel=1e-9)
+
+
+def test_runs_that_come_to_one_optimum_give_it_once(monkeypatch):
+    """Where the scale is free and no coordinate (the motion objectives), each run moves at
+    its start's scale; a run that comes to where an earlier one ended, at another scale, ends
+    with nothing of its own: each local optimum of a variant is given once (compared at the
+    smallest scale, as the runs' ends are). Compared at the runs' own scales, four of the
+    crank-rocker's runs at time ratio 1.6 and 20° gave one optimum four times."""
+    from synth.synthesis import motion
+
+    found: dict[frozenset[str], list[np.ndarray]] = {}
+    real = motion.local_optima
+
+    def spy(m, variant, *args, **kwargs):
+        for d in real(m, variant, *args, **kwargs):
+            found.setdefault(variant, []).append(np.array([d[n] for n in sorted(d)]))
+            yield d
+
+    monkeypatch.setattr(motion, "local_optima", spy)
+    r = synth.synthesize(
+        1.6,
+        1.0,
+        20,
+        objective="uniform_cutting_speed",
+        mechanisms=["crank_rocker_slider"],
+        time_budget_ms=600_000,
+    )
+    assert r.candidates and found
+    for variant, designs in found.items():
+        for i in range(len(designs)):
+            for j in range(i):
+                apart = np.abs(designs[i] - designs[j]).max()
+                assert apart > 1e-3, (sorted(variant), i, j, apart)
