@@ -72,12 +72,16 @@ long: $(VENV)/.dev $(VENV)/.compiled
 # and the full global-search cross-check of the synthesis optima (≥ 20 targets per type), and
 # the envelope against dense pin paths on more designs, the motion objectives' referee for the
 # crank-rocker, the certified motion optima and least peak torques against brute-force draws
-# (20 targets per type and objective, each load), and 5 000 loaded analyses and 500 loaded syntheses at the limits, and 1 000
+# (20 targets per type and objective, each load; the crank shaper's over its ram link too), the
+# least peak torque against the independent global search (20 targets per type: the
+# four-bars' referee takes 10-20 minutes a target, hours in all), and 5 000 loaded analyses
+# and 500 loaded syntheses at the limits, and 1 000
 # budgeted syntheses on the server, each within its budget (200 in `make test`)
 stress: $(VENV)/.dev $(VENV)/.compiled
 	HYPOTHESIS_PROFILE=stress $(BIN)/python -m pytest -q tests/referees/test_stress.py tests/referees/test_global_search.py \
 		tests/referees/test_quality.py tests/referees/test_motion_search.py tests/referees/test_loaded_limits.py \
-		tests/referees/test_certified.py tests/referees/test_certified_torque.py
+		tests/referees/test_certified.py tests/referees/test_certified_torque.py \
+		tests/referees/test_certified_crank_shaper.py tests/referees/test_peak_torque.py
 	SYNTH_BUDGET_REQUESTS=1000 $(BIN)/python -m pytest -q tests/service/test_budgets.py
 
 # the design atlas the service ships (GET /v1/atlas) and the README's charts: docs/atlas/,
