@@ -3,7 +3,7 @@
 Checked from outside: its optimum against the independent global search of
 tests/support/motion_referee.py (its own families of designs, its measure the analysis's
 loads, which tests/referees/test_loads.py holds to independent computations) on a sample in
-`make test` and 10 targets per type in `make stress`; its peak never above the
+`make test` and 20 targets per type in `make stress`; its peak never above the
 best-transmitting design's for the same request; and the requests it refuses.
 """
 
