@@ -154,10 +154,10 @@ class Chart:
         x = [self.fn(z, self.constants(sigma, 0.0))[:nx].T for sigma in (1, -1)]
         return self._smallest(np.vstack(x))
 
-    def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
-        """The design at z; where the scale is free and no coordinate, the smallest the box
-        allows."""
-        return self._smallest(self.at(z, c)[0])
+    def end(self, x: np.ndarray) -> np.ndarray:
+        """The design x(z) at a point; where the scale is free and no coordinate, the smallest
+        the box allows (a copy)."""
+        return self._smallest(x.copy())
 
     def _smallest(self, x: np.ndarray) -> np.ndarray:
         """The designs x (rows, or one) at the smallest scale the box's lower bounds allow,

@@ -71,8 +71,8 @@ class Coordinates(Protocol):
     request's bounds where they are no bounds of z), in one evaluation. ``equalities``:
     whether x(z) may leave the formulation's equalities (then constrained); ``draw``: n
     points (parameters) spread over the space, which the search projects onto the
-    formulation's constraints and ranks as starts; ``end``: the parameters a run's last
-    point stands for."""
+    formulation's constraints and ranks as starts; ``end``: the parameters a run's point
+    stands for, from its x(z) (a free scale at its least)."""
 
     equalities: bool
     drawn: str  # the key of ``Aim.drawn``
@@ -81,7 +81,7 @@ class Coordinates(Protocol):
     def point(self, z: np.ndarray, c: np.ndarray) -> Point: ...
     def bounds(self) -> list[tuple[float, float]]: ...
     def draw(self, n: int) -> np.ndarray: ...
-    def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray: ...
+    def end(self, x: np.ndarray) -> np.ndarray: ...
 
 
 class Parameters:
@@ -106,8 +106,8 @@ class Parameters:
         """Halton points of the box (log-uniform where its bounds are positive)."""
         return halton(self.lo, self.hi, self.lo > 0, n)
 
-    def end(self, z: np.ndarray, c: np.ndarray) -> np.ndarray:
-        return z
+    def end(self, x: np.ndarray) -> np.ndarray:
+        return x
 
 
 def local_optima(
@@ -209,7 +209,7 @@ def local_optima(
                 the run ends with nothing of its own (``Known``: the rest is that run's)."""
                 seen.append(y.copy())
                 still = len(seen) > STILL and np.ptp(seen[-STILL:], axis=0).max() <= 1e-12
-                x = coords.end(y[:-1], run.c)  # as the ends are kept (a free scale its least)
+                x = coords.end(run.x(y)[0])  # as the ends are kept (a free scale its least)
                 known = any(
                     np.abs(x - e).max() <= NEAR and y[-1] >= t - LEVEL * abs(t) for e, t in ended
                 )
@@ -239,7 +239,7 @@ def local_optima(
                 last = seen[-1]
             # SLSQP meets its constraints to ~1e-8, the verification asks 1e-9: projected onto
             # the equalities, the inequalities it is beyond held inside
-            end = coords.end(last[:-1], c)
+            end = coords.end(run.x(last)[0])
             for x in screen.project(form, key, end[None], pv, lo, hi, every=False):
                 ended.append((x, float(last[-1])))
                 yield design(x)
