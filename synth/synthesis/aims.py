@@ -96,4 +96,6 @@ def aim(
 
     peak = partial(peak_torque_terms, m.type, load=load, metres=metres)
     capped = None if limit is None else (pick, limit / unit)
-    return Aim(peak, pick, torque, False, DRAWN_TORQUE), capped
+    # with massless links the torque is the ram's motion's (a four-bar's scale leaves it alone)
+    scale_free = load.link_mass_per_length == 0
+    return Aim(peak, pick, torque, scale_free, DRAWN_TORQUE), capped

@@ -141,15 +141,13 @@ class Chart:
 
     def draw(self, n: int) -> np.ndarray:
         """Designs at n/2 Halton points of the construction on each sheet (ψ over its range, v
-        over ``DRAWN_V``, the rod's numbers over their box; the scale the smallest the box
-        allows): each meets the time ratio and the stroke where its toggles lie in one
-        circuit. Of 256 such points 19–90 pass the screen on a crank-rocker at time ratio 1.6
-        and 0°, of the box's own 3–7."""
-        lo = np.array([EDGE, DRAWN_V[0], *(self.lo[i] for i in self.own_at)])
-        hi = np.array([math.pi - EDGE, DRAWN_V[1], *(self.hi[i] for i in self.own_at)])
-        z = halton(lo, hi, np.r_[False, False, self.lo[self.own_at] > 0], n // 2)
-        if "s" in self.names:
-            z = np.insert(z, 2, 0.0, axis=1)
+        over ``DRAWN_V``, the scale's log where it is a coordinate and the rod's numbers over
+        their box; else the scale the smallest the box allows): each meets the time ratio and
+        the stroke where its toggles lie in one circuit. Of 256 such points 19–90 pass the
+        screen on a crank-rocker at time ratio 1.6 and 0°, of the box's own 3–7."""
+        lo, hi = np.array([(EDGE, math.pi - EDGE), DRAWN_V, *self.box[2:]]).T
+        logs = np.r_[[False] * (len(self.box) - len(self.own_at)), self.lo[self.own_at] > 0]
+        z = halton(lo, hi, logs, n // 2)
         nx = len(self.free)  # every point of a sheet in one call (each its own, to the bit)
         x = [self.fn(z, self.constants(sigma, 0.0))[:nx].T for sigma in (1, -1)]
         return self._smallest(np.vstack(x))
