@@ -68,6 +68,7 @@ class Chart:
         self.free, self.lo, self.hi, self.beta = free, lo, hi, beta(time_ratio)
         self.fn = function(m, variant, free, scale)
         self.roles = r.links
+        self.arm = r.arm
         pinned = _pinned(r, free)
         # a fixed link's length, else None (its log is the constants' last)
         self.pinned = None if pinned is None else fixed[pinned]
@@ -139,18 +140,34 @@ class Chart:
     def bounds(self) -> list[tuple[float, float]]:
         return self.box
 
-    def draw(self, n: int) -> np.ndarray:
+    def draw(self, n: int) -> list[np.ndarray]:
         """Designs at n/2 Halton points of the construction on each sheet (ψ over its range, v
         over ``DRAWN_V``, the scale's log where it is a coordinate and the rod's numbers over
         their box; else the scale the smallest the box allows): each meets the time ratio and
         the stroke where its toggles lie in one circuit. Of 256 such points 19–90 pass the
-        screen on a crank-rocker at time ratio 1.6 and 0°, of the box's own 3–7."""
+        screen on a crank-rocker at time ratio 1.6 and 0°, of the box's own 3–7. Where the
+        rod's length l and its path's placement are both free, a second set with the path
+        within the rod's reach of C's ends (C's height there + u l, u in (−1, 1)): few of the
+        box's placements are, and a short rod's basins lie in that sliver (a crank-rocker's
+        least peak torque at time ratio 2 and 0°, 11% below the slot drive's)."""
         lo, hi = np.array([(EDGE, math.pi - EDGE), DRAWN_V, *self.box[2:]]).T
         logs = np.r_[[False] * (len(self.box) - len(self.own_at)), self.lo[self.own_at] > 0]
-        z = halton(lo, hi, logs, n // 2)
-        nx = len(self.free)  # every point of a sheet in one call (each its own, to the bit)
-        x = [self.fn(z, self.constants(sigma, 0.0))[:nx].T for sigma in (1, -1)]
-        return self._smallest(np.vstack(x))
+        sets = [self._at(halton(lo, hi, logs, n // 2))]
+        if "l" in self.names and "h" in self.names:
+            lo[-1], hi[-1], logs[-1] = -1.0, 1.0, False
+            z = halton(lo, hi, logs, n // 2)
+            reach = self._at(z)
+            z = np.tile(z, (2, 1))  # as the designs' rows
+            arm, h = self.free.index(self.arm), self.own_at[-1]
+            reach[:, h] = reach[:, arm] * np.cos(z[:, 0] / 2) + z[:, -2] * z[:, -1]
+            sets.append(reach)
+        return [self._smallest(x) for x in sets]
+
+    def _at(self, z: np.ndarray) -> np.ndarray:
+        """The designs at the points z on each sheet (rows: every point on one sheet, then
+        on the other), in one call a sheet (each its own, to the bit)."""
+        nx = len(self.free)
+        return np.vstack([self.fn(z, self.constants(sigma, 0.0))[:nx].T for sigma in (1, -1)])
 
     def end(self, x: np.ndarray) -> np.ndarray:
         """The design x(z) at a point; where the scale is free and no coordinate, the smallest

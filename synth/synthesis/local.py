@@ -8,13 +8,14 @@ from ranked starts, in the variant's coordinates.
   exact derivatives (``quality.motion_terms``, ``loads.peak_terms``: the envelope theorem at
   a peak, the implicit function theorem at a dead centre or a window's end);
 - its starts are the exact solvers' designs for the request (best-transmitting and smallest)
-  and ``SAMPLES`` points its coordinates draw (the box's, or the construction's) projected
-  onto the equalities (with few such designs, ``SAMPLES`` more within ``AROUND`` of the
-  starts), ranked by their measure on a grid of crank angles (``screen``); it runs from the
-  ``STARTS`` best of the former and as many of the latter as ``Aim.drawn`` says, at most
-  ``MAX_ITER`` iterations each, but not from a start ``FAR_ABOVE`` the best (the smallest
-  design at a 0° bound, near locking, measures 10–5 000 times the best start: its runs went
-  to the edge of the coordinates and ended infeasible).
+  and ``SAMPLES`` points its coordinates draw (the box's, or the construction's, in one set
+  or more) projected onto the equalities (with few such designs, ``SAMPLES`` more within
+  ``AROUND`` of the starts), ranked by their measure on a grid of crank angles (``screen``);
+  it runs from the ``STARTS`` best of the former and as many of each set of the latter as
+  ``Aim.drawn`` says, at most ``MAX_ITER`` iterations each, but not from a start
+  ``FAR_ABOVE`` the best (the smallest design at a 0° bound, near locking, measures
+  10–5 000 times the best start: its runs went to the edge of the coordinates and ended
+  infeasible).
 - its coordinates (``Coordinates``): a four-bar with its arm and all its links but one free
   moves on its dead-centre construction (``chart``), where every point meets the time ratio
   and the stroke; any other variant in its free parameters, the equalities constraints.
@@ -69,10 +70,10 @@ class Coordinates(Protocol):
     """Where SLSQP moves: points z, each start with its constants c; ``point``: the free
     parameters x(z), ∂x/∂z (None: x is z) and the coordinates' own inequality rows at z (the
     request's bounds where they are no bounds of z), in one evaluation. ``equalities``:
-    whether x(z) may leave the formulation's equalities (then constrained); ``draw``: n
-    points (parameters) spread over the space, which the search projects onto the
-    formulation's constraints and ranks as starts; ``end``: the parameters a run's point
-    stands for, from its x(z) (a free scale at its least)."""
+    whether x(z) may leave the formulation's equalities (then constrained); ``draw``: sets
+    of n points (parameters) spread over the space, which the search projects onto the
+    formulation's constraints and ranks as starts, each set on its own; ``end``: the
+    parameters a run's point stands for, from its x(z) (a free scale at its least)."""
 
     equalities: bool
     drawn: str  # the key of ``Aim.drawn``
@@ -80,7 +81,7 @@ class Coordinates(Protocol):
     def starts(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]: ...
     def point(self, z: np.ndarray, c: np.ndarray) -> Point: ...
     def bounds(self) -> list[tuple[float, float]]: ...
-    def draw(self, n: int) -> np.ndarray: ...
+    def draw(self, n: int) -> list[np.ndarray]: ...
     def end(self, x: np.ndarray) -> np.ndarray: ...
 
 
@@ -102,9 +103,9 @@ class Parameters:
     def bounds(self) -> list[tuple[float, float]]:
         return list(zip(self.lo, self.hi, strict=True))
 
-    def draw(self, n: int) -> np.ndarray:
+    def draw(self, n: int) -> list[np.ndarray]:
         """Halton points of the box (log-uniform where its bounds are positive)."""
-        return halton(self.lo, self.hi, self.lo > 0, n)
+        return [halton(self.lo, self.hi, self.lo > 0, n)]
 
     def end(self, x: np.ndarray) -> np.ndarray:
         return x
@@ -393,11 +394,12 @@ def _ranked(
     design: Any,
 ) -> list[tuple[float, np.ndarray]]:
     """The runs' starts, measured, with their measures: the best ranked of the exact designs
-    (``STARTS``) and of the coordinates' projected points (``drawn_starts``), and of points
-    about the starts where those hold too few designs. Empty where the deadline passed."""
+    (``STARTS``), of the coordinates' projected points (``drawn_starts``) and of points about
+    the starts where those hold too few designs, then of each further set the coordinates
+    draw (``drawn_starts``). Empty where the deadline passed."""
     n = len(free)
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
-    drawn = screen.project(form, key, coords.draw(SAMPLES), pv, lo, hi)
+    drawn, *more = (screen.project(form, key, d, pv, lo, hi) for d in coords.draw(SAMPLES))
     near = drawn[:0]
     if len(drawn) < drawn_starts and len(own):
         # the box's points may hold few designs (a drag-link's ground is its shortest link; a
@@ -405,12 +407,13 @@ def _ranked(
         near_lo = np.maximum(lo, np.where(lo > 0, own.min(axis=0) / AROUND, lo))
         near_hi = np.minimum(hi, np.where(lo > 0, own.max(axis=0) * AROUND, hi))
         near = screen.project(form, key, halton(near_lo, near_hi, lo > 0, SAMPLES), pv, lo, hi)
-    points = np.vstack([own, drawn, near])
+    sets = [own, drawn, near, *more]
+    points = np.vstack(sets)
     pvs = np.array([list(m.filled(design(x)).values()) for x in points])
     value = aim.rank(pvs) if len(points) else np.empty(0)
     measured = []  # the best ranked of each source that the analysis takes
-    ends = np.cumsum([0, len(own), len(drawn), len(near)])
-    for j, most in enumerate((STARTS, drawn_starts, drawn_starts)):
+    ends = np.cumsum([0, *map(len, sets)])
+    for j, most in enumerate([STARTS] + [drawn_starts] * (len(sets) - 1)):
         source = np.arange(ends[j], ends[j + 1])
         taken = 0
         for k in source[np.argsort(value[source], kind="stable")]:

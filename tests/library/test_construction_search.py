@@ -144,7 +144,7 @@ def test_drawn_points_of_the_construction_pass_the_screen_where_the_boxs_seldom_
     pv = np.array([1.6, 0.999])
     lo, hi = c.lo, c.hi
     box = screen.project(form, key, halton(lo, hi, lo > 0, 256), pv, lo, hi)
-    drawn = screen.project(form, key, c.draw(256), pv, lo, hi)
+    drawn = screen.project(form, key, c.draw(256)[0], pv, lo, hi)
     assert len(drawn) >= 3 * max(len(box), 5)
     for x in drawn[:10]:
         a = synth.analyze("crank_rocker_slider", dict(zip(free, x, strict=True)))
