@@ -89,8 +89,8 @@ def against_the_referee(mtype, tr, bound, load=LOAD, effort=EFFORT):
 
 # designs the global search found on crank-rockers: at 1.3 / 30° a larger four-bar than the
 # smallest and a rod off its bound (0.66% below the answer when the searched starts were all
-# at the smallest scale); at 2.0 / 0° a short steep rod (0.24 stroke) on the slot drive's
-# four-bar (11% below it, when no drawn start had the rod's path within its reach)
+# at the smallest scale); at 2.0 / 0° a short steep rod (a third of the stroke) on the slot
+# drive's four-bar (11% below it, when no drawn start had the rod's path within its reach)
 FOUND = {
     (1.3, 30.0): {
         "ground": 2.646480773569366,
