@@ -68,7 +68,7 @@ class Chart:
         self.free, self.lo, self.hi, self.beta = free, lo, hi, beta(time_ratio)
         self.fn = function(m, variant, free, scale)
         self.roles = r.links
-        self.arm = r.arm
+        self.arm, self.rod = r.arm, fixed.get(r.rod)  # the rod's length where it is fixed
         pinned = _pinned(r, free)
         # a fixed link's length, else None (its log is the constants' last)
         self.pinned = None if pinned is None else fixed[pinned]
@@ -146,20 +146,22 @@ class Chart:
         their box; else the scale the smallest the box allows): each meets the time ratio and
         the stroke where its toggles lie in one circuit. Of 256 such points 19–90 pass the
         screen on a crank-rocker at time ratio 1.6 and 0°, of the box's own 3–7. Where the
-        rod's length l and its path's placement are both free, a second set with the path
-        within the rod's reach of C's ends (C's height there + u l, u in (−1, 1)): few of the
-        box's placements are, and a short rod's basins lie in that sliver (a crank-rocker's
-        least peak torque at time ratio 2 and 0°, 11% below the slot drive's)."""
+        rod's path's placement is a coordinate, a second set with the path within the rod's
+        reach of C's ends (C's height there + u l, u in (−1, 1), l the rod's length, fixed or
+        drawn): few of the box's placements are, and a short rod's basins lie in that sliver
+        (a crank-rocker's least peak torque at time ratio 2 and 0°, 11% below the slot
+        drive's)."""
         lo, hi = np.array([(EDGE, math.pi - EDGE), DRAWN_V, *self.box[2:]]).T
         logs = np.r_[[False] * (len(self.box) - len(self.own_at)), self.lo[self.own_at] > 0]
         sets = [self._at(halton(lo, hi, logs, n // 2))]
-        if "l" in self.names and "h" in self.names:
+        if "h" in self.names and ("l" in self.names or self.rod is not None):
             lo[-1], hi[-1], logs[-1] = -1.0, 1.0, False
             z = halton(lo, hi, logs, n // 2)
             reach = self._at(z)
             z = np.tile(z, (2, 1))  # as the designs' rows
+            rod = z[:, -2] if self.rod is None else self.rod
             arm, h = self.free.index(self.arm), self.own_at[-1]
-            reach[:, h] = reach[:, arm] * np.cos(z[:, 0] / 2) + z[:, -2] * z[:, -1]
+            reach[:, h] = reach[:, arm] * np.cos(z[:, 0] / 2) + rod * z[:, -1]
             sets.append(reach)
         return [self._smallest(x) for x in sets]
 
