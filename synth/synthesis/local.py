@@ -12,10 +12,10 @@ from ranked starts, in the variant's coordinates.
   or more) projected onto the equalities (with few such designs, ``SAMPLES`` more within
   ``AROUND`` of the starts), ranked by their measure on a grid of crank angles (``screen``);
   it runs from the ``STARTS`` best of the former and as many of each set of the latter as
-  ``Aim.drawn`` says, at most ``MAX_ITER`` iterations each, but not from a start
-  ``FAR_ABOVE`` the best (the smallest design at a 0° bound, near locking, measures
-  10–5 000 times the best start: its runs went to the edge of the coordinates and ended
-  infeasible).
+  ``Aim.drawn`` says (of a further set, fewer), at most ``MAX_ITER`` iterations each, but
+  not from a start ``FAR_ABOVE`` the best (the smallest design at a 0° bound, near locking,
+  measures 10–5 000 times the best start: its runs went to the edge of the coordinates and
+  ended infeasible).
 - its coordinates (``Coordinates``): a four-bar with its arm and all its links but one free
   moves on its dead-centre construction (``chart``), where every point meets the time ratio
   and the stroke; any other variant in its free parameters, the equalities constraints.
@@ -396,7 +396,8 @@ def _ranked(
     """The runs' starts, measured, with their measures: the best ranked of the exact designs
     (``STARTS``), of the coordinates' projected points (``drawn_starts``) and of points about
     the starts where those hold too few designs, then of each further set the coordinates
-    draw (``drawn_starts``). Empty where the deadline passed."""
+    draw (``Aim.drawn``'s "further", at most ``drawn_starts``). Empty where the deadline
+    passed."""
     n = len(free)
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
     drawn, *more = (screen.project(form, key, d, pv, lo, hi) for d in coords.draw(SAMPLES))
@@ -413,7 +414,8 @@ def _ranked(
     value = aim.rank(pvs) if len(points) else np.empty(0)
     measured = []  # the best ranked of each source that the analysis takes
     ends = np.cumsum([0, *map(len, sets)])
-    for j, most in enumerate([STARTS] + [drawn_starts] * (len(sets) - 1)):
+    further = min(aim.drawn["further"], drawn_starts)
+    for j, most in enumerate([STARTS, drawn_starts, drawn_starts] + [further] * len(more)):
         source = np.arange(ends[j], ends[j + 1])
         taken = 0
         for k in source[np.argsort(value[source], kind="stable")]:
