@@ -92,12 +92,20 @@ def test_a_killed_run_resumes_to_the_same_atlas(tmp_path):
         "--out",
         str(tmp_path),
     ]
-    proc = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # its own process group, killed whole: its pool's workers with it (killed alone, they
+    # outlived the suite, idle)
+    proc = subprocess.Popen(
+        args,
+        cwd=ROOT,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        start_new_session=True,
+    )
     chunks = tmp_path / "chunks"
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and len(list(chunks.glob("*.json"))) < 3:
         time.sleep(0.02)
-    proc.send_signal(signal.SIGKILL)
+    os.killpg(proc.pid, signal.SIGKILL)
     proc.wait()
     written = len(list(chunks.glob("*.json")))
     assert 3 <= written < n, written  # killed with work left
