@@ -179,12 +179,14 @@ def local_optima(
     )
     drawn = aim.drawn["fixed" if fixed_parts else coords.drawn]  # whichever the coordinates
     measured = _ranked(m, form, key, pv, lo, hi, starts, free, drawn, coords, aim, terms, design)
-    # where the measure does not depend on the scale, a start at the smallest member of its
-    # free scale (the same motion): SLSQP then has a bound in that direction, where it would
-    # crawl towards the tie to the smaller design (where it does, the start's own scale)
+    # a start at the smallest member of its free scale (the same motion): SLSQP then has a
+    # bound in that direction, where it would crawl towards the tie to the smaller design;
+    # where the measure depends on the scale and the construction draws it, each start keeps
+    # its own (the construction's starts spread over the scale)
     sc = m.scale
     scaled = [] if sc is None else [free.index(k) for k in (sc.free, *sc.tied) if k in free]
-    if aim.scale_free and sc is not None and len(scaled) == 1 + len(sc.tied):
+    shrunk = aim.scale_free or not isinstance(coords, chart.Chart)
+    if shrunk and sc is not None and len(scaled) == 1 + len(sc.tied):
         for _, x in measured:
             x[scaled] *= max(lo[scaled] / x[scaled])
     links = np.array([float(m.parameter(k).link) for k in free])

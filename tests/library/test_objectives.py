@@ -118,3 +118,27 @@ def test_designs_tied_in_peak_torque_go_to_the_larger_transmission_angle():
             assert abs(x.objective_value - before.objective_value) <= 1e-6 * best
             if x.ranked_by == "min_transmission_angle":
                 assert x.min_transmission_angle_deg < before.min_transmission_angle_deg
+
+
+def test_no_two_candidates_are_one_design_at_two_sizes():
+    """A crank shaper's crank turns at constant speed about its pivot: with links that weigh,
+    its peak torque is the same at every crank length its time ratio allows (the pivot
+    distance in proportion, the rest as it is). The answer gives each such design once (the
+    rest within 1e-6 of the stroke: a third of a micrometre here), its smallest member, and
+    not four sizes of it in the places of different designs."""
+    load = synth.Load(
+        length_unit="mm", crank_rpm=40, cutting_force=2000, slider_mass=20, link_mass_per_length=8
+    )
+    r = synth.synthesize(
+        1.6, 300.0, 20, objective="min_peak_torque", mechanisms=["crank_shaper"], load=load
+    )
+    assert r.complete and len(r.candidates) >= 2
+    for a, b in itertools.combinations(r.candidates, 2):
+        rest = ("lever", "ram_link", "ram_height")
+        assert not (
+            all(abs(a.params[k] - b.params[k]) <= 1e-6 * 300 for k in rest)
+            and abs(a.objective_value - b.objective_value) <= 1e-9 * a.objective_value
+            and abs(a.min_transmission_angle_deg - b.min_transmission_angle_deg) <= 1e-6
+        ), (a.params, b.params)
+    # and each is its smallest member: the crank at its least, 30 (the type's bound)
+    assert all(c.params["crank"] == pytest.approx(30.0, rel=1e-12) for c in r.candidates)
