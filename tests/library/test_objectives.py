@@ -142,3 +142,9 @@ def test_no_two_candidates_are_one_design_at_two_sizes():
         ), (a.params, b.params)
     # and each is its smallest member: the crank at its least, 30 (the type's bound)
     assert all(c.params["crank"] == pytest.approx(30.0, rel=1e-12) for c in r.candidates)
+    # the premise, by the forward analysis: twice the crank and pivot distance, the same torque
+    for c in r.candidates:
+        k = {q: 2 * c.params[q] for q in ("crank", "pivot_distance")}
+        twice = synth.analyze("crank_shaper", {**c.params, **k}, load=load)
+        assert twice.loads is not None and c.loads is not None
+        assert twice.loads.torque.max == pytest.approx(c.loads.torque.max, rel=1e-12)
