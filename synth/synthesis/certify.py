@@ -8,7 +8,11 @@ terms). At each level, over the boxes alive:
   (``numerics.interval``'s centred form, compiled): a box that surely breaks one goes;
 - **bound**: the measure's lower bound over each box, from its centre's measurement;
 - **incumbent**: the least measured centre that meets every constraint (and first the
-  least corner of the box: an optimum at a bound), if it is the least so far;
+  least corner of the box: an optimum at a bound), if it is the least so far; with two or
+  more free numbers also, on each face of the space that boxes the next step keeps touch,
+  the centre of the one measuring least moved onto the face (an optimum a bound holds lies
+  on a face, not at a corner: the centres alone near it only to first order in the boxes'
+  width, and the gap would not close);
 - a box whose bound is within ``CLOSE`` of the incumbent goes (its bound kept); the others
   are cut into parts (``SPLITS``, by the number of free numbers) across their widest side.
 
@@ -285,6 +289,10 @@ def _search(
             lo = lo[:0]
             break
         keep = lower < top * (1 - CLOSE)
+        faces = _faces(lo[keep], hi[keep], centres[keep], value[keep], sp)  # on the faces
+        if len(faces):
+            probe(faces, measure(b.kin, faces, k)[0])
+            keep = lower < top * (1 - CLOSE)
         least = min([least, *lower[~keep]])
         point = np.all(lo == hi, axis=1)  # a box that is a point: its bound is all there is
         least = min([least, *lower[keep & point]])
@@ -340,6 +348,26 @@ def _polish(
     res = minimize_scalar(at, bounds=(lo, hi), method="bounded", options={"xatol": xatol})
     value = at(float(res.x))
     return (value, point(float(res.x))) if value < top else (top, best)
+
+
+def _faces(
+    lo: np.ndarray, hi: np.ndarray, centres: np.ndarray, value: np.ndarray, sp: Space
+) -> np.ndarray:
+    """On each face of a space of two or more free numbers that boxes touch, the centre of
+    the one whose centre measures least, moved onto the face (``INSIDE`` of the space's width
+    within it)."""
+    s_lo, s_hi = np.array(sp.lo), np.array(sp.hi)
+    width = s_hi - s_lo
+    free = np.flatnonzero(width > 0)
+    found = []
+    for d in free if len(free) > 1 else ():
+        for side, edge, at in ((lo, s_lo, 1.0), (hi, s_hi, -1.0)):
+            on = np.flatnonzero(side[:, d] == edge[d])
+            if len(on):
+                x = centres[on[np.argmin(value[on])]].copy()
+                x[d] = edge[d] + at * INSIDE * width[d]
+                found.append(x)
+    return np.array(found).reshape(-1, len(width))
 
 
 def _on_face(x: np.ndarray | None, sp: Space) -> np.ndarray | None:
