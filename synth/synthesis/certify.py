@@ -359,8 +359,10 @@ def _faces(
     s_lo, s_hi = np.array(sp.lo), np.array(sp.hi)
     width = s_hi - s_lo
     free = np.flatnonzero(width > 0)
+    if len(free) < 2:  # one free number: its faces are the corners, measured first
+        return centres[:0]
     found = []
-    for d in free if len(free) > 1 else ():
+    for d in free:
         for side, edge, at in ((lo, s_lo, 1.0), (hi, s_hi, -1.0)):
             on = np.flatnonzero(side[:, d] == edge[d])
             if len(on):

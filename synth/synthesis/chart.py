@@ -65,6 +65,7 @@ class Chart:
         r = m.construction
         assert r is not None
         self.names = names(r, free, scale)
+        self.scaled = "s" in self.names  # ``local.Coordinates``
         self.free, self.lo, self.hi, self.beta = free, lo, hi, beta(time_ratio)
         self.fn = function(m, variant, free, scale)
         self.roles = r.links
@@ -81,7 +82,7 @@ class Chart:
         li = [] if sized else self.links
         self.pairs = [(i, j) for i in li for j in li if i != j and lo[i] > 0 and hi[j] < math.inf]
         self.box = [(EDGE, math.pi - EDGE), (-FAR, FAR)]
-        if "s" in self.names:  # e^s is the first link's length: its bounds, as SLSQP keeps them
+        if self.scaled:  # e^s is the first link's length: its bounds, as SLSQP keeps them
             first = free.index(r.links[0])
             with np.errstate(divide="ignore"):
                 a, b = np.clip(np.log([lo[first], hi[first]]), -FAR, FAR)
@@ -104,7 +105,7 @@ class Chart:
             return []
         swing = triangle_angle(rho[0], rho[3], rho[2] + rho[1])
         swing -= triangle_angle(rho[0], rho[3], rho[2] - rho[1])
-        scale = [math.log(k)] if "s" in self.names else []
+        scale = [math.log(k)] if self.scaled else []
         z = np.array([float(swing), math.log(lam - 1), *scale, *x[self.own_at]])
         found = []
         for sigma in (1, -1):
@@ -179,7 +180,7 @@ class Chart:
     def _smallest(self, x: np.ndarray) -> np.ndarray:
         """The designs x (rows, or one) at the smallest scale the box's lower bounds allow,
         where the scale is free and no coordinate (else as they are)."""
-        if "s" in self.names or self.pinned is not None:
+        if self.scaled or self.pinned is not None:
             return x
         links = x[..., self.links]
         x[..., self.links] *= np.max(self.lo[self.links] / links, axis=-1, keepdims=True)

@@ -73,10 +73,12 @@ class Coordinates(Protocol):
     whether x(z) may leave the formulation's equalities (then constrained); ``draw``: sets
     of n points (parameters) spread over the space, which the search projects onto the
     formulation's constraints and ranks as starts, each set on its own; ``end``: the
-    parameters a run's point stands for, from its x(z) (a free scale at its least)."""
+    parameters a run's point stands for, from its x(z) (a free scale at its least).
+    ``scaled``: whether the scale is one of the coordinates (each start keeps its own)."""
 
     equalities: bool
     drawn: str  # the key of ``Aim.drawn``
+    scaled: bool
 
     def starts(self, x: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]: ...
     def point(self, z: np.ndarray, c: np.ndarray) -> Point: ...
@@ -90,6 +92,7 @@ class Parameters:
 
     equalities = True
     drawn = "free"
+    scaled = False
 
     def __init__(self, lo: np.ndarray, hi: np.ndarray) -> None:
         self.lo, self.hi = lo, hi
@@ -181,12 +184,10 @@ def local_optima(
     measured = _ranked(m, form, key, pv, lo, hi, starts, free, drawn, coords, aim, terms, design)
     # a start at the smallest member of its free scale (the same motion): SLSQP then has a
     # bound in that direction, where it would crawl towards the tie to the smaller design;
-    # where the measure depends on the scale and the construction draws it, each start keeps
-    # its own (the construction's starts spread over the scale)
+    # where the scale is a coordinate (the measure depends on it), each start keeps its own
     sc = m.scale
     scaled = [] if sc is None else [free.index(k) for k in (sc.free, *sc.tied) if k in free]
-    shrunk = aim.scale_free or not isinstance(coords, chart.Chart)
-    if shrunk and sc is not None and len(scaled) == 1 + len(sc.tied):
+    if not coords.scaled and sc is not None and len(scaled) == 1 + len(sc.tied):
         for _, x in measured:
             x[scaled] *= max(lo[scaled] / x[scaled])
     links = np.array([float(m.parameter(k).link) for k in free])
@@ -398,8 +399,7 @@ def _ranked(
     """The runs' starts, measured, with their measures: the best ranked of the exact designs
     (``STARTS``), of the coordinates' projected points (``drawn_starts``) and of points about
     the starts where those hold too few designs, then of each further set the coordinates
-    draw (``Aim.drawn``'s "further", at most ``drawn_starts``). Empty where the deadline
-    passed."""
+    draw (``Aim.drawn``'s "further"). Empty where the deadline passed."""
     n = len(free)
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
     drawn, *more = (screen.project(form, key, d, pv, lo, hi) for d in coords.draw(SAMPLES))
@@ -416,8 +416,8 @@ def _ranked(
     value = aim.rank(pvs) if len(points) else np.empty(0)
     measured = []  # the best ranked of each source that the analysis takes
     ends = np.cumsum([0, *map(len, sets)])
-    further = min(aim.drawn["further"], drawn_starts)
-    for j, most in enumerate([STARTS, drawn_starts, drawn_starts] + [further] * len(more)):
+    further = [aim.drawn["further"]] * len(more)
+    for j, most in enumerate([STARTS, drawn_starts, drawn_starts, *further]):
         source = np.arange(ends[j], ends[j + 1])
         taken = 0
         for k in source[np.argsort(value[source], kind="stable")]:
