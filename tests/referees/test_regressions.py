@@ -222,6 +222,23 @@ def test_four_bar_follower_keeps_its_digits(links):
         assert a.transmission.min_deg == pytest.approx(mu, abs=2e-10)  # a few ulp of cos μ
 
 
+def test_drag_link_with_crank_near_ground_keeps_its_digits():
+    """crank ≈ ground, coupler = follower: Heron's factor r2 − r3 + r4 − r1, summed as
+    (1.01 − 101) + (101 − 1), kept the 0.01 to an ulp of the coupler, and μ of a piston near
+    its dead point moved by 1e-4 relative under scaling (found by make stress). Now each
+    factor pairs the links whose differences are smallest; the referee is acos(r5/r6) in 50
+    digits, where the follower stands upright."""
+    from mpmath import acos, degrees, mpf
+
+    p = {"ground": 1.0, "crank": 1.01, "coupler": 101.0, "follower": 101.0}
+    p |= {"follower_arm": 100.0, "connecting_rod": 100.00000031622776}
+    mu = float(degrees(acos(mpf(p["follower_arm"]) / mpf(p["connecting_rod"]))))
+    for k in (1.0, 10.0, 100.0, 0.1):
+        a = synth.analyze("drag_link_slider", {n: v * k for n, v in p.items()})
+        rod = next(j for j in a.transmission.joints if j.joint == "connecting_rod-slider")
+        assert rod.min_deg == pytest.approx(mu, abs=5e-10)  # a few ulp of cos μ
+
+
 def test_a_motion_search_past_a_design_without_stroke_still_answers():
     """The API contract check sent time ratio 240 with the least peak acceleration: the search
     passed a design whose slider does not move, and its motion measures divided by the stroke

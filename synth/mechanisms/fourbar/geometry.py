@@ -70,11 +70,20 @@ def _triangle(r1: Any, r2: Any, r3: Any, r4: Any, th: Any) -> tuple[Any, Any]:
     s2, c2 = ca.sin(th / 2) ** 2, ca.cos(th / 2) ** 2
     d2 = (r2 - r1) ** 2 + 4 * r1 * r2 * s2
     # the factors that vanish on a Grashof limit are summed as differences of pairs, each
-    # exact or rounded at its own size (a kite's r3 − r2 and r4 − r1 are exact), not left to
-    # right at the size of the longest link
-    outer = ((r3 - r2) + (r4 - r1)) * ((r3 + r4) + (r1 + r2)) + 4 * r1 * r2 * c2
-    inner = ((r2 - r3) + (r4 - r1)) * ((r2 - r1) + (r3 - r4)) + 4 * r1 * r2 * s2
+    # exact or rounded at its own size (``_paired``), not left to right at the size of the
+    # longest link
+    outer = _paired(r3, r2, r4, r1) * ((r3 + r4) + (r1 + r2)) + 4 * r1 * r2 * c2
+    inner = _paired(r2, r3, r4, r1) * _paired(r2, r1, r3, r4) + 4 * r1 * r2 * s2
     return d2, sqrt(outer * inner) / (2 * d2)
+
+
+def _paired(a: Any, b: Any, c: Any, d: Any) -> Any:
+    """a − b + c − d as (a − b) + (c − d) or (a − d) + (c − b), whichever pairs' differences
+    are smaller: each difference of two near links is exact, so the sum keeps the digits of
+    its size (a kite pairs one way, a crank ≈ ground with coupler ≈ follower the other; the
+    wrong pairing keeps only ulps of the longest link)."""
+    x, y, u, v = a - b, c - d, a - d, c - b
+    return where(ca.fabs(x) + ca.fabs(y) <= ca.fabs(u) + ca.fabs(v), x + y, u + v)
 
 
 def grashof_margin(shortest: Any, x: Any, a: Any, b: Any) -> Any:
