@@ -127,7 +127,7 @@ def _analysis(
     if load is not None:
         st = quality.Strokes(*slider_extremes(rows, theta, values))
         upright_load = upright(m, variant, pv, st, load)
-        summary["loads"], loaded = loads.loads(m, variant, f, pv, st, upright_load)
+        summary["loads"], loaded = loads.loads(m, variant, f, pv, d.points, st, upright_load)
     if deg is not None:
         curves = _curves(f, pv, crank_speed, crank_acceleration, deg)
         if "pins" in include:

@@ -41,7 +41,7 @@ from .forces import Forces, Torques, forces, torques
 from .model import Model
 from .pieces import Found, Piece, Pieces, Quantity
 from .quality import Strokes, reached
-from .roots import TWO_PI, stationary_points
+from .roots import TWO_PI, Points
 
 
 def _torque(z: np.ndarray) -> np.ndarray:
@@ -117,11 +117,13 @@ def loads(
     variant: frozenset[str],
     f: Model,
     pv: np.ndarray,
+    points: Points,
     st: Strokes,
     load: Load,
 ) -> tuple[Loads, Callable[[np.ndarray], dict[str, np.ndarray]]]:
-    """The loads of a design (``pv``: its parameters; ``st``: its strokes) under ``load``, and
-    its torque and forces as functions of crank angles (radians), for curves."""
+    """The loads of a design (``pv``: its parameters; ``points``: its stationary points,
+    ``roots.stationary_points``; ``st``: its strokes) under ``load``, and its torque and
+    forces as functions of crank angles (radians), for curves."""
     sys = forces(m, variant)
     pieces = _pieces(sys, _spans(f, pv, st, load, load.metres), st, load.guide_friction)
 
@@ -129,7 +131,7 @@ def loads(
         inside = (theta[:, None] - pieces.lo) % TWO_PI <= pieces.hi - pieces.lo
         return cast(np.ndarray, np.argmax(inside, axis=1))
 
-    rows, at, c = stationary_points(f, pv)  # a joint's transmission angle 0°: a dead point
+    rows, at, c = points  # a joint's transmission angle 0°: a dead point
     flat = (rows > 0) & (np.abs(c) >= 1 - sys.FLAT)
     sys.dead(at[flat], pieces.pv[owner(at[flat])], [f.names[r - 1] for r in rows[flat]])
     lay = sys.layout
