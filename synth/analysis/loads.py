@@ -252,16 +252,24 @@ def peak_terms(
         + dz[..., force_at + 1, None] * d_load[:, None, 1]
     )
     grad, d_guide = both[:, 0], both[:, 1]
-    for j in range(found, x.size):
-        end, span = x[j], spans[pieces.pieces[owner[j]].span]
-        turn = (end - st.start) % TWO_PI
-        if end in (span.lo, span.hi):  # a profile's point
-            u = _end_fractions(span, load)[0 if end == span.lo else 1]
-            if u in (0.0, 1.0):
-                dt = dt_dead[int(u)]
-            else:  # s(θ, p) = s0 + u (s1 − s0)
-                s1 = f(x[[j]], pv)[1][0][0]
-                dt = (ds0 + u * (ds1 - ds0) - f.dp(x[[j]], pv)[0, 0]) / s1
+    # which ends are a profile's points (their fractions of the working stroke); s′ and ∂s/∂p
+    # at those inside the stroke, in one evaluation each
+    ends = range(found, x.size)
+    fractions = {}
+    for j in ends:
+        span = spans[pieces.pieces[owner[j]].span]
+        if x[j] in (span.lo, span.hi):
+            fractions[j] = _end_fractions(span, load)[0 if x[j] == span.lo else 1]
+    inside = [j for j, u in fractions.items() if u not in (0.0, 1.0)]
+    if inside:
+        s1, ds = f(x[inside], pv)[1][0], f.dp(x[inside], pv)[:, 0]
+    for j in ends:
+        turn = (x[j] - st.start) % TWO_PI
+        if j in inside:  # s(θ, p) = s0 + u (s1 − s0)
+            k, u = inside.index(j), fractions[j]
+            dt = (ds0 + u * (ds1 - ds0) - ds[k]) / s1[k]
+        elif j in fractions:  # a profile's point at a dead centre
+            dt = dt_dead[int(fractions[j])]
         elif min(turn, TWO_PI - turn, abs(turn - st.working)) < 1e-9:  # a dead centre
             dt = dt_dead[int(abs(turn - st.working) < 1e-9)]
         else:  # where the guide's force changes sign: N(θ, p) = 0
