@@ -12,7 +12,8 @@ the guide's force changes sign (``_pieces``). On each piece everything is smooth
 - extremes: the stationary points of each quantity on each piece (bracketed on a grid,
   polished by the safeguarded Newton iteration that finds the dead centres, ``roots``), and
   the pieces' ends;
-- the mean and the root mean square: Gauss–Legendre quadrature on each piece;
+- the mean and the root mean square: Gauss–Legendre quadrature on each piece, its panels
+  halved where the 8- and 16-point rules disagree (``Pieces.integrals``);
 - the flywheel: the crank's energy E(θ) = ∫ (T − T_mean) dθ is extreme where T crosses its
   mean (roots, polished alike) or jumps across it at a piece's end: its largest swing ΔE.
 
@@ -349,7 +350,7 @@ def _energy(pieces: Pieces, mean: float) -> float:
     edges = np.concatenate([e[:-1] for e in all_edges])
     at = [np.searchsorted(all_edges[o], x) - 1 for x, o in zip(crossings, owner, strict=True)]
     k = first[owner] + np.clip(at, 0, first[owner + 1] - first[owner] - 1).astype(int)
-    partial = pieces.gauss(edges[k], crossings, owner, 1)[0] - mean * (crossings - edges[k])
+    partial = pieces.gauss(edges[k], crossings, owner, 1)[0, 0] - mean * (crossings - edges[k])
     values = np.concatenate([at_edges, at_edges[k] + partial])
     return float(values.max() - values.min())
 

@@ -1,7 +1,7 @@
 """A turn's pieces on which a design's loads are smooth (``loads``): each with its own numbers
 (the load's segment, the guide's friction's sign), evaluated together; their quantities on a
 grid, their roots (stationary points, crossings) polished to machine precision, and their
-integrals by Gauss–Legendre quadrature."""
+integrals by adaptive Gauss–Legendre quadrature."""
 
 from __future__ import annotations
 
@@ -15,8 +15,11 @@ from .forces import Forces, Torques
 from .model import GRID, Polisher
 from .roots import TWO_PI, polish, rtsafe
 
-PANEL = math.pi / 64  # the widest panel of the quadrature (π/32: a sharp drag-link mean 5e-8 off)
-NODES, WEIGHTS = np.polynomial.legendre.leggauss(16)  # per panel
+# the quadrature: 16-point Gauss–Legendre on panels at most PANEL wide, each halved (at most
+# HALVINGS times) until the 8-point rule agrees with it to AGREE × the piece's largest |T|
+# (|T|² for ∫ T²) × its width: the 16-point rule is then exact to rounding
+PANEL, HALVINGS, AGREE = math.pi / 8, 7, 1e-14
+RULE, CHECK = np.polynomial.legendre.leggauss(16), np.polynomial.legendre.leggauss(8)
 
 
 # a quantity of z, z′, z″ (rows: angles): its value and first two derivatives at each angle
@@ -105,24 +108,58 @@ class Pieces:
         return [(x[w == i], owner[w == i]) for i in range(len(fs))]
 
     def integrals(self) -> tuple[list[np.ndarray], np.ndarray]:
-        """Each piece's panels' edges (each panel at most ``PANEL`` wide), and ∫ T dθ and
-        ∫ T² dθ over every panel (shape (2, panels), the pieces' in turn): Gauss–Legendre, in
-        one evaluation; once."""
+        """Each piece's panels' edges, and ∫ T dθ and ∫ T² dθ over every panel (shape
+        (2, panels), the pieces' in turn, each's in order): the adaptive quadrature above,
+        each round's panels in one evaluation; once."""
         if self._integrals is None:
+            scale = self.largest(self.z[0, :, 0])
+            spans = zip(self.lo, self.hi, strict=True)
+            first = [np.linspace(a, b, math.ceil((b - a) / PANEL) + 1) for a, b in spans]
+            owner = np.repeat(np.arange(len(first)), [e.size - 1 for e in first])
+            lo = np.concatenate([e[:-1] for e in first])
+            hi = np.concatenate([e[1:] for e in first])
+            kept: list[tuple[np.ndarray, ...]] = []  # owner, lo and sums of accepted panels
+            for halving in range(HALVINGS + 1):
+                sums, check = self.gauss(lo, hi, owner, 2, (RULE, CHECK))
+                size = np.array([scale[owner], scale[owner] ** 2]) * (hi - lo)
+                ok = np.all(np.abs(sums - check) <= AGREE * size, axis=0)
+                if halving == HALVINGS:
+                    ok[:] = True
+                kept.append((owner[ok], lo[ok], sums[:, ok]))
+                mid = 0.5 * (lo + hi)[~ok]
+                owner = np.repeat(owner[~ok], 2)
+                lo, hi = np.ravel([lo[~ok], mid], "F"), np.ravel([mid, hi[~ok]], "F")
+                if not owner.size:
+                    break
+            owner, lo, sums = (np.concatenate(c, axis=-1) for c in zip(*kept, strict=True))
+            order = np.lexsort((lo, owner))
+            owner, lo = owner[order], lo[order]
             edges = [
-                np.linspace(a, b, math.ceil((b - a) / PANEL) + 1)
-                for a, b in zip(self.lo, self.hi, strict=True)
+                np.append(lo[owner == i], b) if a < b else np.array([a])
+                for i, (a, b) in enumerate(zip(self.lo, self.hi, strict=True))
             ]
-            owner = np.repeat(np.arange(len(edges)), [e.size - 1 for e in edges])
-            lo = np.concatenate([e[:-1] for e in edges])
-            hi = np.concatenate([e[1:] for e in edges])
-            self._integrals = edges, self.gauss(lo, hi, owner, 2)
+            self._integrals = edges, sums[:, order]
         return self._integrals
 
-    def gauss(self, lo: np.ndarray, hi: np.ndarray, owner: np.ndarray, powers: int) -> np.ndarray:
-        """∫ T^k dθ over each [lo, hi] of the pieces ``owner`` (16-point Gauss–Legendre), for
-        k = 1 … powers: shape (powers, spans)."""
+    def gauss(
+        self,
+        lo: np.ndarray,
+        hi: np.ndarray,
+        owner: np.ndarray,
+        powers: int,
+        rules: tuple[tuple[np.ndarray, np.ndarray], ...] = (RULE,),
+    ) -> np.ndarray:
+        """∫ T^k dθ over each [lo, hi] of the pieces ``owner``, for k = 1 … powers, by each of
+        ``rules`` (Gauss–Legendre nodes and weights), in one evaluation: shape (rules, powers,
+        spans)."""
         mid, half = (lo + hi) / 2, (hi - lo) / 2
-        x = (mid[:, None] + half[:, None] * NODES[None, :]).ravel()
-        t = self(x, np.repeat(owner, NODES.size), 0)[0, :, 0].reshape(lo.size, NODES.size)
-        return np.array([(t**k @ WEIGHTS) * half for k in range(1, powers + 1)])
+        x = np.concatenate([(mid[:, None] + half[:, None] * n[None, :]).ravel() for n, _ in rules])
+        own = np.concatenate([np.repeat(owner, n.size) for n, _ in rules])
+        cuts = np.cumsum([lo.size * n.size for n, _ in rules])[:-1]
+        t = np.split(self(x, own, 0)[0, :, 0], cuts)
+        return np.array(
+            [
+                [(v.reshape(lo.size, w.size) ** k @ w) * half for k in range(1, powers + 1)]
+                for v, (_, w) in zip(t, rules, strict=True)
+            ]
+        )
