@@ -16,7 +16,7 @@ from .model import GRID, Polisher
 from .roots import TWO_PI, polish, rtsafe
 
 # the quadrature: 16-point Gauss–Legendre on panels at most PANEL wide, each halved (at most
-# HALVINGS times) until the 8-point rule agrees with it to AGREE × the piece's largest |T|
+# HALVINGS times) until the 8-point rule agrees with it to AGREE × the turn's largest |T|
 # (|T|² for ∫ T²) × its width: the 16-point rule is then exact to rounding
 PANEL, HALVINGS, AGREE = math.pi / 8, 7, 1e-14
 RULE, CHECK = np.polynomial.legendre.leggauss(16), np.polynomial.legendre.leggauss(8)
@@ -112,7 +112,7 @@ class Pieces:
         (2, panels), the pieces' in turn, each's in order): the adaptive quadrature above,
         each round's panels in one evaluation; once."""
         if self._integrals is None:
-            scale = self.largest(self.z[0, :, 0])
+            scale = self.largest(self.z[0, :, 0]).max()  # the turn's: its rounding's size
             spans = zip(self.lo, self.hi, strict=True)
             first = [np.linspace(a, b, math.ceil((b - a) / PANEL) + 1) for a, b in spans]
             owner = np.repeat(np.arange(len(first)), [e.size - 1 for e in first])
@@ -121,7 +121,7 @@ class Pieces:
             kept: list[tuple[np.ndarray, ...]] = []  # owner, lo and sums of accepted panels
             for halving in range(HALVINGS + 1):
                 sums, check = self.gauss(lo, hi, owner, 2, (RULE, CHECK))
-                size = np.array([scale[owner], scale[owner] ** 2]) * (hi - lo)
+                size = np.array([[scale], [scale**2]]) * (hi - lo)
                 ok = np.all(np.abs(sums - check) <= AGREE * size, axis=0)
                 if halving == HALVINGS:
                     ok[:] = True
