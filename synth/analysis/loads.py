@@ -261,13 +261,14 @@ def peak_terms(
         span = spans[pieces.pieces[owner[j]].span]
         if x[j] in (span.lo, span.hi):
             fractions[j] = _end_fractions(span, load)[0 if x[j] == span.lo else 1]
-    inside = [j for j, u in fractions.items() if u not in (0.0, 1.0)]
+    inside = {j: k for k, j in enumerate(j for j, u in fractions.items() if u not in (0.0, 1.0))}
     if inside:
-        s1, ds = f(x[inside], pv)[1][0], f.dp(x[inside], pv)[:, 0]
+        at = list(inside)
+        s1, ds = f(x[at], pv)[1][0], f.dp(x[at], pv)[:, 0]
     for j in ends:
         turn = (x[j] - st.start) % TWO_PI
         if j in inside:  # s(θ, p) = s0 + u (s1 − s0)
-            k, u = inside.index(j), fractions[j]
+            k, u = inside[j], fractions[j]
             dt = (ds0 + u * (ds1 - ds0) - ds[k]) / s1[k]
         elif j in fractions:  # a profile's point at a dead centre
             dt = dt_dead[int(fractions[j])]
