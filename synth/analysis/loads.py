@@ -219,14 +219,27 @@ def peak_terms(
     a segment's force depends on the stroke's dead centres' positions."""
     sys: Forces | Torques = forces(m, variant) if load.guide_friction else torques(m, variant)
     k, guide = len(m.parameters), sys.n - 1
-    dead = np.array([st.start, st.start + st.working])
-    kd = f.dp(dead, pv)  # (angle, [rows; θ-derivatives], parameter)
+    spans = _spans(f, pv, st, load, metres)
+    # the stroke's dead centres and the profile's points inside it (their fractions): s, its
+    # θ-derivatives and ∂s/∂p there, in one evaluation each
+    inner = {
+        a: u
+        for span in spans
+        for a, u in zip((span.lo, span.hi), _end_fractions(span, load), strict=True)
+        if 0 < u < 1
+    }
+    at = np.array([st.start, st.start + st.working, *inner])
+    kd, g = f.dp(at, pv), f(at, pv)  # kd: (angle, [rows; θ-derivatives], parameter)
     nr = kd.shape[1] // 2
     ds0, ds1 = kd[0, 0], kd[1, 0]
-    dt_dead = -kd[:, nr] / f(dead, pv)[2][0][:, None]  # s′(θ, p) = 0 there
+    dt_dead = -kd[:2, nr] / g[2][0][:2, None]  # s′(θ, p) = 0 there
+    # s(θ, p) = s0 + u (s1 − s0) at the profile's points: each one's dθ/dp
+    dt_inner = {
+        a: (ds0 + u * (ds1 - ds0) - kd[i, 0]) / g[1][0][i]
+        for i, (a, u) in enumerate(inner.items(), start=2)
+    }
     sign = math.copysign(1.0, st.s1 - st.s0)
     force_at = k + kinetics.LOAD.index("force")
-    spans = _spans(f, pv, st, load, metres)
     moving = np.zeros((len(spans), 2, k))  # d(force, slope)/dp: moving with the dead centres
     for i, span in enumerate(spans):
         if span.segment is not None:
@@ -253,25 +266,12 @@ def peak_terms(
         + dz[..., force_at + 1, None] * d_load[:, None, 1]
     )
     grad, d_guide = both[:, 0], both[:, 1]
-    # which ends are a profile's points (their fractions of the working stroke); s′ and ∂s/∂p
-    # at those inside the stroke, in one evaluation each
-    ends = range(found, x.size)
-    fractions = {}
-    for j in ends:
-        span = spans[pieces.pieces[owner[j]].span]
-        if x[j] in (span.lo, span.hi):
-            fractions[j] = _end_fractions(span, load)[0 if x[j] == span.lo else 1]
-    inside = {j: k for k, j in enumerate(j for j, u in fractions.items() if u not in (0.0, 1.0))}
-    if inside:
-        at = list(inside)
-        s1, ds = f(x[at], pv)[1][0], f.dp(x[at], pv)[:, 0]
-    for j in ends:
-        turn = (x[j] - st.start) % TWO_PI
-        if j in inside:  # s(θ, p) = s0 + u (s1 − s0)
-            k, u = inside[j], fractions[j]
-            dt = (ds0 + u * (ds1 - ds0) - ds[k]) / s1[k]
-        elif j in fractions:  # a profile's point at a dead centre
-            dt = dt_dead[int(fractions[j])]
+    for j in range(found, x.size):
+        end, span = x[j], spans[pieces.pieces[owner[j]].span]
+        turn = (end - st.start) % TWO_PI
+        if end in (span.lo, span.hi):  # a profile's point
+            u = _end_fractions(span, load)[0 if end == span.lo else 1]
+            dt = dt_dead[int(u)] if u in (0.0, 1.0) else dt_inner[end]
         elif min(turn, TWO_PI - turn, abs(turn - st.working)) < 1e-9:  # a dead centre
             dt = dt_dead[int(abs(turn - st.working) < 1e-9)]
         else:  # where the guide's force changes sign: N(θ, p) = 0
