@@ -34,7 +34,8 @@ class Aim:
     move alike, but links that weigh load the drive differently), and how many of the box's
     best-ranked points a search runs from (``drawn``: with everything free, on a four-bar's
     construction, and with parts fixed, whichever the coordinates; of each further set the
-    coordinates draw, ``further``)."""
+    coordinates draw, ``further``; of the designs their evolution finds, ``evolved``, none:
+    no evolution)."""
 
     evaluate: Callable[[dict[str, float]], Any]
     pick: Pick
@@ -47,9 +48,11 @@ class Aim:
 # torque's have more (the links' inertia against the cut: a crank-rocker's slot drive at time
 # ratio 1.3 took 8 to reach its optimum, 0.8% below; on the construction, whose runs are
 # shorter and stay within a sheet, 16; of the construction's second set, the rod's reach, 4
-# found every answer 16 did, the torque's medians 0.79 of the time)
-DRAWN_MOTION = {"free": 2, "fixed": 4, "construction": 2, "further": 2}
-DRAWN_TORQUE = {"free": 8, "fixed": 8, "construction": 16, "further": 4}
+# found every answer 16 did, the torque's medians 0.79 of the time); of the evolution's designs
+# on the construction (``chart.Chart.evolve``: the motion measures' ranks only, the torque's
+# cost 20 times as much a design), every one
+DRAWN_MOTION = {"free": 2, "fixed": 4, "construction": 2, "further": 2, "evolved": 4}
+DRAWN_TORQUE = {"free": 8, "fixed": 8, "construction": 16, "further": 4, "evolved": 0}
 
 
 # the motion terms an objective bounds (``Objective.terms``), from ``quality.MotionTerms`` with

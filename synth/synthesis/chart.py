@@ -20,8 +20,10 @@ the construction too (``Chart.draw``)."""
 
 from __future__ import annotations
 
+import itertools
 import math
 import threading
+from collections.abc import Callable
 from typing import Any
 
 import casadi as ca
@@ -30,15 +32,18 @@ import numpy as np
 from ..mechanisms import Mechanism
 from ..mechanisms.fourbar.construction import PARAMS, ROWS, circuit, crank, rows
 from ..mechanisms.geometry import triangle_angle
+from ..mechanisms.reduced import ONE_WAY
 from ..mechanisms.registry import Roles
 from ..numerics.native import Mapped
 from ..targets import beta
+from .solve import spread
 from .solve import starts as halton
 
 MATCH = 1e-9  # relative: how closely a start's coordinates give the start back
 FAR = 30.0  # the logs v and s stay within ±FAR (λ − 1 and the scale within e^±30)
 EDGE = 1e-9  # ψ within (EDGE, π − EDGE)
 DRAWN_V = (-7.0, 4.0)  # the range of v = log(λ − 1) that ``Chart.draw`` draws from
+GENERATIONS, POPULATION = 10, 10  # ``Chart.evolve``'s, on each sheet (per coordinate)
 _local = threading.local()
 
 
@@ -148,29 +153,92 @@ class Chart:
         the stroke where its toggles lie in one circuit. Of 256 such points 19–90 pass the
         screen on a crank-rocker at time ratio 1.6 and 0°, of the box's own 3–7. Where the
         rod's path's placement is a coordinate, a second set with the path within the rod's
-        reach of C's ends (C's height there + u l, u in (−1, 1), l the rod's length, fixed or
-        drawn): few of the box's placements are, and a short rod's basins lie in that sliver
-        (a crank-rocker's least peak torque at time ratio 2 and 0°, 11% below the slot
-        drive's)."""
-        lo, hi = np.array([(EDGE, math.pi - EDGE), DRAWN_V, *self.box[2:]]).T
-        logs = np.r_[[False] * (len(self.box) - len(self.own_at)), self.lo[self.own_at] > 0]
+        reach of C's ends (``_placed``): few of the box's placements are, and a short rod's
+        basins lie in that sliver (a crank-rocker's least peak torque at time ratio 2 and 0°,
+        11% below the slot drive's)."""
+        lo, hi, logs = self._drawn()
         sets = [self._at(halton(lo, hi, logs, n // 2))]
-        if "h" in self.names and ("l" in self.names or self.rod is not None):
+        if self._reaches():
             lo[-1], hi[-1], logs[-1] = -1.0, 1.0, False
             z = halton(lo, hi, logs, n // 2)
-            reach = self._at(z)
-            z = np.tile(z, (2, 1))  # as the designs' rows
-            rod = z[:, -2] if self.rod is None else self.rod
-            arm, h = self.free.index(self.arm), self.own_at[-1]
-            reach[:, h] = reach[:, arm] * np.cos(z[:, 0] / 2) + rod * z[:, -1]
-            sets.append(reach)
+            sets.append(self._placed(np.tile(z, (2, 1)), self._at(z)))  # z as the designs' rows
         return [self._smallest(x) for x in sets]
+
+    def evolve(self, measure: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> np.ndarray:
+        """On each sheet, the design that differential evolution finds least by ``measure``
+        (designs as rows, and how far each breaks the toggles' circuit, 0 where it does not
+        → values) over ``draw``'s coordinates; where the rod's reach applies, also on the
+        one way's edges (u = ±1, ``_placed``), where a crank-rocker's most uniform speed at a
+        0° bound may have its optimum (time ratio 1.3: a basin 1e-5 of the coordinates'
+        volume, which none of 4 096 drawn points reached, nor the evolution off the edge).
+        ``POPULATION`` points per coordinate for ``GENERATIONS`` generations, from seed 0."""
+        from scipy.optimize import differential_evolution  # ~0.4 s of an import of synth
+
+        lo, hi, logs = self._drawn()
+        reach = self._reaches()
+        if reach:
+            lo[-1], hi[-1], logs[-1] = -1.0, 1.0, False
+        found = []
+        for sigma, edge in itertools.product((1, -1), (False, True) if reach else (False,)):
+
+            def designs(
+                u: np.ndarray, sigma: int = sigma, edge: bool = edge
+            ) -> tuple[np.ndarray, np.ndarray]:
+                z = spread(u, lo, hi, logs)
+                if edge:
+                    z[:, -1] = np.where(z[:, -1] < 0, -1.0, 1.0)
+                x, margin = self._on(z, sigma)
+                return self._smallest(self._placed(z, x) if reach else x), margin
+
+            def value(u: np.ndarray, designs: Any = designs) -> np.ndarray:  # u by columns
+                x, margin = designs(u.T)
+                return measure(x, np.where(margin < 0, 0.0, 1.0 + margin))
+
+            best = differential_evolution(
+                value,
+                [(0.0, 1.0)] * len(lo),
+                popsize=POPULATION,
+                maxiter=GENERATIONS,
+                seed=0,
+                polish=False,
+                vectorized=True,
+                updating="deferred",
+            ).x
+            found.append(designs(best[None])[0])
+        return np.vstack(found)
+
+    def _drawn(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The box ``draw`` draws from, and where log-uniformly."""
+        lo, hi = np.array([(EDGE, math.pi - EDGE), DRAWN_V, *self.box[2:]]).T
+        logs = np.r_[[False] * (len(self.box) - len(self.own_at)), self.lo[self.own_at] > 0]
+        return lo, hi, logs
+
+    def _reaches(self) -> bool:
+        """Whether the rod's path's placement is a coordinate and the rod's length known."""
+        return "h" in self.names and ("l" in self.names or self.rod is not None)
+
+    def _placed(self, z: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """The designs x at the points z (rows alike) with the rod's path within its reach of
+        C's ends: at C's height there + u (c − ``ONE_WAY``) l, u the last coordinate (clipped
+        to ±1), c = cos(ψ/2), l the rod's length (fixed or drawn): the slider moves one way
+        over the swing exactly where |u| ≤ 1 (``rod.rule``)."""
+        rod = z[:, -2] if self.rod is None else self.rod
+        arm, h = self.free.index(self.arm), self.own_at[-1]
+        c, u = np.cos(z[:, 0] / 2), np.clip(z[:, -1], -1.0, 1.0)
+        x[:, h] = x[:, arm] * c + rod * u * (c - ONE_WAY)
+        return x
+
+    def _on(self, z: np.ndarray, sigma: int) -> tuple[np.ndarray, np.ndarray]:
+        """The designs at the points z on sheet σ (rows) and their circuits' margins (< 0:
+        the toggles in one circuit), in one call."""
+        nx, k = len(self.free), len(self.names)
+        out = self.fn(z, self.constants(sigma, 0.0))
+        return out[:nx].T, out[nx + nx * k]
 
     def _at(self, z: np.ndarray) -> np.ndarray:
         """The designs at the points z on each sheet (rows: every point on one sheet, then
         on the other), in one call a sheet (each its own, to the bit)."""
-        nx = len(self.free)
-        return np.vstack([self.fn(z, self.constants(sigma, 0.0))[:nx].T for sigma in (1, -1)])
+        return np.vstack([self._on(z, sigma)[0] for sigma in (1, -1)])
 
     def end(self, x: np.ndarray) -> np.ndarray:
         """The design x(z) at a point; where the scale is free and no coordinate, the smallest

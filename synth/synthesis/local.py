@@ -10,12 +10,13 @@ from ranked starts, in the variant's coordinates.
 - its starts are the exact solvers' designs for the request (best-transmitting and smallest)
   and ``SAMPLES`` points its coordinates draw (the box's, or the construction's, in one set
   or more) projected onto the equalities (with few such designs, ``SAMPLES`` more within
-  ``AROUND`` of the starts), ranked by their measure on a grid of crank angles (``screen``);
-  it runs from the ``STARTS`` best of the former and as many of each set of the latter as
-  ``Aim.drawn`` says (of a further set, fewer), at most ``MAX_ITER`` iterations each, but
-  not from a start ``FAR_ABOVE`` the best (the smallest design at a 0° bound, near locking,
-  measures 10–5 000 times the best start: its runs went to the edge of the coordinates and
-  ended infeasible).
+  ``AROUND`` of the starts) and the designs the coordinates' evolution finds (a four-bar's
+  construction, ``chart.Chart.evolve``), ranked by their measure on a grid of crank angles
+  (``screen``); it runs from the ``STARTS`` best of the former and as many of each set of
+  the latter as ``Aim.drawn`` says (of a further set, fewer), at most ``MAX_ITER``
+  iterations each, but not from a start ``FAR_ABOVE`` the best (the smallest design at a
+  0° bound, near locking, measures 10–5 000 times the best start: its runs went to the edge
+  of the coordinates and ended infeasible).
 - its coordinates (``Coordinates``): a four-bar with its arm and all its links but one free
   moves on its dead-centre construction (``chart``), where every point meets the time ratio
   and the stroke; any other variant in its free parameters, the equalities constraints.
@@ -72,7 +73,9 @@ class Coordinates(Protocol):
     request's bounds where they are no bounds of z), in one evaluation. ``equalities``:
     whether x(z) may leave the formulation's equalities (then constrained); ``draw``: sets
     of n points (parameters) spread over the space, which the search projects onto the
-    formulation's constraints and ranks as starts, each set on its own; ``end``: the
+    formulation's constraints and ranks as starts, each set on its own; ``evolve``: the
+    designs an evolution over the space finds least by a measure of many designs at once
+    (none: the variant has none); ``end``: the
     parameters a run's point stands for, from its x(z) (a free scale at its least).
     ``scaled``: whether the scale is one of the coordinates (each start keeps its own)."""
 
@@ -84,6 +87,7 @@ class Coordinates(Protocol):
     def point(self, z: np.ndarray, c: np.ndarray) -> Point: ...
     def bounds(self) -> list[tuple[float, float]]: ...
     def draw(self, n: int) -> list[np.ndarray]: ...
+    def evolve(self, measure: Any) -> np.ndarray: ...
     def end(self, x: np.ndarray) -> np.ndarray: ...
 
 
@@ -109,6 +113,10 @@ class Parameters:
     def draw(self, n: int) -> list[np.ndarray]:
         """Halton points of the box (log-uniform where its bounds are positive)."""
         return [halton(self.lo, self.hi, self.lo > 0, n)]
+
+    def evolve(self, measure: Any) -> np.ndarray:
+        """None: the box's points find these variants' basins."""
+        return np.empty((0, len(self.lo)))
 
     def end(self, x: np.ndarray) -> np.ndarray:
         return x
@@ -399,7 +407,8 @@ def _ranked(
     """The runs' starts, measured, with their measures: the best ranked of the exact designs
     (``STARTS``), of the coordinates' projected points (``drawn_starts``) and of points about
     the starts where those hold too few designs, then of each further set the coordinates
-    draw (``Aim.drawn``'s "further"). Empty where the deadline passed."""
+    draw (``Aim.drawn``'s "further"), then of the designs their evolution finds ("evolved").
+    Empty where the deadline passed."""
     n = len(free)
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
     drawn, *more = (screen.project(form, key, d, pv, lo, hi) for d in coords.draw(SAMPLES))
@@ -410,14 +419,24 @@ def _ranked(
         near_lo = np.maximum(lo, np.where(lo > 0, own.min(axis=0) / AROUND, lo))
         near_hi = np.minimum(hi, np.where(lo > 0, own.max(axis=0) * AROUND, hi))
         near = screen.project(form, key, halton(near_lo, near_hi, lo > 0, SAMPLES), pv, lo, hi)
-    sets = [own, drawn, near, *more]
+
+    def filled(points: np.ndarray) -> np.ndarray:
+        return np.array([list(m.filled(design(x)).values()) for x in points])
+
+    def valued(x: np.ndarray, circuit: np.ndarray) -> np.ndarray:
+        """The evolution's measure: the rank, or FAIL + how far x breaks a row or the box."""
+        broken: np.ndarray = circuit + screen.breach(form, key, x, pv, lo, hi)
+        return broken + np.minimum(np.where(broken > 0, np.inf, aim.rank(filled(x))), FAIL)
+
+    evolve = aim.drawn["evolved"] > 0
+    evolved = screen.project(form, key, coords.evolve(valued), pv, lo, hi) if evolve else near[:0]
+    sets = [own, drawn, near, *more, evolved]
     points = np.vstack(sets)
-    pvs = np.array([list(m.filled(design(x)).values()) for x in points])
-    value = aim.rank(pvs) if len(points) else np.empty(0)
+    value = aim.rank(filled(points)) if len(points) else np.empty(0)
     measured = []  # the best ranked of each source that the analysis takes
     ends = np.cumsum([0, *map(len, sets)])
     further = [aim.drawn["further"]] * len(more)
-    for j, most in enumerate([STARTS, drawn_starts, drawn_starts, *further]):
+    for j, most in enumerate([STARTS, drawn_starts, drawn_starts, *further, aim.drawn["evolved"]]):
         source = np.arange(ends[j], ends[j + 1])
         taken = 0
         for k in source[np.argsort(value[source], kind="stable")]:

@@ -3,7 +3,8 @@ ranked in a few batched calls.
 
 - ``project``: points of the box onto the time-ratio and stroke equalities, all at once
   (minimum-norm Newton steps through the formulation's compiled constraints, mapped over the
-  points), kept where every other constraint holds too;
+  points), kept where every other constraint holds too; ``breach``: how far points break
+  those constraints;
 - ``rank``: the motion measure of each, from the slider's s, s′ and s″ on a grid of crank
   angles (one compiled call for every design): a ranking of starts to ~1e-3, never an answer
   (the answers' measures are the analysis's, by root finding); ``rank_torque``: the peak
@@ -31,6 +32,7 @@ from .formulation import Formulation
 STEPS = 12  # Newton steps a projection takes
 CLOSE = 1e-12  # the equalities' residual a projected point keeps
 SETTLED = 1e-15  # a residual, or a step's change of it, that ends the Newton steps
+MET = 1e-9  # how far beyond its limits an inequality may be and count as met
 INSIDE = 1e-12  # how far inside its limits a local optimum's inequalities are held (relative)
 ANGLES = 96  # crank angles a ranking samples
 _local = threading.local()
@@ -115,9 +117,20 @@ def project(
     x, g = x[finite], g[finite]
     ok = np.all(np.abs(g[:, eq] - lbg[eq]) <= CLOSE, axis=1)
     if every:
-        ok &= np.all(g[:, ~eq] >= lbg[~eq] - 1e-9, axis=1)
-        ok &= np.all(g[:, ~eq] <= ubg[~eq] + 1e-9, axis=1)
+        ok &= np.all(g[:, ~eq] >= lbg[~eq] - MET, axis=1)
+        ok &= np.all(g[:, ~eq] <= ubg[~eq] + MET, axis=1)
     return cast(np.ndarray, x[ok & np.all(np.isfinite(x), axis=1)])
+
+
+def breach(
+    form: Formulation, key: object, x: np.ndarray, pv: np.ndarray, lo: np.ndarray, hi: np.ndarray
+) -> np.ndarray:
+    """How far each point x (rows) breaks the formulation's rows and the box, summed: 0
+    where it meets them (to ``MET``), inf where a row is NaN."""
+    g = constraints(form, key, x, pv)[0]
+    rows = np.maximum(form.lbg - MET - g, 0) + np.maximum(g - form.ubg - MET, 0)
+    box = np.maximum(lo - MET - x, 0) + np.maximum(x - hi - MET, 0)
+    return cast(np.ndarray, np.nan_to_num(np.sum(rows, axis=1) + np.sum(box, axis=1), nan=np.inf))
 
 
 def _held(

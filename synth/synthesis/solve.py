@@ -107,7 +107,11 @@ def starts(lo: np.ndarray, hi: np.ndarray, log: np.ndarray, n: int) -> np.ndarra
     """n deterministic points in the box: Halton, log-uniform where ``log`` (positive bounds)."""
     if lo.size == 0:
         return np.zeros((min(n, 1), 0))
-    u = halton(lo.size, n + 1)[1:]  # skip the corner point 0
+    return spread(halton(lo.size, n + 1)[1:], lo, hi, log)  # the corner point 0 skipped
+
+
+def spread(u: np.ndarray, lo: np.ndarray, hi: np.ndarray, log: np.ndarray) -> np.ndarray:
+    """The points u of the unit cube (rows) in the box, log-uniform where ``log``."""
     llo, lhi = np.log(np.where(log, lo, 1.0)), np.log(np.where(log, hi, 1.0))
     return cast(np.ndarray, np.where(log, np.exp(llo + u * (lhi - llo)), lo + u * (hi - lo)))
 
