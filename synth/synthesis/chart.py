@@ -219,13 +219,13 @@ class Chart:
 
     def _placed(self, z: np.ndarray, x: np.ndarray) -> np.ndarray:
         """The designs x at the points z (rows alike) with the rod's path within its reach of
-        C's ends: at C's height there + u (c − ``ONE_WAY``) l, u the last coordinate (clipped
-        to ±1), c = cos(ψ/2), l the rod's length (fixed or drawn): the slider moves one way
-        over the swing exactly where |u| ≤ 1 (``rod.rule``)."""
+        C's ends: at C's height there + u (c − ``ONE_WAY``) l, u the last coordinate (within
+        ±1), c = cos(ψ/2), l the rod's length (fixed or drawn): the slider moves one way over
+        the swing exactly where |u| ≤ 1 (``rod.rule``)."""
         rod = z[:, -2] if self.rod is None else self.rod
         arm, h = self.free.index(self.arm), self.own_at[-1]
-        c, u = np.cos(z[:, 0] / 2), np.clip(z[:, -1], -1.0, 1.0)
-        x[:, h] = x[:, arm] * c + rod * u * (c - ONE_WAY)
+        c = np.cos(z[:, 0] / 2)
+        x[:, h] = x[:, arm] * c + rod * z[:, -1] * (c - ONE_WAY)
         return x
 
     def _on(self, z: np.ndarray, sigma: int) -> tuple[np.ndarray, np.ndarray]:

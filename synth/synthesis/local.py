@@ -75,8 +75,8 @@ class Coordinates(Protocol):
     of n points (parameters) spread over the space, which the search projects onto the
     formulation's constraints and ranks as starts, each set on its own; ``evolve``: the
     designs an evolution over the space finds least by a measure of many designs at once
-    (none: the variant has none); ``end``: the
-    parameters a run's point stands for, from its x(z) (a free scale at its least).
+    (perhaps none); ``end``: the parameters a run's point stands for, from its x(z) (a free
+    scale at its least).
     ``scaled``: whether the scale is one of the coordinates (each start keeps its own)."""
 
     equalities: bool
@@ -115,7 +115,7 @@ class Parameters:
         return [halton(self.lo, self.hi, self.lo > 0, n)]
 
     def evolve(self, measure: Any) -> np.ndarray:
-        """None: the box's points find these variants' basins."""
+        """None: only a four-bar's construction evolves (its basins are narrow)."""
         return np.empty((0, len(self.lo)))
 
     def end(self, x: np.ndarray) -> np.ndarray:
