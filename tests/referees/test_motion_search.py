@@ -18,7 +18,7 @@ import pytest
 import synth
 from synth.analysis.terms import motion_terms
 
-from ..support import motion_referee
+from ..support import bruteforce, motion_referee
 from ..support.assertions import assert_meets
 from ..support.designs import random_designs
 from ..support.motion_bruteforce import brute_motion
@@ -193,6 +193,10 @@ def test_the_crank_rockers_most_uniform_speed_reaches_the_referees(tr, referee):
     c = r.candidates[0]
     assert_meets(c, tr, 1.0, 0.0)
     assert c.objective_value == pytest.approx(brute(c, UNIFORM), rel=1e-9)
+    b = bruteforce.simulate(mtype, referee)  # the referee's design meets the targets
+    assert b["time_ratio"] == pytest.approx(tr, rel=1e-9)
+    assert b["stroke"] == pytest.approx(1.0, rel=1e-9)
+    assert b["min_transmission_deg"] >= ACROSS_DEG - 1e-7
     theirs = brute_motion(mtype, referee)[1]
     beat = (c.objective_value - theirs) / theirs
     assert beat <= BEATEN, f"ours {c.params} is beaten by the referee's {theirs}"
