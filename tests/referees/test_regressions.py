@@ -5,6 +5,7 @@ never synth's code.
 """
 
 import math
+import warnings
 
 import pytest
 from fastapi.testclient import TestClient
@@ -13,6 +14,7 @@ import synth
 from api.main import app
 
 from ..support import exact
+from ..support.assertions import assert_meets
 
 
 def assert_exact(mtype, p, rel=1e-12):
@@ -273,3 +275,24 @@ def test_drag_link_with_its_crank_fixed_takes_the_better_end_of_its_segment():
     assert best.size == pytest.approx(sum(design.values()), rel=1e-9)
     for k, v in design.items():  # the issue's digits, a few 1e-9 off the exact optimum
         assert best.params[k] == pytest.approx(v, rel=1e-8), k
+
+
+def test_a_crank_rocker_with_its_rod_and_path_fixed_warns_of_nothing():
+    """Its best-transmitting design: where the limited four-bar's search looks for the
+    coupler's and the rod's transmission crossing, both were out of reach at a row (inf −
+    inf: NaN, rightly no crossing), and numpy warned of an invalid subtraction (the rod
+    and path fixed at the referee's most uniform design at time ratio 1.3 and 0°)."""
+    fixed = {"connecting_rod": 0.12281872723421797, "slider_height": 1.1654569550776321}
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        r = synth.synthesize(
+            1.6,
+            1.0,
+            0.0,
+            [{"type": "crank_rocker_slider", "fixed": fixed}],
+            objective="max_transmission_angle",
+        )
+    assert [str(w.message) for w in seen if issubclass(w.category, RuntimeWarning)] == []
+    (c,) = r.candidates
+    assert_meets(c, 1.6, 1.0, 0.0)
+    assert all(c.params[k] == v for k, v in fixed.items())

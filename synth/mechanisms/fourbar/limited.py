@@ -80,8 +80,9 @@ def limited(fb: Search, stratified: Stratified, coupler: Design, exact: bool) ->
             options.append((float(best_rod(psi_r)), psi_r, None))
         # where the coupler and the rod cross, on either side
         for c, d in ((a, rows[i]), (rows[i], b)):
-            dc = f_rows[_row(rows, c)] - r_rows[_row(rows, c)]
-            dd = f_rows[_row(rows, d)] - r_rows[_row(rows, d)]
+            with np.errstate(invalid="ignore"):  # both infinite: NaN, no crossing
+                dc = f_rows[_row(rows, c)] - r_rows[_row(rows, c)]
+                dd = f_rows[_row(rows, d)] - r_rows[_row(rows, d)]
             if np.isfinite(dc) and np.isfinite(dd) and dc * dd < 0:
                 crossed = _cross(line, best_rod, c, d, dc, dd)
                 if crossed is None:
