@@ -121,9 +121,14 @@ class Chart:
 
     def _split(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any, Any]:
         """x(z), ∂x/∂z, the circuit's margin and its gradient."""
-        n, k = len(self.free), len(z)
-        out = self.fn(z[None, :], c)[:, 0]
-        return out[:n], out[n : n + n * k].reshape(k, n).T, out[n + n * k], out[n + n * k + 1 :]
+        x, dx, margin, dm = self._parts(self.fn(z[None, :], c)[:, 0])
+        return x, dx.reshape(len(z), len(x)).T, margin, dm
+
+    def _parts(self, out: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any, Any]:
+        """The chart function's rows (a column a point, ``function``): x, ∂x/∂z by columns,
+        the circuit's margin and its gradient."""
+        n, k = len(self.free), len(self.names)
+        return out[:n], out[n : n + n * k], out[n + n * k], out[n + n * k + 1 :]
 
     def at(self, z: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """x(z) and ∂x/∂z."""
@@ -156,11 +161,9 @@ class Chart:
         reach of C's ends (``_placed``): few of the box's placements are, and a short rod's
         basins lie in that sliver (a crank-rocker's least peak torque at time ratio 2 and 0°,
         11% below the slot drive's)."""
-        lo, hi, logs = self._drawn()
-        sets = [self._at(halton(lo, hi, logs, n // 2))]
+        sets = [self._at(halton(*self._drawn(False), n // 2))]
         if self._reaches():
-            lo[-1], hi[-1], logs[-1] = -1.0, 1.0, False
-            z = halton(lo, hi, logs, n // 2)
+            z = halton(*self._drawn(True), n // 2)
             sets.append(self._placed(np.tile(z, (2, 1)), self._at(z)))  # z as the designs' rows
         return [self._smallest(x) for x in sets]
 
@@ -174,10 +177,8 @@ class Chart:
         ``POPULATION`` points per coordinate for ``GENERATIONS`` generations, from seed 0."""
         from scipy.optimize import differential_evolution  # ~0.4 s of an import of synth
 
-        lo, hi, logs = self._drawn()
         reach = self._reaches()
-        if reach:
-            lo[-1], hi[-1], logs[-1] = -1.0, 1.0, False
+        lo, hi, logs = self._drawn(reach)
         found = []
         for sigma, edge in itertools.product((1, -1), (False, True) if reach else (False,)):
 
@@ -207,10 +208,13 @@ class Chart:
             found.append(designs(best[None])[0])
         return np.vstack(found)
 
-    def _drawn(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The box ``draw`` draws from, and where log-uniformly."""
+    def _drawn(self, reach: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The box ``draw`` draws from, and where log-uniformly; with ``reach``, the path's
+        placement as ``_placed``'s u, within ±1."""
         lo, hi = np.array([(EDGE, math.pi - EDGE), DRAWN_V, *self.box[2:]]).T
         logs = np.r_[[False] * (len(self.box) - len(self.own_at)), self.lo[self.own_at] > 0]
+        if reach:
+            lo[-1], hi[-1], logs[-1] = -1.0, 1.0, False
         return lo, hi, logs
 
     def _reaches(self) -> bool:
@@ -231,9 +235,8 @@ class Chart:
     def _on(self, z: np.ndarray, sigma: int) -> tuple[np.ndarray, np.ndarray]:
         """The designs at the points z on sheet σ (rows) and their circuits' margins (< 0:
         the toggles in one circuit), in one call."""
-        nx, k = len(self.free), len(self.names)
-        out = self.fn(z, self.constants(sigma, 0.0))
-        return out[:nx].T, out[nx + nx * k]
+        x, _, margin, _ = self._parts(self.fn(z, self.constants(sigma, 0.0)))
+        return x.T, margin
 
     def _at(self, z: np.ndarray) -> np.ndarray:
         """The designs at the points z on each sheet (rows: every point on one sheet, then

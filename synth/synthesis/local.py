@@ -74,9 +74,8 @@ class Coordinates(Protocol):
     whether x(z) may leave the formulation's equalities (then constrained); ``draw``: sets
     of n points (parameters) spread over the space, which the search projects onto the
     formulation's constraints and ranks as starts, each set on its own; ``evolve``: the
-    designs an evolution over the space finds least by a measure of many designs at once
-    (perhaps none); ``end``: the parameters a run's point stands for, from its x(z) (a free
-    scale at its least).
+    designs an evolution finds least by a measure of many designs (perhaps none); ``end``:
+    the parameters a run's point stands for, from its x(z) (a free scale at its least).
     ``scaled``: whether the scale is one of the coordinates (each start keeps its own)."""
 
     equalities: bool
@@ -407,7 +406,7 @@ def _ranked(
     """The runs' starts, measured, with their measures: the best ranked of the exact designs
     (``STARTS``), of the coordinates' projected points (``drawn_starts``) and of points about
     the starts where those hold too few designs, then of each further set the coordinates
-    draw (``Aim.drawn``'s "further"), then of the designs their evolution finds ("evolved").
+    draw and of the designs their evolution finds (``Aim.drawn``'s "further", "evolved").
     Empty where the deadline passed."""
     n = len(free)
     own = np.array([np.clip([s[k] for k in free], lo, hi) for s in starts]).reshape(-1, n)
@@ -425,12 +424,13 @@ def _ranked(
 
     def valued(x: np.ndarray, circuit: np.ndarray) -> np.ndarray:
         """The evolution's measure: the rank, or FAIL + how far x breaks a row or the box."""
-        broken: np.ndarray = circuit + screen.breach(form, key, x, pv, lo, hi)
-        return broken + np.minimum(np.where(broken > 0, np.inf, aim.rank(filled(x))), FAIL)
+        out: np.ndarray = FAIL + (broken := circuit + screen.breach(form, key, x, pv, lo, hi))
+        if (met := broken == 0).any():  # only these are ranked
+            out[met] = np.minimum(aim.rank(filled(x[met])), FAIL)
+        return out
 
-    evolve = aim.drawn["evolved"] > 0
-    evolved = screen.project(form, key, coords.evolve(valued), pv, lo, hi) if evolve else near[:0]
-    sets = [own, drawn, near, *more, evolved]
+    evolved = coords.evolve(valued) if aim.drawn["evolved"] else near[:0]
+    sets = [own, drawn, near, *more, screen.project(form, key, evolved, pv, lo, hi)]
     points = np.vstack(sets)
     value = aim.rank(filled(points)) if len(points) else np.empty(0)
     measured = []  # the best ranked of each source that the analysis takes
