@@ -19,6 +19,11 @@ from .model import GRID, Model, Polisher
 
 TWO_PI = 2 * math.pi
 EPS4 = 4 * sys.float_info.epsilon
+# a Newton step this short (relative to the angle, at least 1 rad) where the function is ~0
+# ends the iteration: the point it reaches is as close as the function's rounding tells (from
+# a simple root's quadratic convergence, ~1e-24 away); bracketing on to a few ulps only picks
+# a point within that noise (near a flat root, 1e-14 to 1e-12 wide: dozens of steps)
+STEP = 1e-12
 BATCH = 32  # designs whose grids go through one batched evaluation
 
 Points = tuple[np.ndarray, np.ndarray, np.ndarray]  # (row, θ, value) of each stationary point
@@ -194,10 +199,11 @@ def _compiled(
         x0 = lo + (hi - lo) * f_lo / (f_lo - f_hi)
     x0 = np.where(np.isfinite(x0), x0, 0.5 * (lo + hi))
     x, step, fx, width = polisher(x0, lo, hi, np.where(f_lo < 0, 1.0, -1.0), rows, pv)
-    tol = EPS4 * np.maximum(1.0, np.abs(x))
-    # finished like ``rtsafe``: on a root, a closed bracket, or a Newton step down to
-    # rounding where the function is ~0 too (at a kink it jumps across 0)
-    done = (fx == 0) | (width <= tol) | ((np.abs(step) <= tol) & (np.abs(fx) <= 1e-12 * scale))
+    size = np.maximum(1.0, np.abs(x))
+    # finished like ``rtsafe``: on a root, a closed bracket, or a step within ``STEP`` where
+    # the function is ~0 too (at a kink it jumps across 0)
+    small = np.abs(fx) <= 1e-12 * scale
+    done = (fx == 0) | (width <= EPS4 * size) | ((np.abs(step) <= STEP * size) & small)
     return x, done
 
 
@@ -238,11 +244,11 @@ def rtsafe(
             dx = step if newton else xi - 0.5 * (a + b)
             if not newton:
                 dx_old[i] = dx
-            tol = EPS4 * max(1.0, xi)
-            # a tiny Newton step is convergence only where the function is ~0 too: at a kink
+            size = max(1.0, abs(xi))
+            # a short Newton step is convergence only where the function is ~0 too: at a kink
             # (a change point, a rod at its reach) it jumps across 0, and bisection must finish
             small = abs(fx) <= tiny[i]
-            done &= fx == 0 or b - a <= tol or (abs(dx) <= tol and newton and small)
+            done &= fx == 0 or b - a <= EPS4 * size or (abs(dx) <= STEP * size and newton and small)
             if fx != 0:
                 x[i] = xi - dx
         if done:

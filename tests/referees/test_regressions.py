@@ -7,11 +7,15 @@ never synth's code.
 import math
 import warnings
 
+import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
 import synth
 from api.main import app
+from synth.analysis import roots
+from synth.analysis.model import model
+from synth.analysis.roots import rtsafe
 
 from ..support import exact
 from ..support.assertions import assert_meets
@@ -296,3 +300,35 @@ def test_a_crank_rocker_with_its_rod_and_path_fixed_warns_of_nothing():
     (c,) = r.candidates
     assert_meets(c, 1.6, 1.0, 0.0)
     assert all(c.params[k] == v for k, v in fixed.items())
+
+
+def test_a_crank_rockers_flat_roots_end_at_their_rounding(monkeypatch):
+    """A design a crank-rocker's search met on its way (1.6, 0°, most uniform speed): one of
+    its kinematic stationary points and three of its speed's and acceleration's peaks lie
+    where their rows are flat, and their Newton steps bounced at 1e-14 to 1e-12 rad, the
+    rows' rounding, never down to the 4 ulps the polish asked; each went on to Python's
+    bracketed iteration from the start (10 to 100 evaluations). Now a short Newton step
+    where the row is ~0 ends them: no root is left to that iteration, and each still has
+    its row's sign change within 1e-12 rad."""
+    p = {
+        "ground": 33.52078557916508,
+        "crank": 30.0,
+        "coupler": 30.2170546103525,
+        "rocker": 33.438099370206835,
+        "rocker_arm": 167.0380485025099,
+        "connecting_rod": 65.04999093999962,
+        "slider_height": 102.05310755345026,
+    }
+    m = synth.mechanisms.get("crank_rocker_slider")
+    full = m.complete(p)
+    pv = np.array([full[n] for n in m.names])
+    finished_later = []
+    monkeypatch.setattr(roots, "rtsafe", lambda *a: finished_later.append(a) or rtsafe(*a))
+    for kind, count in (("kinematics", 8), ("motion", 10)):  # dead centres; speed, accel peaks
+        f = model(m, m.variant(full), kind)
+        rows, theta, _ = roots.stationary_points(f, pv)
+        assert len(theta) == count and finished_later == []
+        for r, x in zip(rows, theta, strict=True):
+            step = 1e-12 * max(1.0, abs(x))
+            g1 = f(np.array([x - step, x + step]), pv)[1][r]
+            assert g1[0] * g1[1] <= 0, (kind, r, x)
