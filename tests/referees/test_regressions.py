@@ -16,6 +16,9 @@ from api.main import app
 from synth.analysis import roots
 from synth.analysis.model import model
 from synth.analysis.roots import rtsafe
+from synth.synthesis.formulation import relevant
+from synth.synthesis.search import Spec, Targets, build_problem, variants
+from synth.targets import MAX_TRANSMISSION
 
 from ..support import exact
 from ..support.assertions import assert_meets
@@ -300,6 +303,31 @@ def test_a_crank_rocker_with_its_rod_and_path_fixed_warns_of_nothing():
     (c,) = r.candidates
     assert_meets(c, 1.6, 1.0, 0.0)
     assert all(c.params[k] == v for k, v in fixed.items())
+
+
+def test_a_crank_rocker_whose_rod_reaches_nowhere_has_no_design_exactly():
+    """A connecting rod bounded to 1e-9 strokes cannot follow the arm's tip, which rises and
+    falls along its arc while the slider keeps to its line: no design. The rod-limited
+    search ran the coupler's whole search first, then weighed rod placements 10⁷ times out
+    of reach, and answered one of them, not exact: the request went on to the diagnosis,
+    12.7 s to refuse on a slow machine (the default budget ran out first; 60 ms warm now).
+    The rod is now asked first: no design, exactly, and the refusal says why."""
+    m = synth.mechanisms.get("crank_rocker_slider")
+    spec = Spec(m.type, {}, {"connecting_rod": (1e-9, 1e-9)})
+    targets = Targets(1.5, 1.0, 0.0, MAX_TRANSMISSION, math.inf)
+    for parts in variants(m, spec):
+        problem = build_problem(m, parts, relevant(m, parts), {}, spec, targets)
+        answer = m.reduced(problem)
+        assert answer.designs == [] and answer.exact
+    r = synth.synthesize(
+        1.5,
+        1.0,
+        0.0,
+        [{"type": "crank_rocker_slider", "bounds": {"connecting_rod": [1e-9, 1e-9]}}],
+        time_budget_ms=60_000,
+    )
+    assert r.complete and r.candidates == ()
+    assert [i.code for i in r.infeasible] == ["NO_VALID_DESIGN"]
 
 
 def test_a_crank_rockers_flat_roots_end_at_their_rounding(monkeypatch):

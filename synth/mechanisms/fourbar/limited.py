@@ -16,7 +16,8 @@ min over ψ of T(ψ) = max(F(ψ), R(ψ)), at one of
 - an end of the swing's range.
 
 F on the grid's rows (its least over each row's feasible points) brackets the last three;
-each is then solved with F exact.
+each is then solved with F exact. Where R > 1 on every row and at its least between (the rod
+reaches no placement at any swing) there is no design, and the coupler is not searched.
 """
 
 from __future__ import annotations
@@ -58,6 +59,14 @@ def limited(fb: Search, stratified: Stratified, coupler: Design, exact: bool) ->
         found, ok = stratified("f", psi=psi)
         return (found[0].evaluation.f, found[0], ok) if found else (math.inf, None, ok)
 
+    rows = swings(lo, hi, fb.p.beta) if lo < hi else np.array([lo])
+    r_rows = best_rod(rows)
+    every = np.ones((len(rows), 1), dtype=bool)
+    if np.all(r_rows > 1) and all(  # the rod reaches at no row, nor between: no design
+        best_rod(_golden(best_rod, *_bracket(rows, i))) > 1
+        for i, _ in minima(r_rows[:, None], every)
+    ):
+        return Reduced([], exact=exact)
     found, sure = stratified("f")
     sure = sure and exact
     options: list[tuple[float, float, Design | None]] = []  # (T, ψ, design or None: R's)
@@ -66,12 +75,10 @@ def limited(fb: Search, stratified: Stratified, coupler: Design, exact: bool) ->
         if best_rod(e.at[0]) <= e.f:
             options.append((float(e.f), float(e.at[0]), de))
             break
-    rows = swings(lo, hi, fb.p.beta) if lo < hi else np.array([lo])
-    r_rows = best_rod(rows)
     f_rows = _coupler_rows(fb, rows)
     t_rows = np.maximum(f_rows, r_rows)
-    for i, _ in minima(t_rows[:, None], np.ones((len(t_rows), 1), dtype=bool)):
-        a, b = rows[max(i - 1, 0)], rows[min(i + 1, len(rows) - 1)]
+    for i, _ in minima(t_rows[:, None], every):
+        a, b = _bracket(rows, i)
         # the rod's own best swing in the bracket, if the coupler keeps up there
         psi_r = _golden(best_rod, a, b)
         f_r, at, ok = line(psi_r)
@@ -118,6 +125,11 @@ def _coupler_rows(fb: Search, rows: np.ndarray) -> np.ndarray:
         ok = st.feasible_grid(e)
         out = np.minimum(out, np.min(np.where(ok, e.f, np.inf), axis=1))
     return out
+
+
+def _bracket(rows: np.ndarray, i: int) -> tuple[float, float]:
+    """The rows on either side of row i (its own at an end)."""
+    return float(rows[max(i - 1, 0)]), float(rows[min(i + 1, len(rows) - 1)])
 
 
 def _row(rows: np.ndarray, psi: float) -> int:
