@@ -217,8 +217,9 @@ def rtsafe(
 ) -> np.ndarray:
     """The roots of fd (x -> (value, derivative), vectorised) in the brackets [lo, hi], where
     it changes sign from f_lo to f_hi: Newton from the secant point while it stays in the
-    bracket and at least halves the step before last, else bisection (rtsafe), to machine
-    precision; ``scale`` is the function's size, to tell a root from a kink."""
+    bracket and is at most half the last bisection's step (the bracket's width before any),
+    else bisection (rtsafe), to machine precision; ``scale`` is the function's size, to tell a
+    root from a kink."""
     # start from the secant (regula falsi) point: already close on a fine grid
     with np.errstate(divide="ignore", invalid="ignore"):
         x = lo + (hi - lo) * f_lo / (f_lo - f_hi)
