@@ -10,7 +10,7 @@ import functools
 import math
 import sys
 from collections.abc import Callable
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
@@ -200,11 +200,15 @@ def _compiled(
     x0 = np.where(np.isfinite(x0), x0, 0.5 * (lo + hi))
     x, step, fx, width = polisher(x0, lo, hi, np.where(f_lo < 0, 1.0, -1.0), rows, pv)
     size = np.maximum(1.0, np.abs(x))
-    # finished like ``rtsafe``: on a root, a closed bracket, or a step within ``STEP`` where
-    # the function is ~0 too (at a kink it jumps across 0)
-    small = np.abs(fx) <= 1e-12 * scale
-    done = (fx == 0) | (width <= EPS4 * size) | ((np.abs(step) <= STEP * size) & small)
-    return x, done
+    return x, _finished(size, fx, width, step, np.abs(fx) <= 1e-12 * scale)
+
+
+def _finished(size: Any, fx: Any, width: Any, step: Any, small: Any) -> Any:
+    """Whether a root's iteration (floats, or arrays of many) is done where the angle's
+    size is ``size`` (|x|, at least 1): on a root, a bracket closed to ``EPS4``, or a step
+    within ``STEP`` where the function is ~0 too (``small``: at a kink, a change point or a
+    rod at its reach, it jumps across 0, and bisection must finish)."""
+    return (fx == 0) | (width <= EPS4 * size) | ((abs(step) <= STEP * size) & small)
 
 
 def rtsafe(
@@ -246,10 +250,7 @@ def rtsafe(
             if not newton:
                 dx_old[i] = dx
             size = max(1.0, abs(xi))
-            # a short Newton step is convergence only where the function is ~0 too: at a kink
-            # (a change point, a rod at its reach) it jumps across 0, and bisection must finish
-            small = abs(fx) <= tiny[i]
-            done &= fx == 0 or b - a <= EPS4 * size or (abs(dx) <= STEP * size and newton and small)
+            done &= _finished(size, fx, b - a, dx, newton and abs(fx) <= tiny[i])
             if fx != 0:
                 x[i] = xi - dx
         if done:
