@@ -319,6 +319,10 @@ def _function(r: Roles, free: tuple[str, ...], names: tuple[str, ...]) -> ca.Fun
         if name in names and part is not None:
             value[part] = z[names.index(name)]
     x = ca.vertcat(*(value[n] for n in free))
-    margin = circuit(*crank(z[0], lam, c[0], c[1]), c[0], c[1])
+    zr, zi = crank(z[0], lam, c[0], c[1])
+    # sin θ sin(θ + φ) itself, not up to |z1|²: with a short crank that factor made the row
+    # ~1e-5 far off its circuit, and SLSQP's runs went there (a design of another time ratio
+    # and stroke, its measure far below any design's) and stayed, hundreds of iterations
+    margin = circuit(zr, zi, c[0], c[1]) / (zr * zr + zi * zi)
     out = ca.densify(ca.vertcat(x, ca.vec(ca.jacobian(x, z)), margin, ca.gradient(margin, z)))
     return ca.Function("chart", [z, c], [out], {"cse": True})

@@ -123,6 +123,35 @@ def test_the_coordinates_derivatives_agree_with_central_differences(mtype, scale
 
 
 @pytest.mark.parametrize("mtype", FOURBARS)
+def test_off_its_circuit_a_point_that_misses_the_targets_is_told_so(mtype):
+    """A point whose toggles lie in two circuits is no design with the targets; where its
+    design (judged by the forward analysis) misses the time ratio by over 10%, the circuit's
+    row says so by a margin SLSQP weighs (≤ −1e-4; sin θ sin(θ + φ) ≥ 0.0014 here). With the
+    factor |Z1|² the row had, a short crank's (v up to 5: λ − 1 ≈ 150) was as small as −6e-8,
+    and a crank-rocker's torque runs went there and stayed, hundreds of iterations (designs
+    of time ratio 1.01 and stroke 0.06 at 1.6/0°)."""
+    c = _chart(mtype, 1.6, scale=False)
+    row = len(c.low) + len(c.high)  # the own rows: the bounds below, above, the circuit's
+    box = np.array(c.bounds())
+    box[1] = (-3.0, 5.0)
+    missed = []
+    for sigma in (1, -1):
+        k = c.constants(sigma, 0.0)
+        for z in halton(box[:, 0], box[:, 1], np.zeros(len(box), bool), 400):
+            x, _, (own, _) = c.point(z, k)
+            if own[row] >= 0:  # one circuit
+                continue
+            try:
+                a = synth.analyze(mtype, dict(zip(c.free, x, strict=True)))
+            except synth.SynthError:
+                continue
+            if abs(a.time_ratio - 1.6) > 0.16:
+                missed.append(own[row])
+    assert len(missed) >= 100
+    assert max(missed) <= -1e-4
+
+
+@pytest.mark.parametrize("mtype", FOURBARS)
 def test_a_design_gives_its_coordinates_back(mtype):
     c = _chart(mtype, 1.6, scale=True)
     for z, k in _points(c, 16):
