@@ -19,7 +19,7 @@ from pathlib import Path
 import ezdxf
 import pytest
 
-from ..support.server import ROOT, serving
+from ..support.server import ROOT, SHIPPED_CAP, serving
 
 pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
 
@@ -51,8 +51,7 @@ def site():
     from playwright.sync_api import sync_playwright
 
     SHOTS.mkdir(parents=True, exist_ok=True)
-    # the cap as shipped (the test session's is 1 s): a test may ask the budget it needs
-    with serving(SYNTH_WARM="0", SYNTH_MAX_BUDGET_MS="60000") as (port, _), sync_playwright() as p:
+    with serving(SYNTH_WARM="0", **SHIPPED_CAP) as (port, _), sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=ARGS)
         try:
             yield browser, f"http://127.0.0.1:{port}"
@@ -85,6 +84,16 @@ def page(site):
     p = Page(site)
     yield p
     p.close()
+
+
+def amended(pg, url: str, **extra) -> None:
+    """The page's requests to ``url`` sent on with ``extra`` in their bodies (the real server
+    answers them) until ``pg.unroute(url)``."""
+
+    def route(r) -> None:
+        r.continue_(post_data=json.dumps({**json.loads(r.request.post_data), **extra}))
+
+    pg.route(url, route)
 
 
 def only(pg, mtype: str) -> None:
@@ -327,12 +336,7 @@ def test_a_sweep_out_of_budget_says_where_it_ended(page):
     """The page sends no budget; the request is given a 50 ms one on its way (the real server
     answers it): the plot ends where the server stopped, and the page says so."""
     pg = page.page
-
-    def short(route):
-        body = json.loads(route.request.post_data)
-        route.continue_(post_data=json.dumps({**body, "points": 10_000, "time_budget_ms": 50}))
-
-    pg.route("**/v1/sweep", short)
+    amended(pg, "**/v1/sweep", points=10_000, time_budget_ms=50)
     pg.click("#tab-sweep")
     pg.wait_for_selector("#s-param-coupler")
     pg.select_option("#s-vary", "coupler")
@@ -656,12 +660,7 @@ def test_tied_candidates_say_which_rule_placed_them(page):
     (cold, it took over the default 2 s on a slow machine) and the answer is the same on any
     machine."""
     pg = page.page
-
-    def roomy(route):
-        body = json.loads(route.request.post_data)
-        route.continue_(post_data=json.dumps({**body, "time_budget_ms": 60_000}))
-
-    pg.route("**/v1/synthesize", roomy)
+    amended(pg, "**/v1/synthesize", time_budget_ms=60_000)
     only(pg, "crank_shaper")
     for k, v in (("time_ratio", "1.7"), ("stroke", "250"), ("bound", "35")):
         pg.fill(f"#{k}", v)

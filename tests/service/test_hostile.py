@@ -27,7 +27,7 @@ from hypothesis import strategies as st
 from api.config import Settings
 from synth.mechanisms import all_types, get
 
-from ..support.server import serving
+from ..support.server import SHIPPED_CAP, serving
 
 pytestmark = pytest.mark.serial  # timing-sensitive: alone, not beside other tests (make test)
 
@@ -444,9 +444,9 @@ def test_an_empty_host_binds_loopback_only():
 
 def test_a_sweep_that_runs_out_of_its_budget_ends_where_it_was():
     # the whole sweep (~0.25 s on a quick machine, over 1 s on a slow one) under the cap as
-    # shipped, not the test session's 1 s; the whole first (a fresh server's first 20 ms may
-    # all go to starting the sweep's process: a 503)
-    with serving(SYNTH_MAX_BUDGET_MS="60000") as (port, _):
+    # shipped; the whole first (a fresh server's first 20 ms may all go to starting the
+    # sweep's process: a 503)
+    with serving(**SHIPPED_CAP) as (port, _):
         conn = http.client.HTTPConnection("127.0.0.1", port, timeout=120)
         whole, short = sweep(conn, 60_000), sweep(conn, 20)
     assert short["complete"] is False
